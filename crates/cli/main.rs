@@ -1,0 +1,2 @@
+//! The bodyseg binary.
+fn main() {}

@@ -1,0 +1,82 @@
+//! Person boxes: oriented boxes in the world frame around each person (ALGORITHM.md §4).
+
+use crate::math::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// An oriented box around one person, world frame (z up).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PersonBox {
+    /// Person id within the frame (from the tracker or the box finder).
+    pub id: u32,
+    /// Box centre, world frame, metres.
+    pub center_m: Vec3,
+    /// Half the box's size along its own x, y, z axes, metres (all > 0).
+    pub half_extents_m: Vec3,
+    /// Rotation of the box about the world z axis, radians (counter-clockwise seen from above).
+    #[serde(default)]
+    pub yaw_rad: f32,
+}
+
+impl PersonBox {
+    /// True when `p_world` lies inside the box or on its faces.
+    #[inline]
+    pub fn contains(&self, p_world: Vec3) -> bool {
+        let (s, c) = self.yaw_rad.sin_cos();
+        let dx = p_world[0] - self.center_m[0];
+        let dy = p_world[1] - self.center_m[1];
+        let dz = p_world[2] - self.center_m[2];
+        // Rotate into the box frame by -yaw.
+        let lx = c * dx + s * dy;
+        let ly = -s * dx + c * dy;
+        lx.abs() <= self.half_extents_m[0]
+            && ly.abs() <= self.half_extents_m[1]
+            && dz.abs() <= self.half_extents_m[2]
+    }
+
+    /// Why this box is unusable, if it is (non-finite numbers, non-positive extents).
+    pub fn invalid_reason(&self) -> Option<String> {
+        let all = self.center_m.iter().chain(&self.half_extents_m);
+        if !all.clone().all(|v| v.is_finite()) || !self.yaw_rad.is_finite() {
+            return Some(format!("box {}: coordinates must be finite numbers", self.id));
+        }
+        if self.half_extents_m.iter().any(|&h| h <= 0.0) {
+            return Some(format!(
+                "box {}: half_extents_m must all be > 0, got {:?}",
+                self.id, self.half_extents_m
+            ));
+        }
+        None
+    }
+}
+
+/// The boxes of one frame, as in FORMATS.md's boxes JSON.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PersonBoxes {
+    /// Frame stem the boxes belong to (may be empty when unknown).
+    #[serde(default)]
+    pub frame: String,
+    /// One box per person.
+    pub boxes: Vec<PersonBox>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn yawed_box_contains_its_rotated_corner_region() {
+        let b = PersonBox {
+            id: 0,
+            center_m: [1.0, 2.0, 1.0],
+            half_extents_m: [0.5, 0.1, 1.0],
+            yaw_rad: std::f32::consts::FRAC_PI_2,
+        };
+        // Long axis now along world y.
+        assert!(b.contains([1.0, 2.45, 1.0]));
+        assert!(!b.contains([1.45, 2.0, 1.0]));
+        assert!(!b.contains([1.0, 2.0, 2.1]));
+        assert!(b.invalid_reason().is_none());
+        let bad = PersonBox { half_extents_m: [0.0, 1.0, 1.0], ..b };
+        assert!(bad.invalid_reason().is_some());
+    }
+}

@@ -1,0 +1,1 @@
+//! bodyseg-eval (in progress).

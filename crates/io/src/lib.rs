@@ -1,0 +1,1 @@
+//! bodyseg-io (in progress).

@@ -1,0 +1,1 @@
+//! bodyseg-pipeline (in progress).

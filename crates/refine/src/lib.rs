@@ -1,0 +1,1 @@
+//! bodyseg-refine (in progress).

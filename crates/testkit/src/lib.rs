@@ -1,0 +1,1 @@
+//! bodyseg-testkit (in progress).
