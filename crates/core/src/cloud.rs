@@ -79,7 +79,7 @@ impl LabeledCloud {
     /// Checks that the arrays agree in length and every coordinate is finite.
     pub fn validate(&self) -> Result<(), CloudError> {
         let want = self.positions_m.len();
-        let mut check = |field, got| {
+        let check = |field, got| {
             if got == want {
                 Ok(())
             } else {
@@ -130,7 +130,13 @@ mod tests {
             positions_m: vec![[0.0; 3], [1.0, f32::NAN, 0.0]],
             labels: vec![Label::from(Class::Head); 2],
             colors: None,
-            origins: vec![PointOrigin { camera: 0, pixel: 0 }; 2],
+            origins: vec![
+                PointOrigin {
+                    camera: 0,
+                    pixel: 0
+                };
+                2
+            ],
         };
         assert_eq!(c.validate(), Err(CloudError::NonFinite { index: 1 }));
         c.positions_m[1][1] = 0.0;
@@ -138,7 +144,10 @@ mod tests {
         c.labels.pop();
         assert!(matches!(
             c.validate(),
-            Err(CloudError::LengthMismatch { field: "labels", .. })
+            Err(CloudError::LengthMismatch {
+                field: "labels",
+                ..
+            })
         ));
     }
 }

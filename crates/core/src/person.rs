@@ -37,7 +37,10 @@ impl PersonBox {
     pub fn invalid_reason(&self) -> Option<String> {
         let all = self.center_m.iter().chain(&self.half_extents_m);
         if !all.clone().all(|v| v.is_finite()) || !self.yaw_rad.is_finite() {
-            return Some(format!("box {}: coordinates must be finite numbers", self.id));
+            return Some(format!(
+                "box {}: coordinates must be finite numbers",
+                self.id
+            ));
         }
         if self.half_extents_m.iter().any(|&h| h <= 0.0) {
             return Some(format!(
@@ -76,7 +79,10 @@ mod tests {
         assert!(!b.contains([1.45, 2.0, 1.0]));
         assert!(!b.contains([1.0, 2.0, 2.1]));
         assert!(b.invalid_reason().is_none());
-        let bad = PersonBox { half_extents_m: [0.0, 1.0, 1.0], ..b };
+        let bad = PersonBox {
+            half_extents_m: [0.0, 1.0, 1.0],
+            ..b
+        };
         assert!(bad.invalid_reason().is_some());
     }
 }

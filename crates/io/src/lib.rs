@@ -1,1 +1,35 @@
-//! bodyseg-io (in progress).
+//! bodyseg-io: bodyseg's files on disk, and the only crate that touches the file system.
+//!
+//! Place in the pipeline: at both ends of every stage. It reads and writes the values
+//! that cross stage boundaries so any intermediate can be stored and inspected:
+//! [`LabeledCloud`](bodyseg_core::LabeledCloud) ⇄ PLY ([`read_ply`], [`write_ply`]) and
+//! [`PersonBoxes`](bodyseg_core::PersonBoxes) ⇄ JSON ([`read_boxes`], [`write_boxes`]).
+//! Layouts are those of FORMATS.md. Readers are tolerant (unknown PLY properties and
+//! elements, unknown JSON keys are ignored); writers are exact.
+//!
+//! # Conventions
+//! - Units and frames are the stored types': positions in metres, world frame (z up);
+//!   angles in radians. Files carry no unit conversion.
+//! - Labels on disk are class ids 0..=6, and 255 for unknown
+//!   ([`Label::UNKNOWN_ID`](bodyseg_core::Label::UNKNOWN_ID)).
+//! - A point's origin is `(camera, pixel)`: camera index in rig order and row-major
+//!   index in that camera's depth image. A PLY without `camera`/`pixel` reads as camera 0
+//!   and the vertex index, as [`LabeledCloud::origins`](bodyseg_core::LabeledCloud::origins)
+//!   documents.
+//! - PLY is written binary little-endian by default; readers accept ASCII and both byte
+//!   orders.
+//! - Every write goes through [`write_atomic`]: a temporary file in the destination's
+//!   directory, fsynced, renamed over the destination. A failed write leaves the
+//!   destination untouched and no temporary behind.
+//! - Errors are [`IoError`]; each message starts with the file's path. Bad input is an
+//!   error, never a panic.
+
+mod atomic;
+mod boxes;
+mod error;
+mod ply;
+
+pub use atomic::{write_atomic, write_bytes_atomic};
+pub use boxes::{parse_boxes, read_boxes, write_boxes};
+pub use error::IoError;
+pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};

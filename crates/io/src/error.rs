@@ -1,0 +1,163 @@
+//! [`IoError`]: everything that can go wrong reading or writing bodyseg's files.
+
+use bodyseg_core::CloudError;
+use std::path::PathBuf;
+
+/// An error reading or writing one of bodyseg's files. Every variant names the file
+/// (`path`, the last field); messages start with it, so `{err}` alone is actionable.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum IoError {
+    /// The file could not be opened or read.
+    #[error("{}: cannot read: {source}", .path.display())]
+    Read {
+        /// What the operating system said.
+        source: std::io::Error,
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file (or its temporary sibling) could not be created, written, synced or
+    /// renamed into place. The destination is left as it was.
+    #[error("{}: cannot write: {source}", .path.display())]
+    Write {
+        /// What the operating system (or the writing closure) said.
+        source: std::io::Error,
+        /// The destination file.
+        path: PathBuf,
+    },
+    /// The file does not start with the `ply` magic line.
+    #[error("{}: not a PLY file (the first line is not 'ply')", .path.display())]
+    NotPly {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The header's `format` line names something other than `ascii`,
+    /// `binary_little_endian` or `binary_big_endian`.
+    #[error(
+        "{}: unsupported PLY format '{format}' (expected ascii, binary_little_endian or binary_big_endian)",
+        .path.display()
+    )]
+    UnsupportedFormat {
+        /// The format as written in the header.
+        format: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A header line could not be understood.
+    #[error("{}: PLY header line {line}: {reason}", .path.display())]
+    BadHeader {
+        /// 1-based line number in the file.
+        line: usize,
+        /// What is wrong with it.
+        reason: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// The header never ends: no `end_header` line (usually a truncated file).
+    #[error("{}: PLY header has no end_header line (truncated file?)", .path.display())]
+    UnterminatedHeader {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The header declares no element with this name.
+    #[error("{}: PLY file has no '{element}' element", .path.display())]
+    MissingElement {
+        /// The element we need (`vertex`).
+        element: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A required property is not declared (or is a list where a scalar is needed).
+    #[error("{}: PLY {element} element has no '{property}' property", .path.display())]
+    MissingProperty {
+        /// The element (`vertex`).
+        element: String,
+        /// The missing property (`x`, `y`, `z` or `label`).
+        property: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// The data ends before all entries the header declares.
+    #[error(
+        "{}: truncated PLY: header declares {expected} {element} entries, data holds only {read}",
+        .path.display()
+    )]
+    Truncated {
+        /// The element whose data is cut short (`vertex`, `face`, ...).
+        element: String,
+        /// The count the header declares.
+        expected: usize,
+        /// How many complete entries the data holds.
+        read: usize,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A value that does not fit its meaning (a label id 17, a non-finite coordinate, a
+    /// token that is not a number of the declared type).
+    #[error("{}: {element} {index}: {property} is {value}, expected {expected}", .path.display())]
+    BadValue {
+        /// The element (`vertex`, ...).
+        element: String,
+        /// 0-based index of the entry within its element.
+        index: usize,
+        /// The property.
+        property: String,
+        /// The offending value as text.
+        value: String,
+        /// What would have been accepted.
+        expected: &'static str,
+        /// The file.
+        path: PathBuf,
+    },
+    /// An ASCII PLY data line has the wrong number of values.
+    #[error("{}: line {line}: {element} {index}: {reason}", .path.display())]
+    BadAsciiLine {
+        /// 1-based line number in the file.
+        line: usize,
+        /// The element the line belongs to.
+        element: String,
+        /// 0-based index of the entry within its element.
+        index: usize,
+        /// What is wrong with it.
+        reason: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A cloud handed to a writer is inconsistent (array lengths differ, non-finite
+    /// coordinate); nothing was written.
+    #[error("{}: refusing to write an invalid cloud: {source}", .path.display())]
+    InvalidCloud {
+        /// What [`bodyseg_core::LabeledCloud::validate`] reported.
+        source: CloudError,
+        /// The destination file.
+        path: PathBuf,
+    },
+    /// Camera colours were asked for but the cloud has none; nothing was written.
+    #[error(
+        "{}: camera colours requested but the cloud has none (use the class palette)",
+        .path.display()
+    )]
+    NoCameraColors {
+        /// The destination file.
+        path: PathBuf,
+    },
+    /// A boxes file is not valid JSON or does not have FORMATS.md's shape. serde's
+    /// message carries the line and column.
+    #[error("{}: bad boxes JSON: {source}", .path.display())]
+    BoxesJson {
+        /// serde_json's error (with line and column).
+        source: serde_json::Error,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A box is well-formed JSON but unusable (see [`bodyseg_core::PersonBox::invalid_reason`]).
+    #[error("{}: boxes[{index}]: {reason}", .path.display())]
+    InvalidBox {
+        /// Position of the box in the `boxes` array.
+        index: usize,
+        /// Why it is unusable.
+        reason: String,
+        /// The file.
+        path: PathBuf,
+    },
+}

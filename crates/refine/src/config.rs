@@ -1,0 +1,286 @@
+//! `RefineConfig`: every knob of the refinement, with units and defaults.
+
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::fmt;
+use std::str::FromStr;
+
+/// Errors of the refinement stage.
+#[derive(Debug, thiserror::Error)]
+pub enum RefineError {
+    /// A configuration field is out of range.
+    #[error("refine.{field} {problem}")]
+    InvalidConfig {
+        /// The field's name.
+        field: &'static str,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// The input cloud is inconsistent (NaN coordinate, arrays of different lengths).
+    #[error("input cloud: {0}")]
+    InvalidCloud(#[from] bodyseg_core::CloudError),
+    /// A person box is unusable.
+    #[error("person box: {reason}")]
+    InvalidBox {
+        /// What is wrong with it.
+        reason: String,
+    },
+}
+
+/// How the best body tree is searched (ALGORITHM.md §5.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TreeMode {
+    /// The paper's reading: root = largest torso cluster, slots filled breadth-first with
+    /// the largest adjacent unused cluster of the slot's label.
+    #[default]
+    Paper,
+}
+
+/// Which refinement steps run: the paper's five configurations and the rest of the
+/// combinations. Written as `"reference"` or letters joined by `-`: `"M-R-N"`, `"m,n"`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Steps {
+    /// The projected cloud untouched: no boxes, no outlier removal, no steps.
+    Reference,
+    /// Per-person processing and the fuse, with the named steps.
+    Run {
+        /// M: merge clusters lying inside a cluster of another label.
+        merge: bool,
+        /// R: remove clusters not connected to the best body tree.
+        remove: bool,
+        /// N: noise points take the label of the nearest clustered point.
+        noise: bool,
+    },
+}
+
+impl Steps {
+    /// The whole algorithm, the default.
+    pub const MRN: Steps = Steps::Run {
+        merge: true,
+        remove: true,
+        noise: true,
+    };
+
+    /// The five configurations of the paper's tables, in table order.
+    pub const PAPER: [Steps; 5] = [
+        Steps::Reference,
+        Steps::Run {
+            merge: true,
+            remove: false,
+            noise: false,
+        },
+        Steps::Run {
+            merge: false,
+            remove: false,
+            noise: true,
+        },
+        Steps::Run {
+            merge: true,
+            remove: false,
+            noise: true,
+        },
+        Steps::MRN,
+    ];
+}
+
+impl Default for Steps {
+    fn default() -> Self {
+        Steps::MRN
+    }
+}
+
+impl fmt::Display for Steps {
+    /// The paper's names: `Reference`, `M`, `N`, `M-N`, `M-R-N`; `none` for no step.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Steps::Reference => f.write_str("Reference"),
+            Steps::Run {
+                merge,
+                remove,
+                noise,
+            } => {
+                let names: Vec<&str> = [(merge, "M"), (remove, "R"), (noise, "N")]
+                    .into_iter()
+                    .filter_map(|(on, n)| on.then_some(n))
+                    .collect();
+                if names.is_empty() {
+                    f.write_str("none")
+                } else {
+                    f.write_str(&names.join("-"))
+                }
+            }
+        }
+    }
+}
+
+impl FromStr for Steps {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let t = s.trim().to_ascii_lowercase();
+        if t == "reference" || t == "ref" {
+            return Ok(Steps::Reference);
+        }
+        if t == "none" {
+            return Ok(Steps::Run {
+                merge: false,
+                remove: false,
+                noise: false,
+            });
+        }
+        let (mut merge, mut remove, mut noise) = (false, false, false);
+        for part in t.split(['-', ',', ' ']).filter(|p| !p.is_empty()) {
+            match part {
+                "m" | "merge" => merge = true,
+                "r" | "remove" => remove = true,
+                "n" | "noise" => noise = true,
+                other => {
+                    return Err(format!(
+                        "unknown step '{other}' in '{s}': use 'reference', 'none' or letters m, r, n joined by '-' (e.g. M-R-N)"
+                    ));
+                }
+            }
+        }
+        if !(merge || remove || noise) {
+            return Err(format!("no step named in '{s}'"));
+        }
+        Ok(Steps::Run {
+            merge,
+            remove,
+            noise,
+        })
+    }
+}
+
+impl Serialize for Steps {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
+    }
+}
+
+impl<'de> Deserialize<'de> for Steps {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+/// Configuration of the clustering refinement (ALGORITHM.md §5). TOML section `[refine]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RefineConfig {
+    /// DBSCAN radius, metres. Default 0.05 (the paper's value on Kinect data).
+    pub eps_m: f32,
+    /// DBSCAN core threshold: points within eps, the point itself included. Default 40.
+    pub min_points: usize,
+    /// Distance added between points of different labels, metres. Default `inf`: labels
+    /// never mix, DBSCAN runs per label.
+    pub label_penalty_m: f32,
+    /// Slack of the "inside" test, a fraction of the container's radius. Default 0.
+    pub inside_tolerance: f32,
+    /// Best body tree search. Default `paper`.
+    pub tree: TreeMode,
+    /// Steps to run: `reference`, `M`, `N`, `M-N`, `M-R-N` (default) or any other mix.
+    pub steps: Steps,
+    /// Keep the labels of body points outside every box (default false: they are outliers
+    /// and become background, as in the paper).
+    pub keep_outside_boxes: bool,
+    /// Let background clusters act as containers in M (default false: a floor's bounding
+    /// sphere swallows leg fragments).
+    pub merge_into_background: bool,
+}
+
+impl Default for RefineConfig {
+    fn default() -> Self {
+        RefineConfig {
+            eps_m: 0.05,
+            min_points: 40,
+            label_penalty_m: f32::INFINITY,
+            inside_tolerance: 0.0,
+            tree: TreeMode::Paper,
+            steps: Steps::MRN,
+            keep_outside_boxes: false,
+            merge_into_background: false,
+        }
+    }
+}
+
+impl RefineConfig {
+    /// Checks every field's range; the error names the field.
+    pub fn validate(&self) -> Result<(), RefineError> {
+        let bad = |field, problem: String| Err(RefineError::InvalidConfig { field, problem });
+        if !(self.eps_m.is_finite() && self.eps_m > 0.0) {
+            return bad(
+                "eps_m",
+                format!("must be a finite number > 0, got {}", self.eps_m),
+            );
+        }
+        if self.min_points < 1 {
+            return bad("min_points", "must be >= 1, got 0".into());
+        }
+        if self.label_penalty_m.is_nan() || self.label_penalty_m < 0.0 {
+            return bad(
+                "label_penalty_m",
+                format!(
+                    "must be >= 0 (inf keeps labels apart), got {}",
+                    self.label_penalty_m
+                ),
+            );
+        }
+        if !(self.inside_tolerance.is_finite() && self.inside_tolerance >= 0.0) {
+            return bad(
+                "inside_tolerance",
+                format!(
+                    "must be a finite number >= 0, got {}",
+                    self.inside_tolerance
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// The DBSCAN parameters of this configuration.
+    pub fn dbscan_params(&self) -> crate::DbscanParams {
+        crate::DbscanParams {
+            eps_m: self.eps_m,
+            min_points: self.min_points,
+            label_penalty_m: self.label_penalty_m,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_parse_and_print_the_papers_names() {
+        for s in Steps::PAPER {
+            assert_eq!(s.to_string().parse::<Steps>(), Ok(s));
+        }
+        assert_eq!("m,r,n".parse::<Steps>(), Ok(Steps::MRN));
+        assert_eq!(Steps::PAPER[3].to_string(), "M-N");
+        assert!("m-x".parse::<Steps>().is_err());
+        assert!("".parse::<Steps>().is_err());
+    }
+
+    #[test]
+    fn validation_names_the_field() {
+        let c = RefineConfig {
+            eps_m: -1.0,
+            ..Default::default()
+        };
+        let e = c
+            .validate()
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.starts_with("refine.eps_m must be"), "{e}");
+        let c = RefineConfig {
+            min_points: 0,
+            ..Default::default()
+        };
+        assert!(c.validate().is_err());
+        assert!(RefineConfig::default().validate().is_ok());
+    }
+}

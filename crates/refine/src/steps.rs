@@ -1,0 +1,350 @@
+//! The M, R and N steps (ALGORITHM.md §5.4–§5.6), each a plain function.
+
+use crate::graph::{BodyTree, ClusterFeatures, Graph};
+use bodyseg_core::Label;
+use bodyseg_core::math::{Vec3, dist2};
+
+/// M — merge_nodes: every cluster that is not a tree node and lies inside at least one
+/// cluster of a different label takes the label of the largest such container (ties: the
+/// smaller id). Containers are judged with `labels` as given (all updates at once), so the
+/// result does not depend on order. Background containers count only when
+/// `merge_into_background` is set.
+pub fn merge_nodes(
+    features: &[ClusterFeatures],
+    labels: &[Label],
+    graph: &Graph,
+    tree: &BodyTree,
+    merge_into_background: bool,
+) -> Vec<Label> {
+    (0..features.len())
+        .map(|a| {
+            let own = labels[a];
+            if tree.contains(a as u32) {
+                return own;
+            }
+            let best = graph.containers[a]
+                .iter()
+                .map(|&b| b as usize)
+                .filter(|&b| labels[b] != own)
+                .filter(|&b| merge_into_background || labels[b].is_body())
+                .fold(None, |best: Option<usize>, b| match best {
+                    Some(x) if features[x].size >= features[b].size => Some(x),
+                    _ => Some(b),
+                });
+            best.map_or(own, |b| labels[b])
+        })
+        .collect()
+}
+
+/// R — remove_nodes: when the tree is valid, every body-labelled cluster not connected to
+/// the tree through a chain of inside / intersect / tree edges *between body-labelled
+/// clusters* becomes background. Background clusters stay background; a chain may not pass
+/// through them (a floor touches everything). With no valid tree, nothing changes.
+pub fn remove_nodes(labels: &[Label], graph: &Graph, tree: &BodyTree) -> Vec<Label> {
+    if !tree.is_valid() {
+        return labels.to_vec();
+    }
+    let k = labels.len();
+    let mut reached = vec![false; k];
+    // Tree nodes are body-labelled (they never change), and tree edges join them; seeding
+    // the search with all of them covers the tree edges.
+    let mut stack: Vec<u32> = tree.nodes().collect();
+    for &n in &stack {
+        reached[n as usize] = true;
+    }
+    while let Some(a) = stack.pop() {
+        for &b in &graph.adjacent[a as usize] {
+            if !reached[b as usize] && labels[b as usize].is_body() {
+                reached[b as usize] = true;
+                stack.push(b);
+            }
+        }
+    }
+    labels
+        .iter()
+        .zip(&reached)
+        .map(|(&l, &r)| {
+            if l.is_body() && !r {
+                Label::BACKGROUND
+            } else {
+                l
+            }
+        })
+        .collect()
+}
+
+/// N — reassign_noise: every point with `is_noise[i]` takes the label of the nearest point
+/// with `!is_noise` (ties: the smaller index), exact nearest neighbour. With no clustered
+/// point, noise keeps its label and unknown becomes background.
+///
+/// Why not a plain ring search or an unbounded k-d tree walk: flying pixels lie far from
+/// the body, and searching outward from each costs more than the clustering. [`NnIndex`]
+/// is a two-level grid: blocks of cells, each with the tight bounding box of its points, so
+/// a query ranks the few hundred blocks by lower bound and opens only those that can still
+/// hold a nearer point — a bounded cost whatever the distance.
+pub fn reassign_noise(
+    positions_m: &[Vec3],
+    labels: &[Label],
+    is_noise: &[bool],
+    eps_m: f32,
+) -> Vec<Label> {
+    let mut out = labels.to_vec();
+    let clustered: Vec<u32> = (0..positions_m.len() as u32)
+        .filter(|&i| !is_noise[i as usize])
+        .collect();
+    if clustered.is_empty() {
+        for l in &mut out {
+            if l.is_unknown() {
+                *l = Label::BACKGROUND;
+            }
+        }
+        return out;
+    }
+    let index = NnIndex::new(positions_m, &clustered, eps_m);
+    for i in 0..positions_m.len() {
+        if is_noise[i] {
+            if let Some(j) = index.nearest(positions_m, positions_m[i]) {
+                out[i] = labels[j as usize];
+            }
+        }
+    }
+    out
+}
+
+/// Fine cells per block edge in [`NnIndex`].
+const NN_BLOCK_CELLS: i32 = 4;
+
+/// Axis-aligned box, metres.
+#[derive(Clone, Copy)]
+struct Aabb {
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Aabb {
+    const EMPTY: Aabb = Aabb {
+        lo: [f32::INFINITY; 3],
+        hi: [f32::NEG_INFINITY; 3],
+    };
+    fn grow(&mut self, p: Vec3) {
+        for a in 0..3 {
+            self.lo[a] = self.lo[a].min(p[a]);
+            self.hi[a] = self.hi[a].max(p[a]);
+        }
+    }
+    fn union(&mut self, o: &Aabb) {
+        self.grow(o.lo);
+        self.grow(o.hi);
+    }
+    /// Squared distance from `q` to the box (0 inside); a lower bound for its points,
+    /// shaved by a hair so rounding never prunes a point at exactly the best distance.
+    #[inline]
+    fn dist2(&self, q: Vec3) -> f32 {
+        let mut d = 0.0;
+        for a in 0..3 {
+            let g = (self.lo[a] - q[a]).max(q[a] - self.hi[a]).max(0.0);
+            d += g * g;
+        }
+        d * (1.0 - 1e-5)
+    }
+}
+
+/// Exact nearest-neighbour index over a fixed point set: cells of side eps grouped into
+/// blocks of 4×4×4 cells, each cell and block with the bounding box of its points.
+struct NnIndex {
+    /// Point ids grouped by cell (CSR over cells).
+    items: Vec<u32>,
+    cell_start: Vec<u32>,
+    cell_box: Vec<Aabb>,
+    /// Cells grouped by block (CSR over blocks).
+    block_cells: Vec<u32>,
+    block_start: Vec<u32>,
+    block_box: Vec<Aabb>,
+}
+
+impl NnIndex {
+    fn new(positions: &[Vec3], idx: &[u32], eps_m: f32) -> Self {
+        let mut bounds = Aabb::EMPTY;
+        for &i in idx {
+            bounds.grow(positions[i as usize]);
+        }
+        let extent = (0..3)
+            .map(|a| bounds.hi[a] - bounds.lo[a])
+            .fold(0.0f32, f32::max);
+        // Cells of side eps, but never more than ~64 along the longest axis.
+        let side = eps_m.max(extent / 64.0).max(1e-6);
+        let dims = [0, 1, 2].map(|a| ((bounds.hi[a] - bounds.lo[a]) / side) as i32 + 1);
+        let key = |p: Vec3| -> [i32; 3] {
+            [0, 1, 2].map(|a| (((p[a] - bounds.lo[a]) / side) as i32).clamp(0, dims[a] - 1))
+        };
+        let lin = |k: [i32; 3]| ((k[2] * dims[1] + k[1]) * dims[0] + k[0]) as usize;
+        let ncell = dims.iter().map(|&d| d as usize).product::<usize>();
+        // Counting sort of the points by cell.
+        let cell_of: Vec<usize> = idx
+            .iter()
+            .map(|&i| lin(key(positions[i as usize])))
+            .collect();
+        let mut start = vec![0u32; ncell + 1];
+        for &c in &cell_of {
+            start[c + 1] += 1;
+        }
+        for c in 0..ncell {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut sorted = vec![0u32; idx.len()];
+        for (&i, &c) in idx.iter().zip(&cell_of) {
+            sorted[fill[c] as usize] = i;
+            fill[c] += 1;
+        }
+        // Keep the non-empty cells only, with their boxes, and bucket them by block.
+        let bdims = dims.map(|d| (d + NN_BLOCK_CELLS - 1) / NN_BLOCK_CELLS);
+        let nblock = bdims.iter().map(|&d| d as usize).product::<usize>();
+        let mut cell_start = vec![0u32];
+        let mut cell_box = Vec::new();
+        let mut cell_block = Vec::new();
+        for c in 0..ncell {
+            let (s, e) = (start[c] as usize, start[c + 1] as usize);
+            if s == e {
+                continue;
+            }
+            let mut bx = Aabb::EMPTY;
+            for &i in &sorted[s..e] {
+                bx.grow(positions[i as usize]);
+            }
+            cell_box.push(bx);
+            cell_start.push(e as u32);
+            let (x, y, z) = (
+                c as i32 % dims[0],
+                (c as i32 / dims[0]) % dims[1],
+                c as i32 / (dims[0] * dims[1]),
+            );
+            let b = [x, y, z].map(|v| v / NN_BLOCK_CELLS);
+            cell_block.push(((b[2] * bdims[1] + b[1]) * bdims[0] + b[0]) as usize);
+        }
+        let mut bstart = vec![0u32; nblock + 1];
+        for &b in &cell_block {
+            bstart[b + 1] += 1;
+        }
+        for b in 0..nblock {
+            bstart[b + 1] += bstart[b];
+        }
+        let mut bfill = bstart.clone();
+        let mut bcells = vec![0u32; cell_block.len()];
+        for (c, &b) in cell_block.iter().enumerate() {
+            bcells[bfill[b] as usize] = c as u32;
+            bfill[b] += 1;
+        }
+        let mut block_start = vec![0u32];
+        let mut block_cells = Vec::with_capacity(bcells.len());
+        let mut block_box = Vec::new();
+        for b in 0..nblock {
+            let cells = &bcells[bstart[b] as usize..bstart[b + 1] as usize];
+            if cells.is_empty() {
+                continue;
+            }
+            let mut bx = Aabb::EMPTY;
+            for &c in cells {
+                bx.union(&cell_box[c as usize]);
+            }
+            block_cells.extend_from_slice(cells);
+            block_start.push(block_cells.len() as u32);
+            block_box.push(bx);
+        }
+        NnIndex {
+            items: sorted,
+            cell_start,
+            cell_box,
+            block_cells,
+            block_start,
+            block_box,
+        }
+    }
+
+    /// The nearest indexed point to `q` (ties: smaller index).
+    ///
+    /// The block nearest to `q` is opened first so the bound is tight, then every other
+    /// block is checked against it in one linear pass (a few hundred box tests).
+    fn nearest(&self, positions: &[Vec3], q: Vec3) -> Option<u32> {
+        let first = self
+            .block_box
+            .iter()
+            .enumerate()
+            .map(|(b, bx)| (bx.dist2(q), b))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, b)| b)?;
+        let mut best: Option<(f32, u32)> = None;
+        self.scan_block(positions, q, first, &mut best);
+        for b in 0..self.block_box.len() {
+            if b != first && best.is_none_or(|(b2, _)| self.block_box[b].dist2(q) <= b2) {
+                self.scan_block(positions, q, b, &mut best);
+            }
+        }
+        best.map(|(_, j)| j)
+    }
+
+    fn scan_block(&self, positions: &[Vec3], q: Vec3, b: usize, best: &mut Option<(f32, u32)>) {
+        let cells =
+            &self.block_cells[self.block_start[b] as usize..self.block_start[b + 1] as usize];
+        for &c in cells {
+            let c = c as usize;
+            if best.is_some_and(|(b2, _)| self.cell_box[c].dist2(q) > b2) {
+                continue;
+            }
+            for &j in &self.items[self.cell_start[c] as usize..self.cell_start[c + 1] as usize] {
+                let d2 = dist2(q, positions[j as usize]);
+                if best.is_none_or(|(b2, bj)| d2 < b2 || (d2 == b2 && j < bj)) {
+                    *best = Some((d2, j));
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_neighbour_index_equals_brute_force() {
+        let mut rng = bodyseg_testkit_free_rng(11);
+        for case in 0..50 {
+            let n = 1 + (case * 37) % 400;
+            let pos: Vec<Vec3> = (0..n)
+                .map(|_| {
+                    [
+                        rng() * 2.0,
+                        rng() * 1.0,
+                        rng() * 0.5 + if case % 3 == 0 { 5.0 } else { 0.0 },
+                    ]
+                })
+                .collect();
+            let is_noise: Vec<bool> = (0..n).map(|_| rng() < 0.3).collect();
+            let clustered: Vec<u32> = (0..n as u32).filter(|&i| !is_noise[i as usize]).collect();
+            if clustered.is_empty() {
+                continue;
+            }
+            let index = NnIndex::new(&pos, &clustered, 0.05);
+            for _ in 0..20 {
+                let q = [rng() * 4.0 - 1.0, rng() * 3.0 - 1.0, rng() * 7.0 - 1.0];
+                let want = clustered.iter().copied().min_by(|&a, &b| {
+                    dist2(q, pos[a as usize])
+                        .total_cmp(&dist2(q, pos[b as usize]))
+                        .then(a.cmp(&b))
+                });
+                assert_eq!(index.nearest(&pos, q), want, "case {case}");
+            }
+        }
+    }
+
+    /// A tiny xorshift so this unit test needs no dev-dependency.
+    fn bodyseg_testkit_free_rng(seed: u64) -> impl FnMut() -> f32 {
+        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+}
