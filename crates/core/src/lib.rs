@@ -18,4 +18,4 @@ pub mod person;
 
 pub use class::{Class, Label, NUM_CLASSES};
 pub use cloud::{CloudError, LabeledCloud, PointOrigin, RefinedCloud};
-pub use person::{PersonBox, PersonBoxes};
+pub use person::{BoxTest, PersonBox, PersonBoxes};

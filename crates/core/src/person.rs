@@ -18,19 +18,22 @@ pub struct PersonBox {
 }
 
 impl PersonBox {
-    /// True when `p_world` lies inside the box or on its faces.
+    /// True when `p_world` lies inside the box or on its faces. For many points, make a
+    /// [`BoxTest`] once with [`PersonBox::test`].
     #[inline]
     pub fn contains(&self, p_world: Vec3) -> bool {
-        let (s, c) = self.yaw_rad.sin_cos();
-        let dx = p_world[0] - self.center_m[0];
-        let dy = p_world[1] - self.center_m[1];
-        let dz = p_world[2] - self.center_m[2];
-        // Rotate into the box frame by -yaw.
-        let lx = c * dx + s * dy;
-        let ly = -s * dx + c * dy;
-        lx.abs() <= self.half_extents_m[0]
-            && ly.abs() <= self.half_extents_m[1]
-            && dz.abs() <= self.half_extents_m[2]
+        self.test().contains(p_world)
+    }
+
+    /// The containment test with the yaw's sine and cosine computed once.
+    pub fn test(&self) -> BoxTest {
+        let (sin, cos) = self.yaw_rad.sin_cos();
+        BoxTest {
+            center_m: self.center_m,
+            half_extents_m: self.half_extents_m,
+            sin,
+            cos,
+        }
     }
 
     /// Why this box is unusable, if it is (non-finite numbers, non-positive extents).
@@ -49,6 +52,31 @@ impl PersonBox {
             ));
         }
         None
+    }
+}
+
+/// A [`PersonBox`] ready for fast point-in-box tests.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxTest {
+    center_m: Vec3,
+    half_extents_m: Vec3,
+    sin: f32,
+    cos: f32,
+}
+
+impl BoxTest {
+    /// True when `p_world` lies inside the box or on its faces.
+    #[inline]
+    pub fn contains(&self, p_world: Vec3) -> bool {
+        let dx = p_world[0] - self.center_m[0];
+        let dy = p_world[1] - self.center_m[1];
+        let dz = p_world[2] - self.center_m[2];
+        // Rotate into the box frame by -yaw.
+        let lx = self.cos * dx + self.sin * dy;
+        let ly = -self.sin * dx + self.cos * dy;
+        lx.abs() <= self.half_extents_m[0]
+            && ly.abs() <= self.half_extents_m[1]
+            && dz.abs() <= self.half_extents_m[2]
     }
 }
 

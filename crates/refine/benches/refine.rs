@@ -1,1 +1,62 @@
-fn main() {}
+//! Guards the speed of label-aware DBSCAN and of the whole refinement on human-shaped
+//! clouds of 30k, 100k and 300k points (eps 0.05 m, min_points 40, 7 labels), made by the
+//! seeded generator of `bodyseg-testkit`. Targets (issue 2, single-threaded at 100k): the
+//! whole refinement of one person under 20 ms; ratios against peers are printed by
+//! `scripts/bench_dbscan_peers.py`. Run single-threaded with
+//! `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`.
+
+#![allow(missing_docs)] // criterion_group! generates undocumented items.
+
+use bodyseg_refine::{DbscanParams, RefineConfig, dbscan, refine};
+use bodyseg_testkit::human_cloud;
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use std::hint::black_box;
+
+const SIZES: [usize; 3] = [30_000, 100_000, 300_000];
+const SEED: u64 = 1;
+
+fn bench_dbscan(c: &mut Criterion) {
+    let mut g = c.benchmark_group("dbscan");
+    g.sample_size(20);
+    let params = DbscanParams {
+        eps_m: 0.05,
+        min_points: 40,
+        label_penalty_m: f32::INFINITY,
+    };
+    for n in SIZES {
+        let p = human_cloud(n, SEED);
+        g.throughput(Throughput::Elements(p.cloud.len() as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), &p, |b, p| {
+            b.iter(|| {
+                dbscan(
+                    black_box(&p.cloud.positions_m),
+                    black_box(&p.cloud.labels),
+                    &params,
+                )
+            })
+        });
+    }
+    g.finish();
+}
+
+fn bench_refine(c: &mut Criterion) {
+    let mut g = c.benchmark_group("refine");
+    g.sample_size(20);
+    let cfg = RefineConfig::default();
+    for n in SIZES {
+        let p = human_cloud(n, SEED);
+        let boxes = [p.person_box.clone()];
+        g.throughput(Throughput::Elements(p.cloud.len() as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), &p, |b, p| {
+            b.iter(|| refine(black_box(&p.cloud), &boxes, &cfg))
+        });
+    }
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default();
+    targets = bench_dbscan, bench_refine
+}
+criterion_main!(benches);

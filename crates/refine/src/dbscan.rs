@@ -169,7 +169,7 @@ fn assemble(
             }
         }
     }
-    let cluster_labels = votes.iter().map(|v| majority_label(v)).collect();
+    let cluster_labels = votes.iter().map(majority_label).collect();
     Clustering {
         cluster_of,
         is_core,
@@ -266,10 +266,10 @@ impl Grid {
                 start.push(pts.len() as u32);
                 uniform.push(true);
                 last = k;
-            } else if labels[idx[l as usize] as usize] != lbl[lbl.len() - 1] {
-                if let Some(u) = uniform.last_mut() {
-                    *u = false;
-                }
+            } else if labels[idx[l as usize] as usize] != lbl[lbl.len() - 1]
+                && let Some(u) = uniform.last_mut()
+            {
+                *u = false;
             }
             pts.push(gpos[l as usize]);
             lbl.push(labels[idx[l as usize] as usize]);
@@ -279,11 +279,7 @@ impl Grid {
         let lookup = CellLookup::new(&keys);
         let mut nbr_start = Vec::with_capacity(keys.len() + 1);
         let mut nbr = Vec::new();
-        let offsets = neighbour_offsets();
-        for k in &keys {
-            nbr_start.push(nbr.len() as u32);
-            lookup.push_neighbours(*k, &offsets, &mut nbr);
-        }
+        lookup.neighbour_lists(&keys, &neighbour_offsets(), &mut nbr_start, &mut nbr);
         nbr_start.push(nbr.len() as u32);
         let mut grid = Grid {
             side,
@@ -418,8 +414,11 @@ enum CellLookup {
 }
 
 impl CellLookup {
-    /// Largest dense table, in cells, relative to the number of occupied cells.
-    const DENSE_FACTOR: i64 = 64;
+    /// Largest dense table, in cells, per occupied cell: a person's cells fill a few
+    /// percent of their bounding block (a surface in a volume), a scene's far less.
+    const DENSE_FACTOR: i64 = 256;
+    /// A dense table this small (4 MiB) is always fine.
+    const DENSE_ALWAYS: i64 = 1 << 20;
 
     fn new(keys: &[[i32; 3]]) -> Self {
         let mut lo = [i32::MAX; 3];
@@ -433,7 +432,9 @@ impl CellLookup {
         let pad = i64::from(REACH);
         let dims = [0, 1, 2].map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * pad).max(0));
         let volume = dims.iter().product::<i64>();
-        if !keys.is_empty() && volume <= (keys.len() as i64 * Self::DENSE_FACTOR).max(1 << 16) {
+        if !keys.is_empty()
+            && volume <= (keys.len() as i64 * Self::DENSE_FACTOR).max(Self::DENSE_ALWAYS)
+        {
             let mut table = vec![u32::MAX; volume as usize];
             let lookup_lo = lo;
             for (c, k) in keys.iter().enumerate() {
@@ -462,24 +463,46 @@ impl CellLookup {
         ((z * dims[1] + y) * dims[0] + x) as usize
     }
 
-    /// Appends the occupied cells at `k + offset` for each offset, in the offsets' order.
-    fn push_neighbours(&self, k: [i32; 3], offsets: &[[i32; 3]], out: &mut Vec<u32>) {
+    /// For each cell, appends the occupied cells at `key + offset` for each offset, in the
+    /// offsets' order (CSR: `start` gets one entry per cell, `out` the lists).
+    fn neighbour_lists(
+        &self,
+        keys: &[[i32; 3]],
+        offsets: &[[i32; 3]],
+        start: &mut Vec<u32>,
+        out: &mut Vec<u32>,
+    ) {
         match self {
             CellLookup::Dense { lo, dims, table } => {
-                let base = Self::lin(*lo, *dims, k) as i64;
-                for o in offsets {
-                    let delta =
-                        (i64::from(o[2]) * dims[1] + i64::from(o[1])) * dims[0] + i64::from(o[0]);
-                    let c = table[(base + delta) as usize];
-                    if c != u32::MAX {
-                        out.push(c);
+                let deltas: Vec<i64> = offsets
+                    .iter()
+                    .map(|o| {
+                        (i64::from(o[2]) * dims[1] + i64::from(o[1])) * dims[0] + i64::from(o[0])
+                    })
+                    .collect();
+                // Branch-free append: about half the look-ups are empty and a branch on
+                // them mispredicts; write every slot and advance only on a hit.
+                out.reserve(keys.len() * deltas.len());
+                let mut buf = [0u32; 125];
+                for k in keys {
+                    start.push(out.len() as u32);
+                    let base = Self::lin(*lo, *dims, *k) as i64;
+                    let mut n = 0;
+                    for d in &deltas {
+                        let c = table[(base + d) as usize];
+                        buf[n] = c;
+                        n += usize::from(c != u32::MAX);
                     }
+                    out.extend_from_slice(&buf[..n]);
                 }
             }
             CellLookup::Hashed(m) => {
-                for o in offsets {
-                    if let Some(&c) = m.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
-                        out.push(c);
+                for k in keys {
+                    start.push(out.len() as u32);
+                    for o in offsets {
+                        if let Some(&c) = m.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
+                            out.push(c);
+                        }
                     }
                 }
             }
@@ -603,57 +626,63 @@ fn cluster_group(
         })
         .collect();
 
-    // 3. Connect core cells. All core points of one cell are within eps of each other
-    //    only when the cell is uniform; a mixed cell is split per label first.
-    let mut uf = UnionFind::new(m);
-    for c in 0..ncells as u32 {
-        let r = core_range(c);
-        if r.is_empty() {
-            continue;
+    // 3. Connect core points. In a cell of one label all core points are within eps of
+    //    each other, so the cell is the unit of the union-find (a small array that stays
+    //    in L1); cells of several labels (finite label penalty) fall back to points.
+    let reach2 = th.same2.max(th.diff2);
+    let gap2 = |a: usize, b: usize| -> f32 {
+        let ((alo, ahi), (blo, bhi)) = (core_box[a], core_box[b]);
+        let mut g2 = 0.0;
+        for k in 0..3 {
+            let g = (blo[k] - ahi[k]).max(alo[k] - bhi[k]).max(0.0);
+            g2 += g * g;
         }
-        if grid.uniform[c as usize] {
-            for i in r.start + 1..r.end {
-                uf.union(r.start as u32, i as u32);
-            }
-        } else {
+        g2
+    };
+    let all_uniform = grid.uniform.iter().all(|&u| u);
+    // Union-find elements: cells when all are uniform, else sorted points.
+    let unit = |c: u32, i: usize| -> u32 { if all_uniform { c } else { i as u32 } };
+    let mut uf = UnionFind::new(if all_uniform { ncells } else { m });
+    if !all_uniform {
+        for c in 0..ncells as u32 {
+            let r = core_range(c);
             for i in r.clone() {
                 for j in r.start..i {
-                    if dist2(grid.pts[i], grid.pts[j]) <= th.get(grid.lbl[i], grid.lbl[j]) {
+                    if grid.uniform[c as usize]
+                        || dist2(grid.pts[i], grid.pts[j]) <= th.get(grid.lbl[i], grid.lbl[j])
+                    {
                         uf.union(i as u32, j as u32);
                     }
                 }
             }
         }
     }
-    let reach2 = th.same2.max(th.diff2);
     for c in 0..ncells as u32 {
         if !has_core(c) {
             continue;
         }
-        let (alo, ahi) = core_box[c as usize];
+        let ra = core_range(c);
+        let uniform_c = grid.uniform[c as usize];
         for &d in grid.neighbours(c as usize) {
             if d <= c || !has_core(d) {
                 continue;
             }
-            let (blo, bhi) = core_box[d as usize];
-            let mut gap2 = 0.0;
-            for a in 0..3 {
-                let g = (blo[a] - ahi[a]).max(alo[a] - bhi[a]).max(0.0);
-                gap2 += g * g;
-            }
-            if gap2 > reach2 {
-                continue;
-            }
-            let ra = core_range(c);
             let rb = core_range(d);
-            if grid.uniform[c as usize] && grid.uniform[d as usize] {
-                if uf.find(ra.start as u32) == uf.find(rb.start as u32) {
+            if uniform_c && grid.uniform[d as usize] {
+                // Already joined (the common case on a surface): nothing to test.
+                if uf.find(unit(c, ra.start)) == uf.find(unit(d, rb.start)) {
                     continue;
                 }
-                if let Some((i, j)) = any_pair(&grid, ra, rb, th) {
-                    uf.union(i as u32, j as u32);
+                if gap2(c as usize, d as usize) > reach2 {
+                    continue;
+                }
+                if let Some((i, j)) = any_pair(&grid, ra.clone(), rb, th) {
+                    uf.union(unit(c, i), unit(d, j));
                 }
             } else {
+                if gap2(c as usize, d as usize) > reach2 {
+                    continue;
+                }
                 for i in ra.clone() {
                     for j in rb.clone() {
                         if dist2(grid.pts[i], grid.pts[j]) <= th.get(grid.lbl[i], grid.lbl[j]) {
@@ -671,7 +700,7 @@ fn cluster_group(
     for c in 0..ncells as u32 {
         for i in core_range(c) {
             let l = grid.local[i] as usize;
-            component[l] = Some(uf.find(i as u32));
+            component[l] = Some(uf.find(unit(c, i)));
             is_core[l] = true;
         }
     }
@@ -680,7 +709,7 @@ fn cluster_group(
         for i in core_end[c as usize] as usize..r.end {
             let p = grid.pts[i];
             let li = grid.lbl[i];
-            // (distance², original index of the core point, its root)
+            // (distance², original index of the core point, its union-find unit)
             let mut best: Option<(f32, u32, u32)> = None;
             for &d in grid.neighbours(c as usize) {
                 for j in core_range(d) {
@@ -694,12 +723,12 @@ fn cluster_group(
                         Some((b2, bo, _)) => d2 < b2 || (d2 == b2 && oj < bo),
                     };
                     if better {
-                        best = Some((d2, oj, j as u32));
+                        best = Some((d2, oj, unit(d, j)));
                     }
                 }
             }
-            if let Some((_, _, j)) = best {
-                component[grid.local[i] as usize] = Some(uf.find(j));
+            if let Some((_, _, u)) = best {
+                component[grid.local[i] as usize] = Some(uf.find(u));
             }
         }
     }

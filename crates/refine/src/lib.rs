@@ -158,8 +158,9 @@ pub fn refine(
     let people: Vec<(Vec<u32>, PersonRefinement)> = boxes
         .par_iter()
         .map(|b| {
+            let test = b.test();
             let idx: Vec<u32> = (0..cloud.len() as u32)
-                .filter(|&i| b.contains(cloud.positions_m[i as usize]))
+                .filter(|&i| test.contains(cloud.positions_m[i as usize]))
                 .collect();
             let pos: Vec<Vec3> = idx.iter().map(|&i| cloud.positions_m[i as usize]).collect();
             let lab: Vec<Label> = idx.iter().map(|&i| cloud.labels[i as usize]).collect();
@@ -203,7 +204,13 @@ pub fn fuse(
             match first[i] {
                 None => {
                     first[i] = Some((p as u32, l));
-                    clusters[i] = r.clustering.cluster_of[k].map(|c| (p as u32, c));
+                    clusters[i] = r
+                        .clustering
+                        .cluster_of
+                        .get(k)
+                        .copied()
+                        .flatten()
+                        .map(|c| (p as u32, c));
                 }
                 Some((_, l0)) if l0 != l => disagree[i] = true,
                 Some(_) => {}

@@ -102,10 +102,10 @@ pub fn reassign_noise(
     }
     let index = NnIndex::new(positions_m, &clustered, eps_m);
     for i in 0..positions_m.len() {
-        if is_noise[i] {
-            if let Some(j) = index.nearest(positions_m, positions_m[i]) {
-                out[i] = labels[j as usize];
-            }
+        if is_noise[i]
+            && let Some(j) = index.nearest(positions_m[i])
+        {
+            out[i] = labels[j as usize];
         }
     }
     out
@@ -136,6 +136,18 @@ impl Aabb {
         self.grow(o.lo);
         self.grow(o.hi);
     }
+    /// Squared distance from `q` to the box's farthest corner, grown by a hair: an upper
+    /// bound for the distance to any point in the box.
+    #[inline]
+    fn far2(&self, q: Vec3) -> f32 {
+        let mut d = 0.0;
+        for a in 0..3 {
+            let g = (q[a] - self.lo[a]).abs().max((self.hi[a] - q[a]).abs());
+            d += g * g;
+        }
+        d * (1.0 + 1e-5)
+    }
+
     /// Squared distance from `q` to the box (0 inside); a lower bound for its points,
     /// shaved by a hair so rounding never prunes a point at exactly the best distance.
     #[inline]
@@ -149,17 +161,29 @@ impl Aabb {
     }
 }
 
+/// Per-query buffers: block lower bounds, candidate cells with their lower bounds.
+type QueryScratch = (Vec<f32>, Vec<(f32, u32)>);
+
 /// Exact nearest-neighbour index over a fixed point set: cells of side eps grouped into
 /// blocks of 4×4×4 cells, each cell and block with the bounding box of its points.
 struct NnIndex {
-    /// Point ids grouped by cell (CSR over cells).
+    /// Grid geometry, to find a query's own cell.
+    lo: Vec3,
+    inv_side: f32,
+    dims: [i32; 3],
+    /// Per grid cell (dense, row-major): its index among the non-empty cells, or `u32::MAX`.
+    cell_of_grid: Vec<u32>,
+    /// Point ids grouped by cell (CSR over cells), and their positions in the same order.
     items: Vec<u32>,
+    pts: Vec<Vec3>,
     cell_start: Vec<u32>,
     cell_box: Vec<Aabb>,
     /// Cells grouped by block (CSR over blocks).
     block_cells: Vec<u32>,
     block_start: Vec<u32>,
     block_box: Vec<Aabb>,
+    /// Candidate cells of the query in progress (reused to avoid an allocation per query).
+    scratch: std::cell::RefCell<QueryScratch>,
 }
 
 impl NnIndex {
@@ -193,8 +217,12 @@ impl NnIndex {
         }
         let mut fill = start.clone();
         let mut sorted = vec![0u32; idx.len()];
+        // Positions too, in cell order, so that scanning a cell reads memory in sequence.
+        let mut pts = vec![[0f32; 3]; idx.len()];
         for (&i, &c) in idx.iter().zip(&cell_of) {
-            sorted[fill[c] as usize] = i;
+            let f = fill[c] as usize;
+            sorted[f] = i;
+            pts[f] = positions[i as usize];
             fill[c] += 1;
         }
         // Keep the non-empty cells only, with their boxes, and bucket them by block.
@@ -203,14 +231,16 @@ impl NnIndex {
         let mut cell_start = vec![0u32];
         let mut cell_box = Vec::new();
         let mut cell_block = Vec::new();
+        let mut cell_of_grid = vec![u32::MAX; ncell];
         for c in 0..ncell {
             let (s, e) = (start[c] as usize, start[c + 1] as usize);
             if s == e {
                 continue;
             }
+            cell_of_grid[c] = cell_box.len() as u32;
             let mut bx = Aabb::EMPTY;
-            for &i in &sorted[s..e] {
-                bx.grow(positions[i as usize]);
+            for &p in &pts[s..e] {
+                bx.grow(p);
             }
             cell_box.push(bx);
             cell_start.push(e as u32);
@@ -252,12 +282,18 @@ impl NnIndex {
             block_box.push(bx);
         }
         NnIndex {
+            lo: bounds.lo,
+            inv_side: 1.0 / side,
+            dims,
+            cell_of_grid,
             items: sorted,
+            pts,
             cell_start,
             cell_box,
             block_cells,
             block_start,
             block_box,
+            scratch: Default::default(),
         }
     }
 
@@ -265,37 +301,67 @@ impl NnIndex {
     ///
     /// The block nearest to `q` is opened first so the bound is tight, then every other
     /// block is checked against it in one linear pass (a few hundred box tests).
-    fn nearest(&self, positions: &[Vec3], q: Vec3) -> Option<u32> {
-        let first = self
-            .block_box
-            .iter()
-            .enumerate()
-            .map(|(b, bx)| (bx.dist2(q), b))
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|(_, b)| b)?;
+    fn nearest(&self, q: Vec3) -> Option<u32> {
         let mut best: Option<(f32, u32)> = None;
-        self.scan_block(positions, q, first, &mut best);
-        for b in 0..self.block_box.len() {
-            if b != first && best.is_none_or(|(b2, _)| self.block_box[b].dist2(q) <= b2) {
-                self.scan_block(positions, q, b, &mut best);
+        // The query's own cell first: for a point next to the body it holds the answer or
+        // something close, and every box test after it prunes.
+        let k = [0, 1, 2].map(|a| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32);
+        if (0..3).all(|a| k[a] >= 0 && k[a] < self.dims[a]) {
+            let g = ((k[2] * self.dims[1] + k[1]) * self.dims[0] + k[0]) as usize;
+            let c = self.cell_of_grid[g];
+            if c != u32::MAX {
+                self.scan_cell(q, c as usize, &mut best);
             }
+        }
+        // Best-first over cells: an upper bound from box corners (every point of a box lies
+        // within its farthest corner) limits the blocks and cells worth opening, which are
+        // then scanned nearest box first until the next box is farther than the best point.
+        let mut bound = best.map_or(f32::INFINITY, |(b2, _)| b2);
+        let (blb, cand) = &mut *self.scratch.borrow_mut();
+        blb.clear();
+        blb.extend(self.block_box.iter().map(|bx| bx.dist2(q)));
+        // Tighten the bound with the cells of the nearest block first.
+        if let Some(b0) = (0..blb.len()).min_by(|&a, &b| blb[a].total_cmp(&blb[b])) {
+            for &c in self.cells_of_block(b0) {
+                bound = bound.min(self.cell_box[c as usize].far2(q));
+            }
+        }
+        cand.clear();
+        for (b, &lb) in blb.iter().enumerate() {
+            if lb > bound {
+                continue;
+            }
+            for &c in self.cells_of_block(b) {
+                let cb = &self.cell_box[c as usize];
+                let lb = cb.dist2(q);
+                if lb <= bound {
+                    bound = bound.min(cb.far2(q));
+                    cand.push((lb, c));
+                }
+            }
+        }
+        cand.retain(|&(lb, _)| lb <= bound);
+        cand.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        for &(lb, c) in cand.iter() {
+            if best.is_some_and(|(b2, _)| lb > b2) {
+                break;
+            }
+            self.scan_cell(q, c as usize, &mut best);
         }
         best.map(|(_, j)| j)
     }
 
-    fn scan_block(&self, positions: &[Vec3], q: Vec3, b: usize, best: &mut Option<(f32, u32)>) {
-        let cells =
-            &self.block_cells[self.block_start[b] as usize..self.block_start[b + 1] as usize];
-        for &c in cells {
-            let c = c as usize;
-            if best.is_some_and(|(b2, _)| self.cell_box[c].dist2(q) > b2) {
-                continue;
-            }
-            for &j in &self.items[self.cell_start[c] as usize..self.cell_start[c + 1] as usize] {
-                let d2 = dist2(q, positions[j as usize]);
-                if best.is_none_or(|(b2, bj)| d2 < b2 || (d2 == b2 && j < bj)) {
-                    *best = Some((d2, j));
-                }
+    fn cells_of_block(&self, b: usize) -> &[u32] {
+        &self.block_cells[self.block_start[b] as usize..self.block_start[b + 1] as usize]
+    }
+
+    #[inline]
+    fn scan_cell(&self, q: Vec3, c: usize, best: &mut Option<(f32, u32)>) {
+        let r = self.cell_start[c] as usize..self.cell_start[c + 1] as usize;
+        for (&j, &p) in self.items[r.clone()].iter().zip(&self.pts[r]) {
+            let d2 = dist2(q, p);
+            if best.is_none_or(|(b2, bj)| d2 < b2 || (d2 == b2 && j < bj)) {
+                *best = Some((d2, j));
             }
         }
     }
@@ -332,7 +398,7 @@ mod tests {
                         .total_cmp(&dist2(q, pos[b as usize]))
                         .then(a.cmp(&b))
                 });
-                assert_eq!(index.nearest(&pos, q), want, "case {case}");
+                assert_eq!(index.nearest(q), want, "case {case}");
             }
         }
     }
