@@ -228,6 +228,8 @@ struct Grid {
     bounds: Vec<(Vec3, Vec3)>,
     /// CSR adjacency: the non-empty cells of each cell's 5×5×5 block (itself included).
     nbr_start: Vec<u32>,
+    /// Per cell: end (in `nbr`) of the neighbours in its 3×3×3 block, which come first.
+    nbr_near_end: Vec<u32>,
     nbr: Vec<u32>,
 }
 
@@ -279,7 +281,14 @@ impl Grid {
         let lookup = CellLookup::new(&keys);
         let mut nbr_start = Vec::with_capacity(keys.len() + 1);
         let mut nbr = Vec::new();
-        lookup.neighbour_lists(&keys, &neighbour_offsets(), &mut nbr_start, &mut nbr);
+        let mut nbr_near_end = Vec::with_capacity(keys.len());
+        lookup.neighbour_lists(
+            &keys,
+            &neighbour_offsets(),
+            &mut nbr_start,
+            &mut nbr_near_end,
+            &mut nbr,
+        );
         nbr_start.push(nbr.len() as u32);
         let mut grid = Grid {
             side,
@@ -292,6 +301,7 @@ impl Grid {
             uniform,
             bounds: Vec::new(),
             nbr_start,
+            nbr_near_end,
             nbr,
         };
         grid.bounds = (0..grid.num_cells() as u32)
@@ -310,6 +320,16 @@ impl Grid {
 
     fn neighbours(&self, c: usize) -> &[u32] {
         &self.nbr[self.nbr_start[c] as usize..self.nbr_start[c + 1] as usize]
+    }
+
+    /// The neighbours of cell `c` in its 3×3×3 block (`near`) or beyond it.
+    fn neighbours_part(&self, c: usize, near: bool) -> &[u32] {
+        let mid = self.nbr_near_end[c] as usize;
+        if near {
+            &self.nbr[self.nbr_start[c] as usize..mid]
+        } else {
+            &self.nbr[mid..self.nbr_start[c + 1] as usize]
+        }
     }
 
     /// Axis-aligned bounds of a cell, metres (f32, widened by a hair so that the
@@ -470,8 +490,11 @@ impl CellLookup {
         keys: &[[i32; 3]],
         offsets: &[[i32; 3]],
         start: &mut Vec<u32>,
+        near_end: &mut Vec<u32>,
         out: &mut Vec<u32>,
     ) {
+        // Offsets come nearest first; the 3×3×3 block is the first NEAR_OFFSETS of them.
+        const NEAR_OFFSETS: usize = 27;
         match self {
             CellLookup::Dense { lo, dims, table } => {
                 let deltas: Vec<i64> = offsets
@@ -488,18 +511,26 @@ impl CellLookup {
                     start.push(out.len() as u32);
                     let base = Self::lin(*lo, *dims, *k) as i64;
                     let mut n = 0;
-                    for d in &deltas {
+                    let mut near = 0;
+                    for (o, d) in deltas.iter().enumerate() {
                         let c = table[(base + d) as usize];
                         buf[n] = c;
                         n += usize::from(c != u32::MAX);
+                        if o + 1 == NEAR_OFFSETS {
+                            near = n;
+                        }
                     }
+                    near_end.push((out.len() + near) as u32);
                     out.extend_from_slice(&buf[..n]);
                 }
             }
             CellLookup::Hashed(m) => {
                 for k in keys {
                     start.push(out.len() as u32);
-                    for o in offsets {
+                    for (i, o) in offsets.iter().enumerate() {
+                        if i == NEAR_OFFSETS {
+                            near_end.push(out.len() as u32);
+                        }
                         if let Some(&c) = m.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
                             out.push(c);
                         }
@@ -657,36 +688,41 @@ fn cluster_group(
             }
         }
     }
-    for c in 0..ncells as u32 {
-        if !has_core(c) {
-            continue;
-        }
-        let ra = core_range(c);
-        let uniform_c = grid.uniform[c as usize];
-        for &d in grid.neighbours(c as usize) {
-            if d <= c || !has_core(d) {
+    // Two passes: the 3×3×3 blocks first, which join almost everything, so that the
+    // farther pairs of the second pass are mostly settled by one `find`.
+    for near in [true, false] {
+        for c in 0..ncells as u32 {
+            if !has_core(c) {
                 continue;
             }
-            let rb = core_range(d);
-            if uniform_c && grid.uniform[d as usize] {
-                // Already joined (the common case on a surface): nothing to test.
-                if uf.find(unit(c, ra.start)) == uf.find(unit(d, rb.start)) {
+            let ra = core_range(c);
+            let uniform_c = grid.uniform[c as usize];
+            for &d in grid.neighbours_part(c as usize, near) {
+                if d <= c || !has_core(d) {
                     continue;
                 }
-                if gap2(c as usize, d as usize) > reach2 {
-                    continue;
-                }
-                if let Some((i, j)) = any_pair(&grid, ra.clone(), rb, th) {
-                    uf.union(unit(c, i), unit(d, j));
-                }
-            } else {
-                if gap2(c as usize, d as usize) > reach2 {
-                    continue;
-                }
-                for i in ra.clone() {
-                    for j in rb.clone() {
-                        if dist2(grid.pts[i], grid.pts[j]) <= th.get(grid.lbl[i], grid.lbl[j]) {
-                            uf.union(i as u32, j as u32);
+                let rb = core_range(d);
+                if uniform_c && grid.uniform[d as usize] {
+                    // Already joined (the common case on a surface): nothing to test.
+                    if uf.find(unit(c, ra.start)) == uf.find(unit(d, rb.start)) {
+                        continue;
+                    }
+                    if gap2(c as usize, d as usize) > reach2 {
+                        continue;
+                    }
+                    if let Some((i, j)) = any_pair(&grid, ra.clone(), rb, core_box[d as usize], th)
+                    {
+                        uf.union(unit(c, i), unit(d, j));
+                    }
+                } else {
+                    if gap2(c as usize, d as usize) > reach2 {
+                        continue;
+                    }
+                    for i in ra.clone() {
+                        for j in rb.clone() {
+                            if dist2(grid.pts[i], grid.pts[j]) <= th.get(grid.lbl[i], grid.lbl[j]) {
+                                uf.union(i as u32, j as u32);
+                            }
                         }
                     }
                 }
@@ -800,11 +836,17 @@ fn any_pair(
     grid: &Grid,
     a: std::ops::Range<usize>,
     b: std::ops::Range<usize>,
+    core_box: (Vec3, Vec3),
     th: Thresholds,
 ) -> Option<(usize, usize)> {
     let t = th.get(grid.lbl[a.start], grid.lbl[b.start]);
+    let (blo, bhi) = core_box;
     for i in a {
         let p = grid.pts[i];
+        // Most points of A are too far from all of B: one box test skips them.
+        if box_dist2(p, blo, bhi).0 > t {
+            continue;
+        }
         for j in b.clone() {
             if dist2(p, grid.pts[j]) <= t {
                 return Some((i, j));
