@@ -768,11 +768,17 @@ fn cluster_group(
             }
         }
     }
-    // Renumber roots densely (any order; global ids are assigned later).
-    let mut dense: FxHashMap<u32, u32> = FxHashMap::default();
+    // Renumber roots densely (any order; global ids are assigned later). Roots are
+    // union-find elements, so a table over them replaces a hash map.
+    let mut dense = vec![u32::MAX; uf.0.len()];
+    let mut next = 0u32;
     for c in component.iter_mut().flatten() {
-        let next = dense.len() as u32;
-        *c = *dense.entry(*c).or_insert(next);
+        let d = &mut dense[*c as usize];
+        if *d == u32::MAX {
+            *d = next;
+            next += 1;
+        }
+        *c = *d;
     }
     GroupResult { component, is_core }
 }

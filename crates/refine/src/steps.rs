@@ -127,27 +127,21 @@ impl Aabb {
         hi: [f32::NEG_INFINITY; 3],
     };
     fn grow(&mut self, p: Vec3) {
+        // Plain comparisons (coordinates are finite): `f32::min`'s NaN handling costs
+        // several instructions per call on this hot path.
         for a in 0..3 {
-            self.lo[a] = self.lo[a].min(p[a]);
-            self.hi[a] = self.hi[a].max(p[a]);
+            if p[a] < self.lo[a] {
+                self.lo[a] = p[a];
+            }
+            if p[a] > self.hi[a] {
+                self.hi[a] = p[a];
+            }
         }
     }
     fn union(&mut self, o: &Aabb) {
         self.grow(o.lo);
         self.grow(o.hi);
     }
-    /// Squared distance from `q` to the box's farthest corner, grown by a hair: an upper
-    /// bound for the distance to any point in the box.
-    #[inline]
-    fn far2(&self, q: Vec3) -> f32 {
-        let mut d = 0.0;
-        for a in 0..3 {
-            let g = (q[a] - self.lo[a]).abs().max((self.hi[a] - q[a]).abs());
-            d += g * g;
-        }
-        d * (1.0 + 1e-5)
-    }
-
     /// Squared distance from `q` to the box (0 inside); a lower bound for its points,
     /// shaved by a hair so rounding never prunes a point at exactly the best distance.
     #[inline]
@@ -160,9 +154,6 @@ impl Aabb {
         d * (1.0 - 1e-5)
     }
 }
-
-/// Per-query buffers: block lower bounds, candidate cells with their lower bounds.
-type QueryScratch = (Vec<f32>, Vec<(f32, u32)>);
 
 /// Exact nearest-neighbour index over a fixed point set: cells of side eps grouped into
 /// blocks of 4×4×4 cells, each cell and block with the bounding box of its points.
@@ -182,8 +173,8 @@ struct NnIndex {
     block_cells: Vec<u32>,
     block_start: Vec<u32>,
     block_box: Vec<Aabb>,
-    /// Candidate cells of the query in progress (reused to avoid an allocation per query).
-    scratch: std::cell::RefCell<QueryScratch>,
+    /// Block lower bounds of the query in progress (reused to avoid an allocation per query).
+    scratch: std::cell::RefCell<Vec<f32>>,
 }
 
 impl NnIndex {
@@ -197,9 +188,10 @@ impl NnIndex {
             .fold(0.0f32, f32::max);
         // Cells of side eps, but never more than ~64 along the longest axis.
         let side = eps_m.max(extent / 64.0).max(1e-6);
-        let dims = [0, 1, 2].map(|a| ((bounds.hi[a] - bounds.lo[a]) / side) as i32 + 1);
+        let inv_side = 1.0 / side;
+        let dims = [0, 1, 2].map(|a| ((bounds.hi[a] - bounds.lo[a]) * inv_side) as i32 + 1);
         let key = |p: Vec3| -> [i32; 3] {
-            [0, 1, 2].map(|a| (((p[a] - bounds.lo[a]) / side) as i32).clamp(0, dims[a] - 1))
+            [0, 1, 2].map(|a| (((p[a] - bounds.lo[a]) * inv_side) as i32).clamp(0, dims[a] - 1))
         };
         let lin = |k: [i32; 3]| ((k[2] * dims[1] + k[1]) * dims[0] + k[0]) as usize;
         let ncell = dims.iter().map(|&d| d as usize).product::<usize>();
@@ -283,7 +275,7 @@ impl NnIndex {
         }
         NnIndex {
             lo: bounds.lo,
-            inv_side: 1.0 / side,
+            inv_side,
             dims,
             cell_of_grid,
             items: sorted,
@@ -303,52 +295,84 @@ impl NnIndex {
     /// block is checked against it in one linear pass (a few hundred box tests).
     fn nearest(&self, q: Vec3) -> Option<u32> {
         let mut best: Option<(f32, u32)> = None;
-        // The query's own cell first: for a point next to the body it holds the answer or
-        // something close, and every box test after it prunes.
+        // Near the body (most noise: unknown points on it, points at its edges) the answer
+        // lies in the query's own 3×3×3 block of cells: scan the own cell, then the block,
+        // and stop as soon as the best point is nearer than the block's walls.
         let k = [0, 1, 2].map(|a| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32);
         if (0..3).all(|a| k[a] >= 0 && k[a] < self.dims[a]) {
             let g = ((k[2] * self.dims[1] + k[1]) * self.dims[0] + k[0]) as usize;
-            let c = self.cell_of_grid[g];
-            if c != u32::MAX {
-                self.scan_cell(q, c as usize, &mut best);
+            let own = self.cell_of_grid[g];
+            if own != u32::MAX {
+                self.scan_cell(q, own as usize, &mut best);
+                if best.is_some_and(|(b2, _)| b2 <= self.wall_dist2(q, k, 0)) {
+                    return best.map(|(_, j)| j);
+                }
+            }
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let n = [k[0] + dx, k[1] + dy, k[2] + dz];
+                        if (dx, dy, dz) == (0, 0, 0)
+                            || (0..3).any(|a| n[a] < 0 || n[a] >= self.dims[a])
+                        {
+                            continue;
+                        }
+                        let c = self.cell_of_grid
+                            [((n[2] * self.dims[1] + n[1]) * self.dims[0] + n[0]) as usize];
+                        if c != u32::MAX
+                            && best.is_none_or(|(b2, _)| self.cell_box[c as usize].dist2(q) <= b2)
+                        {
+                            self.scan_cell(q, c as usize, &mut best);
+                        }
+                    }
+                }
+            }
+            if best.is_some_and(|(b2, _)| b2 <= self.wall_dist2(q, k, 1)) {
+                return best.map(|(_, j)| j);
             }
         }
-        // Best-first over cells: an upper bound from box corners (every point of a box lies
-        // within its farthest corner) limits the blocks and cells worth opening, which are
-        // then scanned nearest box first until the next box is farther than the best point.
-        let mut bound = best.map_or(f32::INFINITY, |(b2, _)| b2);
-        let (blb, cand) = &mut *self.scratch.borrow_mut();
+        // Far from the body: rank the blocks by their lower bound, scan the nearest cell of
+        // the nearest block for a real best distance, then open only the blocks and cells
+        // whose boxes are nearer than it.
+        let blb = &mut *self.scratch.borrow_mut();
         blb.clear();
         blb.extend(self.block_box.iter().map(|bx| bx.dist2(q)));
-        // Tighten the bound with the cells of the nearest block first.
-        if let Some(b0) = (0..blb.len()).min_by(|&a, &b| blb[a].total_cmp(&blb[b])) {
-            for &c in self.cells_of_block(b0) {
-                bound = bound.min(self.cell_box[c as usize].far2(q));
-            }
-        }
-        cand.clear();
+        let b0 = (0..blb.len()).min_by(|&a, &b| blb[a].total_cmp(&blb[b]))?;
+        let c0 = self
+            .cells_of_block(b0)
+            .iter()
+            .min_by(|&&a, &&b| {
+                self.cell_box[a as usize]
+                    .dist2(q)
+                    .total_cmp(&self.cell_box[b as usize].dist2(q))
+            })
+            .copied()?;
+        self.scan_cell(q, c0 as usize, &mut best);
         for (b, &lb) in blb.iter().enumerate() {
-            if lb > bound {
+            if best.is_some_and(|(b2, _)| lb > b2) {
                 continue;
             }
             for &c in self.cells_of_block(b) {
-                let cb = &self.cell_box[c as usize];
-                let lb = cb.dist2(q);
-                if lb <= bound {
-                    bound = bound.min(cb.far2(q));
-                    cand.push((lb, c));
+                if c != c0 && best.is_none_or(|(b2, _)| self.cell_box[c as usize].dist2(q) <= b2) {
+                    self.scan_cell(q, c as usize, &mut best);
                 }
             }
         }
-        cand.retain(|&(lb, _)| lb <= bound);
-        cand.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-        for &(lb, c) in cand.iter() {
-            if best.is_some_and(|(b2, _)| lb > b2) {
-                break;
-            }
-            self.scan_cell(q, c as usize, &mut best);
-        }
         best.map(|(_, j)| j)
+    }
+
+    /// Squared distance from `q` (in cell `k`) to the walls of the block of cells within
+    /// `r` cells of `k`, shaved by a hair: no point outside that block is nearer.
+    fn wall_dist2(&self, q: Vec3, k: [i32; 3], r: i32) -> f32 {
+        let side = 1.0 / self.inv_side;
+        let mut m = f32::INFINITY;
+        for a in 0..3 {
+            let lo = self.lo[a] + (k[a] - r) as f32 * side;
+            let hi = self.lo[a] + (k[a] + r + 1) as f32 * side;
+            m = m.min(q[a] - lo).min(hi - q[a]);
+        }
+        let m = m.max(0.0);
+        m * m * (1.0 - 1e-4)
     }
 
     fn cells_of_block(&self, b: usize) -> &[u32] {
