@@ -1,1 +1,10 @@
-//! End-to-end tests.
+//! End-to-end tests: run the real `bodyseg` binary on files in a temporary folder.
+//!
+//! One test binary (`e2e`) whose modules are the other files of `tests/`.
+
+mod common;
+
+mod cli_bad_input;
+mod cli_eval;
+mod cli_help;
+mod cli_refine;

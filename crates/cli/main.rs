@@ -1,2 +1,103 @@
-//! The bodyseg binary.
-fn main() {}
+//! The `bodyseg` binary: parses the command line, sets up logging, calls
+//! bodyseg-pipeline, prints per-stage summaries and errors.
+//!
+//! Exit status: 0 on success, 1 on any error (printed as one `error: ...` line on
+//! stderr), 2 for a command line clap rejects.
+
+mod args;
+
+use anyhow::Result;
+use args::{Cli, Command, EvalArgs, RefineArgs};
+use bodyseg_pipeline::{Stage, eval_files, merge_reports, refine_file, render_report, write_text};
+use clap::Parser;
+use std::io::Write;
+use std::process::ExitCode;
+use std::time::Instant;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    init_logging(cli.verbose);
+    match run(&cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Logs go to stderr. `-v` flags pick the level; without them RUST_LOG does, else `warn`.
+fn init_logging(verbose: u8) {
+    use tracing_subscriber::EnvFilter;
+    let filter = match verbose {
+        0 => EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn")),
+        1 => EnvFilter::new("info"),
+        2 => EnvFilter::new("debug"),
+        _ => EnvFilter::new("trace"),
+    };
+    // Fails only when a subscriber is already set, which cannot happen here.
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .try_init();
+}
+
+fn run(cli: &Cli) -> Result<()> {
+    let stages = match &cli.command {
+        Command::Refine(args) => refine(args)?,
+        Command::Eval(args) => eval(args)?,
+    };
+    if !cli.quiet {
+        for s in stages {
+            eprintln!("{s}");
+        }
+    }
+    Ok(())
+}
+
+fn refine(args: &RefineArgs) -> Result<Vec<Stage>> {
+    let summary = refine_file(&args.options()?)?;
+    Ok(summary.stages)
+}
+
+fn eval(args: &EvalArgs) -> Result<Vec<Stage>> {
+    let (report, mut stages) = if args.merge.is_empty() {
+        let summary = eval_files(&args.options()?)?;
+        (summary.report, summary.stages)
+    } else {
+        let start = Instant::now();
+        let report = merge_reports(&args.merge)?;
+        let detail = format!(
+            "{} reports, configurations: {}",
+            args.merge.len(),
+            report.names().join(", ")
+        );
+        (report, vec![Stage::new("merge", start.elapsed(), detail)])
+    };
+    let text = render_report(&report, args.format.into())?;
+    match &args.out {
+        Some(path) => {
+            let start = Instant::now();
+            write_text(path, &text)?;
+            stages.push(Stage::new(
+                "write",
+                start.elapsed(),
+                path.display().to_string(),
+            ));
+        }
+        None => print_stdout(&text)?,
+    }
+    Ok(stages)
+}
+
+/// Prints to stdout; a closed pipe (`bodyseg eval ... | head`) is not an error.
+fn print_stdout(text: &str) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(anyhow::Error::new(e).context("cannot write the report to stdout"))
+        }
+        _ => Ok(()),
+    }
+}

@@ -23,8 +23,8 @@ pub fn write_atomic<F>(path: &Path, write: F) -> Result<(), IoError>
 where
     F: FnOnce(&mut dyn Write) -> io::Result<()>,
 {
-    let wrap = |source| IoError::Write {
-        source,
+    let wrap = |cause| IoError::Write {
+        cause,
         path: path.to_path_buf(),
     };
     let dir = match path.parent() {

@@ -9,8 +9,8 @@ use std::path::Path;
 /// # Errors
 /// [`IoError::Read`] when the file cannot be read, otherwise as [`parse_boxes`].
 pub fn read_boxes(path: &Path) -> Result<PersonBoxes, IoError> {
-    let bytes = std::fs::read(path).map_err(|source| IoError::Read {
-        source,
+    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
+        cause,
         path: path.to_path_buf(),
     })?;
     parse_boxes(&bytes, path)
@@ -25,11 +25,10 @@ pub fn read_boxes(path: &Path) -> Result<PersonBoxes, IoError> {
 /// [`IoError::BoxesJson`] (with serde's line and column) when the text is not JSON of
 /// FORMATS.md's shape, [`IoError::InvalidBox`] naming the first unusable box.
 pub fn parse_boxes(bytes: &[u8], path_for_errors: &Path) -> Result<PersonBoxes, IoError> {
-    let boxes: PersonBoxes =
-        serde_json::from_slice(bytes).map_err(|source| IoError::BoxesJson {
-            source,
-            path: path_for_errors.to_path_buf(),
-        })?;
+    let boxes: PersonBoxes = serde_json::from_slice(bytes).map_err(|cause| IoError::BoxesJson {
+        cause,
+        path: path_for_errors.to_path_buf(),
+    })?;
     validate(&boxes, path_for_errors)?;
     Ok(boxes)
 }

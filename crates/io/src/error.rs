@@ -5,23 +5,47 @@ use std::path::PathBuf;
 
 /// An error reading or writing one of bodyseg's files. Every variant names the file
 /// (`path`, the last field); messages start with it, so `{err}` alone is actionable.
+///
+/// # Causes are in the message, not in `source()`
+/// Variants that wrap a lower-level error (`Read`, `Write`, `InvalidCloud`, `BoxesJson`)
+/// print it inside their own message (`x.ply: cannot read: No such file or directory`) and
+/// do **not** return it from [`source()`](std::error::Error::source), which is `None` for
+/// every variant. An error chain printer (anyhow's `{:#}`, `{:?}`) walks `source()` and
+/// appends each cause, so having both would print the cause twice; of the two, the message
+/// is the one that must carry it: `to_string()` has to say what went wrong on its own, in
+/// one line, for callers that print just `{err}`. The wrapped errors stay available as
+/// the `cause` fields. (The fields are deliberately not named `source`: thiserror would
+/// make such a field the error source implicitly.)
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum IoError {
     /// The file could not be opened or read.
-    #[error("{}: cannot read: {source}", .path.display())]
+    #[error("{}: cannot read: {cause}", .path.display())]
     Read {
         /// What the operating system said.
-        source: std::io::Error,
+        cause: std::io::Error,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A text file (configuration, report) is not valid UTF-8.
+    #[error(
+        "{}: not UTF-8 text: invalid byte sequence on line {line} (byte offset {offset})",
+        .path.display()
+    )]
+    NotUtf8 {
+        /// 1-based line number of the first invalid byte.
+        line: usize,
+        /// 0-based byte offset of the first invalid byte in the file.
+        offset: usize,
         /// The file.
         path: PathBuf,
     },
     /// The file (or its temporary sibling) could not be created, written, synced or
     /// renamed into place. The destination is left as it was.
-    #[error("{}: cannot write: {source}", .path.display())]
+    #[error("{}: cannot write: {cause}", .path.display())]
     Write {
         /// What the operating system (or the writing closure) said.
-        source: std::io::Error,
+        cause: std::io::Error,
         /// The destination file.
         path: PathBuf,
     },
@@ -125,10 +149,10 @@ pub enum IoError {
     },
     /// A cloud handed to a writer is inconsistent (array lengths differ, non-finite
     /// coordinate); nothing was written.
-    #[error("{}: refusing to write an invalid cloud: {source}", .path.display())]
+    #[error("{}: refusing to write an invalid cloud: {cause}", .path.display())]
     InvalidCloud {
         /// What [`bodyseg_core::LabeledCloud::validate`] reported.
-        source: CloudError,
+        cause: CloudError,
         /// The destination file.
         path: PathBuf,
     },
@@ -143,10 +167,10 @@ pub enum IoError {
     },
     /// A boxes file is not valid JSON or does not have FORMATS.md's shape. serde's
     /// message carries the line and column.
-    #[error("{}: bad boxes JSON: {source}", .path.display())]
+    #[error("{}: bad boxes JSON: {cause}", .path.display())]
     BoxesJson {
         /// serde_json's error (with line and column).
-        source: serde_json::Error,
+        cause: serde_json::Error,
         /// The file.
         path: PathBuf,
     },

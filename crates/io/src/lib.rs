@@ -4,6 +4,8 @@
 //! that cross stage boundaries so any intermediate can be stored and inspected:
 //! [`LabeledCloud`](bodyseg_core::LabeledCloud) ⇄ PLY ([`read_ply`], [`write_ply`]) and
 //! [`PersonBoxes`](bodyseg_core::PersonBoxes) ⇄ JSON ([`read_boxes`], [`write_boxes`]).
+//! Other crates' text files (configurations, reports) go through [`read_text`] and
+//! [`write_bytes_atomic`].
 //! Layouts are those of FORMATS.md. Readers are tolerant (unknown PLY properties and
 //! elements, unknown JSON keys are ignored); writers are exact.
 //!
@@ -21,15 +23,18 @@
 //! - Every write goes through [`write_atomic`]: a temporary file in the destination's
 //!   directory, fsynced, renamed over the destination. A failed write leaves the
 //!   destination untouched and no temporary behind.
-//! - Errors are [`IoError`]; each message starts with the file's path. Bad input is an
-//!   error, never a panic.
+//! - Errors are [`IoError`]; each message starts with the file's path and includes the
+//!   underlying cause (an OS or JSON error), which is not repeated by `source()`: an
+//!   error chain prints each cause once. Bad input is an error, never a panic.
 
 mod atomic;
 mod boxes;
 mod error;
 mod ply;
+mod text;
 
 pub use atomic::{write_atomic, write_bytes_atomic};
 pub use boxes::{parse_boxes, read_boxes, write_boxes};
 pub use error::IoError;
 pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};
+pub use text::read_text;

@@ -1,1 +1,38 @@
-//! bodyseg-pipeline (in progress).
+//! bodyseg-pipeline: the commands behind the `bodyseg` binary, as plain functions.
+//!
+//! Place in the pipeline: the only crate (with the binary) that sees every stage. It
+//! loads the [`PipelineConfig`], reads the inputs with bodyseg-io, calls the stages in
+//! order and writes the outputs:
+//!
+//! ```text
+//! refine_file:   cloud PLY + boxes JSON → bodyseg_refine::refine → refined PLY (+ resolved config)
+//! eval_files:    predicted PLY(s) + ground-truth PLY → bodyseg_eval::match_clouds → Report
+//! merge_reports: report JSON files → Report::merge → Report
+//! ```
+//!
+//! No command-line parsing here (that is `crates/cli`): each command takes an options
+//! struct and returns a summary with per-stage timings ([`Stage`]) for the binary to print.
+//!
+//! # Conventions
+//! - Errors are [`anyhow::Error`]s whose chain (`{:#}`) reads as one line naming the file,
+//!   and the vertex, box or configuration field at fault.
+//! - Every file is written atomically (bodyseg-io's `write_atomic`): a failed command
+//!   leaves no output file behind and an existing one untouched.
+//! - Configuration precedence: built-in defaults ([`PipelineConfig::default`], equal to
+//!   `configs/default.toml`) < configuration file < command-line flags.
+//! - Units are those of the stages: metres, radians; times are wall-clock.
+
+mod config;
+mod eval;
+mod fs;
+mod refine;
+mod stage;
+
+pub use config::{PipelineConfig, RefineOverrides};
+pub use eval::{
+    DEFAULT_PREDICTION_NAME, EvalOptions, EvalSummary, NamedPrediction, ReportFormat, eval_files,
+    merge_reports, render_report,
+};
+pub use fs::write_text;
+pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
+pub use stage::Stage;

@@ -32,8 +32,8 @@ const REQUIRED: [usize; 4] = [X, Y, Z, LABEL];
 /// # Errors
 /// [`IoError::Read`] when the file cannot be read, otherwise as [`parse_ply`].
 pub fn read_ply(path: &Path) -> Result<LabeledCloud, IoError> {
-    let bytes = std::fs::read(path).map_err(|source| IoError::Read {
-        source,
+    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
+        cause,
         path: path.to_path_buf(),
     })?;
     parse_ply(&bytes, path)

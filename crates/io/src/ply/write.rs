@@ -68,8 +68,8 @@ pub fn ply_bytes(
 ) -> Result<Vec<u8>, IoError> {
     check(cloud, opts, path_for_errors)?;
     let mut out = Vec::with_capacity(512 + cloud.len() * RECORD_BYTES);
-    encode(cloud, opts, &mut out).map_err(|source| IoError::Write {
-        source,
+    encode(cloud, opts, &mut out).map_err(|cause| IoError::Write {
+        cause,
         path: path_for_errors.to_path_buf(),
     })?;
     Ok(out)
@@ -77,8 +77,8 @@ pub fn ply_bytes(
 
 /// Everything that can be wrong with the input, checked before any byte is written.
 fn check(cloud: &LabeledCloud, opts: &PlyWriteOptions, path: &Path) -> Result<(), IoError> {
-    cloud.validate().map_err(|source| IoError::InvalidCloud {
-        source,
+    cloud.validate().map_err(|cause| IoError::InvalidCloud {
+        cause,
         path: path.to_path_buf(),
     })?;
     if opts.colors == PlyColors::Camera && cloud.colors.is_none() {

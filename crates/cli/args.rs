@@ -1,0 +1,385 @@
+//! Command-line arguments (clap derive) and their translation into bodyseg-pipeline's
+//! option structs. No work happens here.
+
+use anyhow::{Result, bail};
+use bodyseg_pipeline::{
+    DEFAULT_PREDICTION_NAME, EvalOptions, NamedPrediction, PipelineConfig, RefineOptions,
+    RefineOverrides, ReportFormat,
+};
+use bodyseg_refine::Steps;
+use clap::{ArgAction, Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+const ABOUT: &str = "Body-part labelled 3D point clouds from multi-camera RGB-D recordings";
+
+const LONG_ABOUT: &str = "\
+bodyseg labels the points of 3D point clouds of people with body parts (head, torso, \
+upper arms, lower arms, upper legs, lower legs; everything else is background). Its core is \
+the clustering refinement of the paper \"Clustering-based refinement for 3D human body \
+parts segmentation\": it repairs the labels that go wrong when 2D \
+human-parsing masks are projected onto 3D points.
+
+Files: labelled point clouds are PLY (x y z in metres, world frame, z up; a `label` class id \
+per point), person boxes are JSON; see shared/FORMATS.md. Run `bodyseg <COMMAND> --help` for \
+each command.";
+
+const MAIN_EXAMPLES: &str = "\
+Examples:
+  bodyseg refine --cloud frame.ply --boxes frame_boxes.json --out refined.ply
+  bodyseg eval --pred refined.ply --gt truth.ply
+  bodyseg refine --help
+
+Logging: RUST_LOG=debug (default warn); -v is info, -vv debug.";
+
+/// `bodyseg`: the command line.
+#[derive(Debug, Parser)]
+#[command(
+    name = "bodyseg",
+    version,
+    about = ABOUT,
+    long_about = LONG_ABOUT,
+    after_help = MAIN_EXAMPLES,
+    propagate_version = true
+)]
+pub struct Cli {
+    /// Log more to stderr: -v info, -vv debug, -vvv trace (default: warnings only, or
+    /// RUST_LOG when set)
+    #[arg(
+        short,
+        long,
+        action = ArgAction::Count,
+        global = true,
+        help_heading = "Global options"
+    )]
+    pub verbose: u8,
+
+    /// Do not print the per-stage summary lines (time and counts) to stderr
+    #[arg(short, long, global = true, help_heading = "Global options")]
+    pub quiet: bool,
+
+    /// The command to run
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Repair the body-part labels of a point cloud (clustering refinement: M, R, N steps)
+    #[command(long_about = REFINE_LONG_ABOUT, after_help = REFINE_EXAMPLES)]
+    Refine(RefineArgs),
+    /// Score labelled point clouds against ground truth (IoU, BIoU, precision, F1), or merge
+    /// reports
+    #[command(long_about = EVAL_LONG_ABOUT, after_help = EVAL_EXAMPLES)]
+    Eval(EvalArgs),
+}
+
+const REFINE_LONG_ABOUT: &str = "\
+Repair the body-part labels of one point cloud with the clustering refinement (the paper's \
+Algorithm 1). Inside each person box, points are clustered per label (DBSCAN); the M step \
+merges clusters lying inside a cluster of another label, R turns clusters cut off from the \
+body into background, and N gives noise points the label of the nearest clustered point. \
+Body-labelled points outside every box become background.
+
+Reads: the labelled cloud (--cloud, PLY) and its person boxes (--boxes, JSON). Writes: the \
+refined cloud (--out, PLY: the same points in the same order, only `label` and the palette \
+colours change) and beside it the exact configuration used (--out refined.ply writes \
+refined.config.resolved.toml). Nothing is written when the command fails.
+
+Configuration: built-in defaults (configs/default.toml) < --config FILE < flags.";
+
+const REFINE_EXAMPLES: &str = "\
+Examples:
+  # Refine with the default configuration (M-R-N, eps 0.05 m, min 40 points):
+  bodyseg refine --cloud frame.ply --boxes frame_boxes.json --out refined.ply
+  # Only merge and noise steps, a 3 cm radius, ASCII output:
+  bodyseg refine --cloud frame.ply --boxes frame_boxes.json --steps m,n --eps-m 0.03 \\
+      --ascii --out refined.ply
+  # Settings from a file (see configs/default.toml for every key):
+  bodyseg refine --config my.toml --cloud frame.ply --boxes frame_boxes.json --out refined.ply";
+
+/// `bodyseg refine`.
+#[derive(Debug, Args)]
+pub struct RefineArgs {
+    /// Labelled point cloud to refine (PLY with x, y, z in metres and a `label` per point)
+    #[arg(long, value_name = "IN.ply")]
+    pub cloud: PathBuf,
+
+    /// Person boxes of that cloud (JSON: {"boxes": [{"id", "center_m", "half_extents_m",
+    /// "yaw_rad"}]})
+    #[arg(long, value_name = "BOXES.json")]
+    pub boxes: PathBuf,
+
+    /// Where to write the refined cloud (PLY); an existing file is replaced only on success
+    #[arg(long, value_name = "OUT.ply")]
+    pub out: PathBuf,
+
+    /// Configuration file (TOML, section [refine]); keys left out keep the defaults of
+    /// configs/default.toml
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+
+    /// Steps to run: m (merge), r (remove), n (noise) joined by ',' or '-', e.g. m,r,n or
+    /// M-N; or `reference` (labels untouched) [default: M-R-N]
+    #[arg(long, value_name = "STEPS")]
+    pub steps: Option<Steps>,
+
+    /// DBSCAN radius in metres (> 0) [default: 0.05]
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
+    pub eps_m: Option<f32>,
+
+    /// DBSCAN core threshold: neighbours within the radius, the point itself included (>= 1)
+    /// [default: 40]
+    #[arg(long, value_name = "N")]
+    pub min_points: Option<usize>,
+
+    /// Keep the labels of body points outside every box (default: they become background)
+    #[arg(long)]
+    pub keep_outside_boxes: bool,
+
+    /// Write ASCII PLY (default: binary little-endian)
+    #[arg(long)]
+    pub ascii: bool,
+}
+
+impl RefineArgs {
+    /// The resolved configuration: defaults < --config < flags, validated.
+    pub fn config(&self) -> Result<PipelineConfig> {
+        let mut config = match &self.config {
+            Some(path) => PipelineConfig::load(path)?,
+            None => PipelineConfig::default(),
+        };
+        config.apply_refine_overrides(&RefineOverrides {
+            steps: self.steps,
+            eps_m: self.eps_m,
+            min_points: self.min_points,
+            keep_outside_boxes: self.keep_outside_boxes.then_some(true),
+        })?;
+        Ok(config)
+    }
+
+    /// The pipeline's options for `refine_file`.
+    pub fn options(&self) -> Result<RefineOptions> {
+        Ok(RefineOptions {
+            cloud: self.cloud.clone(),
+            boxes: self.boxes.clone(),
+            out: self.out.clone(),
+            config: self.config()?,
+            ascii: self.ascii,
+            write_resolved_config: true,
+        })
+    }
+}
+
+const EVAL_LONG_ABOUT: &str = "\
+Score labelled point clouds against ground truth, as the paper's tables do: per class IoU, \
+precision, recall and F1, mIoU (all 7 classes), BIoU (the 6 body classes), AP and F1.
+
+Reads: one or more predicted clouds (--pred, PLY) and the ground-truth cloud (--gt, PLY). \
+Points are paired by their origin (the `camera` and `pixel` properties; without them, by \
+vertex index), so both clouds must come from the same frame. Ground-truth points labelled \
+255 (unknown) are not scored; predicted unknown points count as background. Writes: the \
+report to stdout, or to --out FILE.
+
+With --merge, reads report JSON files (written with --format json, e.g. one per shard of a \
+data set) and sums their confusion matrices into one report.
+
+Metrics are printed as percentages (markdown) or fractions 0..1 (JSON).";
+
+const EVAL_EXAMPLES: &str = "\
+Examples:
+  # One prediction, markdown table on stdout:
+  bodyseg eval --pred refined.ply --gt truth.ply
+  # Compare configurations (the first is the reference of the change rows), JSON report:
+  bodyseg eval --pred Reference=input.ply --pred M-R-N=refined.ply --gt truth.ply \\
+      --format json --out report.json
+  # Sum the reports of several shards:
+  bodyseg eval --merge shard0.json shard1.json --format md";
+
+/// `bodyseg eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// Predicted cloud (PLY); repeat as NAME=PATH to compare several configurations
+    /// (a value holding '=' is NAME=PATH: write ./a=b.ply for such a file name)
+    #[arg(
+        long = "pred",
+        value_name = "[NAME=]PRED.ply",
+        required_unless_present = "merge"
+    )]
+    pub pred: Vec<String>,
+
+    /// Ground-truth cloud (PLY) with the true label of each point
+    #[arg(long, value_name = "GT.ply", required_unless_present = "merge")]
+    pub gt: Option<PathBuf>,
+
+    /// Row name of a single --pred given without NAME= [default: prediction]
+    #[arg(long, value_name = "NAME")]
+    pub name: Option<String>,
+
+    /// Merge these report JSON files (from --format json) instead of scoring clouds
+    #[arg(
+        long,
+        value_name = "REPORT.json",
+        num_args = 1..,
+        conflicts_with_all = ["pred", "gt", "name"]
+    )]
+    pub merge: Vec<PathBuf>,
+
+    /// Report format: md (the paper's tables, percentages) or json (matrices and metrics,
+    /// fractions; mergeable with --merge)
+    #[arg(long, value_enum, default_value_t = Format::Md)]
+    pub format: Format,
+
+    /// Write the report to this file (replaced only on success) instead of stdout
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+}
+
+/// `--format`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// Markdown tables.
+    Md,
+    /// JSON.
+    Json,
+}
+
+impl From<Format> for ReportFormat {
+    fn from(f: Format) -> ReportFormat {
+        match f {
+            Format::Md => ReportFormat::Markdown,
+            Format::Json => ReportFormat::Json,
+        }
+    }
+}
+
+impl EvalArgs {
+    /// The pipeline's options for `eval_files` (not used with --merge).
+    pub fn options(&self) -> Result<EvalOptions> {
+        let Some(gt) = self.gt.clone() else {
+            bail!("--gt is required to score clouds");
+        };
+        let parsed: Vec<(Option<String>, PathBuf)> =
+            self.pred.iter().map(|p| split_named(p)).collect();
+        let unnamed = parsed.iter().filter(|(n, _)| n.is_none()).count();
+        if parsed.len() > 1 && unnamed > 0 {
+            bail!("several --pred given: name each as --pred NAME=PATH");
+        }
+        if self.name.is_some() && unnamed == 0 {
+            bail!("--name names a single --pred given without NAME=; drop one of the two");
+        }
+        let predictions = parsed
+            .into_iter()
+            .map(|(name, path)| NamedPrediction {
+                name: name
+                    .or_else(|| self.name.clone())
+                    .unwrap_or_else(|| DEFAULT_PREDICTION_NAME.to_string()),
+                path,
+            })
+            .collect();
+        Ok(EvalOptions { predictions, gt })
+    }
+}
+
+/// `NAME=PATH` → (Some(NAME), PATH); a value with no '=', or whose part before the first
+/// '=' is empty or holds a path separator, is a plain path.
+fn split_named(value: &str) -> (Option<String>, PathBuf) {
+    match value.split_once('=') {
+        Some((name, path)) if !name.is_empty() && !name.contains(['/', '\\']) => {
+            (Some(name.to_string()), PathBuf::from(path))
+        }
+        _ => (None, PathBuf::from(value)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn clap_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn named_predictions_split_at_the_first_equals_sign() {
+        assert_eq!(
+            split_named("M-R-N=out/a.ply"),
+            (Some("M-R-N".into()), "out/a.ply".into())
+        );
+        assert_eq!(split_named("out/a.ply"), (None, "out/a.ply".into()));
+        assert_eq!(split_named("./a=b.ply"), (None, "./a=b.ply".into()));
+        assert_eq!(split_named("=b.ply"), (None, "=b.ply".into()));
+    }
+
+    #[test]
+    fn flags_override_the_defaults() {
+        let cli = Cli::try_parse_from([
+            "bodyseg",
+            "refine",
+            "--cloud",
+            "a.ply",
+            "--boxes",
+            "b.json",
+            "--out",
+            "c.ply",
+            "--steps",
+            "m,n",
+            "--eps-m",
+            "0.03",
+            "--min-points",
+            "5",
+        ])
+        .expect("valid command line");
+        let Command::Refine(r) = cli.command else {
+            panic!("parsed as refine");
+        };
+        let c = r.config().expect("valid config");
+        assert_eq!(c.refine.eps_m, 0.03);
+        assert_eq!(c.refine.min_points, 5);
+        assert_eq!(c.refine.steps.to_string(), "M-N");
+        assert!(!c.refine.keep_outside_boxes);
+    }
+
+    #[test]
+    fn negative_radius_parses_and_is_rejected_naming_the_flag() {
+        let cli = Cli::try_parse_from([
+            "bodyseg", "refine", "--cloud", "a", "--boxes", "b", "--out", "c", "--eps-m", "-1",
+        ])
+        .expect("clap accepts a negative number");
+        let Command::Refine(r) = cli.command else {
+            panic!("parsed as refine");
+        };
+        let e = format!("{:#}", r.config().expect_err("invalid"));
+        assert_eq!(
+            e,
+            "--eps-m: refine.eps_m must be a finite number > 0, got -1"
+        );
+    }
+
+    #[test]
+    fn eval_names_predictions() {
+        let parse = |args: &[&str]| {
+            let mut all = vec!["bodyseg", "eval", "--gt", "g.ply"];
+            all.extend_from_slice(args);
+            let cli = Cli::try_parse_from(all).expect("valid command line");
+            let Command::Eval(e) = cli.command else {
+                panic!("parsed as eval");
+            };
+            e.options()
+        };
+        let o = parse(&["--pred", "p.ply"]).expect("valid");
+        assert_eq!(o.predictions[0].name, "prediction");
+        let o = parse(&["--pred", "p.ply", "--name", "M-R-N"]).expect("valid");
+        assert_eq!(o.predictions[0].name, "M-R-N");
+        let o = parse(&["--pred", "R=a.ply", "--pred", "M=b.ply"]).expect("valid");
+        assert_eq!(o.predictions[1].name, "M");
+        assert!(parse(&["--pred", "a.ply", "--pred", "M=b.ply"]).is_err());
+        assert!(
+            Cli::try_parse_from(["bodyseg", "eval", "--merge", "a.json", "--gt", "g"]).is_err()
+        );
+        assert!(Cli::try_parse_from(["bodyseg", "eval", "--merge", "a.json", "b.json"]).is_ok());
+        assert!(Cli::try_parse_from(["bodyseg", "eval", "--pred", "a.ply"]).is_err());
+    }
+}

@@ -1,0 +1,31 @@
+//! Plain UTF-8 text files (configurations, reports): bodyseg-io reads them so that no
+//! other crate touches the file system.
+
+use crate::IoError;
+use std::path::Path;
+
+/// Reads a whole UTF-8 text file.
+///
+/// The text is returned as is: a byte-order mark or CRLF line endings are not removed.
+///
+/// # Errors
+/// [`IoError::Read`] when the file cannot be read, [`IoError::NotUtf8`] (naming the line
+/// and byte offset of the first invalid byte) when it is not UTF-8.
+pub fn read_text(path: &Path) -> Result<String, IoError> {
+    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
+        cause,
+        path: path.to_path_buf(),
+    })?;
+    String::from_utf8(bytes).map_err(|e| {
+        let offset = e.utf8_error().valid_up_to();
+        let line = 1 + e.as_bytes()[..offset]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        IoError::NotUtf8 {
+            line,
+            offset,
+            path: path.to_path_buf(),
+        }
+    })
+}

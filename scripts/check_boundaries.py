@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""Checks the crate boundaries of STYLE.md ("Boundaries") with `cargo metadata`.
+
+- core depends on no bodyseg crate;
+- a stage crate (calib, parsing, project, people, refine, eval, synth) depends only on core,
+  and project, people and synth also on calib;
+- io depends only on core; testkit only on core;
+- only pipeline and the root package (the `bodyseg` binary) may depend on every crate;
+- testkit is never a normal dependency, and synth is one only of pipeline and the binary:
+  lower crates may use them as dev-dependencies (tests, benches) only.
+
+Prints every violation and exits 1 if there is any; exits 0 and prints a one-line summary
+otherwise. Standard library only; run from anywhere.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PREFIX = "bodyseg-"
+ROOT_PACKAGE = "bodyseg"
+
+# Normal (and build) dependencies each crate may have among bodyseg's crates, by short
+# name (without the "bodyseg-" prefix). None = any.
+ALLOWED = {
+    "core": set(),
+    "calib": {"core"},
+    "parsing": {"core"},
+    "project": {"core", "calib"},
+    "people": {"core", "calib"},
+    "refine": {"core"},
+    "eval": {"core"},
+    "synth": {"core", "calib"},
+    "io": {"core"},
+    "testkit": {"core"},
+    "pipeline": None,
+    ROOT_PACKAGE: None,
+}
+
+# Crates that lower crates may use from tests and benches only.
+DEV_ONLY = {"testkit", "synth"}
+# Crates that may have synth as a normal dependency (they "see them all").
+SEES_ALL = {"pipeline", ROOT_PACKAGE}
+
+
+def short(name: str) -> str:
+    return name[len(PREFIX):] if name.startswith(PREFIX) else name
+
+
+def is_ours(name: str) -> bool:
+    return name == ROOT_PACKAGE or name.startswith(PREFIX)
+
+
+def metadata() -> dict:
+    try:
+        out = subprocess.run(
+            ["cargo", "metadata", "--format-version", "1", "--no-deps"],
+            cwd=ROOT,
+            check=True,
+            capture_output=True,
+            text=True,
+        )
+    except (OSError, subprocess.CalledProcessError) as e:
+        stderr = getattr(e, "stderr", "") or ""
+        sys.exit(f"check_boundaries: cargo metadata failed: {e}\n{stderr}")
+    return json.loads(out.stdout)
+
+
+def violations(meta: dict) -> list[str]:
+    found = []
+    packages = [p for p in meta["packages"] if is_ours(p["name"])]
+    for pkg in sorted(packages, key=lambda p: p["name"]):
+        me = short(pkg["name"])
+        if me not in ALLOWED:
+            found.append(
+                f"{pkg['name']}: not in scripts/check_boundaries.py's table; add its allowed "
+                "dependencies there (and its line to ARCHITECTURE.md)"
+            )
+            continue
+        allowed = ALLOWED[me]
+        for dep in pkg["dependencies"]:
+            if not is_ours(dep["name"]):
+                continue
+            other = short(dep["name"])
+            kind = dep.get("kind") or "normal"
+            if other == me:
+                continue
+            if kind == "dev":
+                # Tests and benches may also use the test-scene generators.
+                ok = allowed is None or other in allowed or other in DEV_ONLY
+                if not ok:
+                    found.append(
+                        f"{pkg['name']}: dev-dependency on {dep['name']} (allowed: "
+                        f"{describe(allowed | DEV_ONLY)})"
+                    )
+                continue
+            if other == "testkit" or (other in DEV_ONLY and me not in SEES_ALL):
+                found.append(
+                    f"{pkg['name']}: {kind} dependency on {dep['name']}, which may be only a "
+                    "dev-dependency here (tests, benches)"
+                )
+                continue
+            if allowed is not None and other not in allowed:
+                found.append(
+                    f"{pkg['name']}: {kind} dependency on {dep['name']} (allowed: "
+                    f"{describe(allowed)}; STYLE.md 'Boundaries')"
+                )
+    return found
+
+
+def describe(names: set) -> str:
+    return ", ".join(PREFIX + n for n in sorted(names)) or "no bodyseg crate"
+
+
+def main() -> int:
+    meta = metadata()
+    found = violations(meta)
+    for v in found:
+        print(f"boundary violation: {v}")
+    checked = sum(1 for p in meta["packages"] if is_ours(p["name"]))
+    if found:
+        print(f"check_boundaries: {len(found)} violation(s) in {checked} crates")
+        return 1
+    print(f"check_boundaries: {checked} crates, boundaries respected")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# The whole check, as CI runs it (.ci/run): formatting, lints, crate boundaries, tests.
+#
+#   scripts/test.sh            from any folder
+#
+# Installs what a fresh Debian 12 machine with the Rust toolchain lacks (the rustfmt and
+# clippy components). Tests run in release: the DBSCAN property tests compare against an
+# O(n^2) brute force on hundreds of clouds. Slow tests marked #[ignore] run last.
+set -euo pipefail
+
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "toolchain"
+if ! command -v cargo >/dev/null 2>&1; then
+    echo "cargo not found: install the Rust toolchain with rustup, then rerun" >&2
+    exit 1
+fi
+# rust-toolchain.toml pins the version; rustup installs it on first use.
+missing=()
+cargo fmt --version >/dev/null 2>&1 || missing+=(rustfmt)
+cargo clippy --version >/dev/null 2>&1 || missing+=(clippy)
+if ((${#missing[@]})); then
+    if ! command -v rustup >/dev/null 2>&1; then
+        echo "cargo ${missing[*]} missing and no rustup to install them" >&2
+        exit 1
+    fi
+    rustup component add "${missing[@]}"
+fi
+if ! command -v python3 >/dev/null 2>&1; then
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        apt-get update -qq && apt-get install -y -qq python3
+    else
+        echo "python3 not found (needed by scripts/check_boundaries.py)" >&2
+        exit 1
+    fi
+fi
+cargo --version
+rustc --version
+
+step "cargo fmt --all --check"
+cargo fmt --all --check
+
+step "cargo clippy --workspace --all-targets --all-features -- -D warnings"
+cargo clippy --workspace --all-targets --all-features -- -D warnings
+
+step "python3 scripts/check_boundaries.py"
+python3 scripts/check_boundaries.py
+
+step "cargo test --workspace --all-features --release"
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+cargo test --workspace --all-features --release 2>&1 | tee "$log"
+
+# Slow cases are #[ignore]d and run here, in release; skipped when there are none (a run
+# of zero tests would read as "no test ran").
+if grep -rqs '#\[ignore' crates tests; then
+    step "cargo test --workspace --all-features --release -- --ignored (slow tests)"
+    cargo test --workspace --all-features --release -- --ignored 2>&1 | tee -a "$log"
+fi
+
+step "all checks passed"
+# One closing line with the totals of every test binary above.
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
+     END { printf "tests: %d passed, %d failed\n", p, f }' "$log"

@@ -1,0 +1,58 @@
+//! `--help` of every command exits 0 and names the key flags.
+
+use crate::common::{assert_ok, bodyseg, stdout, tempdir};
+
+fn help(args: &[&str], must_mention: &[&str]) {
+    let dir = tempdir();
+    let out = bodyseg(dir.path(), args);
+    assert_ok(&out, &format!("bodyseg {args:?}"));
+    let text = stdout(&out);
+    for word in must_mention {
+        assert!(
+            text.contains(word),
+            "{args:?} does not mention {word}:\n{text}"
+        );
+    }
+}
+
+#[test]
+fn main_help() {
+    help(&["--help"], &["refine", "eval", "Examples:", "RUST_LOG"]);
+}
+
+#[test]
+fn refine_help() {
+    help(
+        &["refine", "--help"],
+        &[
+            "--cloud",
+            "--boxes",
+            "--out",
+            "--config",
+            "--steps",
+            "--eps-m",
+            "--min-points",
+            "--keep-outside-boxes",
+            "--ascii",
+            "metres",
+            "Examples:",
+            "configs/default.toml",
+        ],
+    );
+}
+
+#[test]
+fn eval_help() {
+    help(
+        &["eval", "--help"],
+        &[
+            "--pred",
+            "--gt",
+            "--format",
+            "--merge",
+            "--out",
+            "--name",
+            "Examples:",
+        ],
+    );
+}

@@ -1,0 +1,106 @@
+//! Helpers shared by the e2e modules: running the binary, writing scenes.
+
+use bodyseg_core::{PersonBoxes, PointOrigin};
+use bodyseg_io::{PlyWriteOptions, write_boxes, write_ply};
+use bodyseg_testkit::{SyntheticPerson, human_cloud};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Seed of the synthetic person of the happy-path tests.
+pub const SEED: u64 = 20240;
+
+/// Points of that person: enough for every part to form clusters at min_points 40.
+pub const POINTS: usize = 20_000;
+
+/// The finished run of `bodyseg ARGS` in `dir`, with logging at its default (warn).
+pub fn bodyseg(dir: &Path, args: &[&str]) -> Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_bodyseg"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("RUST_LOG")
+        .output();
+    match out {
+        Ok(out) => out,
+        Err(e) => panic!("cannot run bodyseg {args:?}: {e}"),
+    }
+}
+
+/// stderr as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// stdout as text.
+pub fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Asserts success, showing stderr otherwise.
+pub fn assert_ok(out: &Output, what: &str) {
+    assert!(
+        out.status.success(),
+        "{what} failed ({}):\n{}",
+        out.status,
+        stderr(out)
+    );
+}
+
+/// The input files of a one-person scene, written in `dir`.
+pub struct Scene {
+    /// The generated person (predicted labels, truth, box).
+    pub person: SyntheticPerson,
+    /// Predicted cloud, `in.ply`.
+    pub cloud: PathBuf,
+    /// Ground truth (same points, true labels), `gt.ply`.
+    pub gt: PathBuf,
+    /// Person boxes, `boxes.json`.
+    pub boxes: PathBuf,
+}
+
+/// Writes `in.ply`, `gt.ply` and `boxes.json` for `human_cloud(POINTS, SEED)` into `dir`.
+pub fn write_scene(dir: &Path) -> Scene {
+    let person = human_cloud(POINTS, SEED);
+    let scene = Scene {
+        cloud: dir.join("in.ply"),
+        gt: dir.join("gt.ply"),
+        boxes: dir.join("boxes.json"),
+        person,
+    };
+    let opts = PlyWriteOptions::default();
+    write_ply(&scene.cloud, &scene.person.cloud, &opts).expect("write in.ply");
+    let gt = scene.person.cloud.with_labels(scene.person.truth.clone());
+    write_ply(&scene.gt, &gt, &opts).expect("write gt.ply");
+    let boxes = PersonBoxes {
+        frame: "000000".into(),
+        boxes: vec![scene.person.person_box.clone()],
+    };
+    write_boxes(&scene.boxes, &boxes).expect("write boxes.json");
+    scene
+}
+
+/// The origins `human_cloud` gives its points: camera 0, pixel = index.
+pub fn index_origins(n: usize) -> Vec<PointOrigin> {
+    (0..n as u32)
+        .map(|pixel| PointOrigin { camera: 0, pixel })
+        .collect()
+}
+
+/// The file names in `dir`, sorted.
+pub fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("read temp dir")
+        .map(|e| {
+            e.expect("dir entry")
+                .file_name()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+/// A temporary folder for one test.
+pub fn tempdir() -> tempfile::TempDir {
+    tempfile::tempdir().expect("create temp dir")
+}
