@@ -14,6 +14,13 @@ use std::io::Write;
 use std::process::ExitCode;
 use std::time::Instant;
 
+/// mimalloc: the refinement allocates and frees multi-megabyte arrays per person and per
+/// frame; glibc hands them back to the kernel and pays page faults again on every frame
+/// (measured: whole refinement of a 100k-point person 23 ms with glibc, 19 ms with
+/// mimalloc, `crates/refine/examples/dbscan_cloud.rs`).
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     init_logging(cli.verbose);

@@ -12,6 +12,10 @@ use bodyseg_testkit::human_cloud;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 
+/// The same allocator as the `bodyseg` binary.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 const SIZES: [usize; 3] = [30_000, 100_000, 300_000];
 const SEED: u64 = 1;
 

@@ -10,6 +10,10 @@
 //! 255 = unknown), `ours_clusters.i32` (cluster id per point, −1 = noise),
 //! `ours_core.u8` (1 = core point).
 
+/// The same allocator as the `bodyseg` binary.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 use bodyseg_refine::{DbscanParams, RefineConfig, dbscan, refine};
 use bodyseg_testkit::human_cloud;
 use std::io::Write;

@@ -511,16 +511,18 @@ impl CellLookup {
                     start.push(out.len() as u32);
                     let base = Self::lin(*lo, *dims, *k) as i64;
                     let mut n = 0;
-                    let mut near = 0;
-                    for (o, d) in deltas.iter().enumerate() {
+                    let (near_deltas, far_deltas) = deltas.split_at(NEAR_OFFSETS);
+                    for d in near_deltas {
                         let c = table[(base + d) as usize];
                         buf[n] = c;
                         n += usize::from(c != u32::MAX);
-                        if o + 1 == NEAR_OFFSETS {
-                            near = n;
-                        }
                     }
-                    near_end.push((out.len() + near) as u32);
+                    near_end.push((out.len() + n) as u32);
+                    for d in far_deltas {
+                        let c = table[(base + d) as usize];
+                        buf[n] = c;
+                        n += usize::from(c != u32::MAX);
+                    }
                     out.extend_from_slice(&buf[..n]);
                 }
             }
