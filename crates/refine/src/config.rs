@@ -16,14 +16,22 @@ pub enum RefineError {
         problem: String,
     },
     /// The input cloud is inconsistent (NaN coordinate, arrays of different lengths).
+    /// The cause is in the message and deliberately not exposed as `source()`, so an
+    /// error chain (`{:#}`) prints it once.
     #[error("input cloud: {0}")]
-    InvalidCloud(#[from] bodyseg_core::CloudError),
+    InvalidCloud(bodyseg_core::CloudError),
     /// A person box is unusable.
     #[error("person box: {reason}")]
     InvalidBox {
         /// What is wrong with it.
         reason: String,
     },
+}
+
+impl From<bodyseg_core::CloudError> for RefineError {
+    fn from(e: bodyseg_core::CloudError) -> Self {
+        RefineError::InvalidCloud(e)
+    }
 }
 
 /// How the best body tree is searched (ALGORITHM.md §5.3).
