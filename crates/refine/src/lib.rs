@@ -162,9 +162,14 @@ pub fn refine(
             let idx: Vec<u32> = (0..cloud.len() as u32)
                 .filter(|&i| test.contains(cloud.positions_m[i as usize]))
                 .collect();
-            let pos: Vec<Vec3> = idx.iter().map(|&i| cloud.positions_m[i as usize]).collect();
-            let lab: Vec<Label> = idx.iter().map(|&i| cloud.labels[i as usize]).collect();
-            let r = refine_person(&pos, &lab, cfg);
+            // A box holding the whole cloud (a cloud cropped to one person) needs no copy.
+            let r = if idx.len() == cloud.len() {
+                refine_person(&cloud.positions_m, &cloud.labels, cfg)
+            } else {
+                let pos: Vec<Vec3> = idx.iter().map(|&i| cloud.positions_m[i as usize]).collect();
+                let lab: Vec<Label> = idx.iter().map(|&i| cloud.labels[i as usize]).collect();
+                refine_person(&pos, &lab, cfg)
+            };
             tracing::debug!(
                 person = b.id,
                 points = idx.len(),
