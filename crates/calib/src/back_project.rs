@@ -1,0 +1,206 @@
+//! Depth image → points (ALGORITHM.md §1): every valid depth pixel becomes
+//! `z · (x', y', 1)`, with (x', y') the undistorted normalised ray of the pixel, optionally
+//! moved into the world frame. Each point keeps its origin (camera, pixel).
+
+use bodyseg_core::PointOrigin;
+use bodyseg_core::math::Vec3;
+
+use crate::{CalibError, Intrinsics, RgbdCamera};
+
+/// The frame back-projected points are expressed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CloudFrame {
+    /// The camera's depth sensor frame (OpenCV optical, metres).
+    Depth,
+    /// The world frame, through the camera's `world_from_depth` (z up, metres).
+    #[default]
+    World,
+}
+
+/// Which depth pixels become points, and in which frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BackProjectOptions {
+    /// Depths below this (metres, after scale and shift) give no point. Default 0: any
+    /// positive depth is kept.
+    pub depth_min_m: f64,
+    /// Depths above this (metres) give no point. Default +∞ (no limit); Kinect v2 data is
+    /// unreliable beyond ~4.5 m.
+    pub depth_max_m: f64,
+    /// Keep every `stride`-th pixel along rows and columns (pixels with `u % stride == 0`
+    /// and `v % stride == 0`). Default 1 (every pixel).
+    pub stride: u32,
+    /// Frame of the output points. Default [`CloudFrame::World`].
+    pub frame: CloudFrame,
+}
+
+impl Default for BackProjectOptions {
+    fn default() -> Self {
+        BackProjectOptions {
+            depth_min_m: 0.0,
+            depth_max_m: f64::INFINITY,
+            stride: 1,
+            frame: CloudFrame::World,
+        }
+    }
+}
+
+impl BackProjectOptions {
+    /// Checks `stride >= 1`, `depth_min_m` finite and ≥ 0, `depth_max_m >= depth_min_m`.
+    pub fn validate(&self) -> Result<(), CalibError> {
+        if self.stride == 0 {
+            return Err(CalibError::invalid("stride", "must be >= 1, got 0"));
+        }
+        if !(self.depth_min_m.is_finite() && self.depth_min_m >= 0.0) {
+            return Err(CalibError::invalid(
+                "depth_min_m",
+                format!("must be finite and >= 0, got {}", self.depth_min_m),
+            ));
+        }
+        if self.depth_max_m.is_nan() || self.depth_max_m < self.depth_min_m {
+            return Err(CalibError::invalid(
+                "depth_max_m",
+                format!(
+                    "must be >= depth_min_m ({}), got {}",
+                    self.depth_min_m, self.depth_max_m
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Points of one depth image with their origins (same length, row-major pixel order).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BackProjected {
+    /// Point positions, metres, in the frame the options asked for.
+    pub points_m: Vec<Vec3>,
+    /// Origin of each point: camera index in the rig and row-major depth pixel index.
+    pub origins: Vec<PointOrigin>,
+}
+
+/// The undistorted normalised ray `(x', y')` of every pixel of a sensor, row-major;
+/// `None` where undistortion does not converge.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RayTable {
+    width: u32,
+    height: u32,
+    rays: Vec<Option<[f64; 2]>>,
+}
+
+impl RayTable {
+    /// Computes the table (one Newton undistortion per pixel).
+    pub fn new(intrinsics: &Intrinsics) -> Self {
+        let mut rays = Vec::with_capacity(intrinsics.num_pixels());
+        for v in 0..intrinsics.height {
+            for u in 0..intrinsics.width {
+                rays.push(
+                    intrinsics
+                        .unproject(f64::from(u), f64::from(v))
+                        .map(|[x, y, _]| [x, y]),
+                );
+            }
+        }
+        RayTable {
+            width: intrinsics.width,
+            height: intrinsics.height,
+            rays,
+        }
+    }
+
+    /// The ray `(x', y')` of pixel (u, v); `None` outside the image or where
+    /// undistortion failed.
+    pub fn ray(&self, u: u32, v: u32) -> Option<[f64; 2]> {
+        if u >= self.width || v >= self.height {
+            return None;
+        }
+        self.rays[v as usize * self.width as usize + u as usize]
+    }
+}
+
+/// Back-projects depth images of one camera, with its ray table computed once.
+#[derive(Debug, Clone)]
+pub struct DepthBackProjector {
+    camera: RgbdCamera,
+    camera_index: u8,
+    rays: RayTable,
+}
+
+impl DepthBackProjector {
+    /// Validates the camera and computes its ray table. `camera_index` is the camera's
+    /// place in the rig, stored in every point's origin.
+    pub fn new(camera: &RgbdCamera, camera_index: u8) -> Result<Self, CalibError> {
+        camera.validate()?;
+        Ok(DepthBackProjector {
+            camera: camera.clone(),
+            camera_index,
+            rays: RayTable::new(&camera.depth),
+        })
+    }
+
+    /// The camera this projector was built for.
+    pub fn camera(&self) -> &RgbdCamera {
+        &self.camera
+    }
+
+    /// Back-projects one depth image (raw `u16` values, row-major, the depth sensor's
+    /// size). Raw 0, depths outside `[depth_min_m, depth_max_m]`, non-positive depths
+    /// after the shift and pixels without a ray give no point.
+    pub fn back_project(
+        &self,
+        depth_raw: &[u16],
+        opts: &BackProjectOptions,
+    ) -> Result<BackProjected, CalibError> {
+        opts.validate()?;
+        let (w, h) = (self.camera.depth.width, self.camera.depth.height);
+        if depth_raw.len() != self.camera.depth.num_pixels() {
+            return Err(CalibError::DepthSize {
+                camera: self.camera.name.clone(),
+                got: depth_raw.len(),
+                want_w: w,
+                want_h: h,
+            });
+        }
+        let mut out = BackProjected::default();
+        let step = opts.stride as usize;
+        for v in (0..h).step_by(step) {
+            for u in (0..w).step_by(step) {
+                let pixel = v as usize * w as usize + u as usize;
+                let Some(z) = self.camera.depth_m(depth_raw[pixel]) else {
+                    continue;
+                };
+                if !(z > 0.0 && z >= opts.depth_min_m && z <= opts.depth_max_m) {
+                    continue;
+                }
+                let Some([x, y]) = self.rays.ray(u, v) else {
+                    continue;
+                };
+                let p_depth = [z * x, z * y, z];
+                let p = match opts.frame {
+                    CloudFrame::Depth => p_depth,
+                    CloudFrame::World => self.camera.world_from_depth.transform_point(p_depth),
+                };
+                // Clouds store f32 positions: ~0.1 µm rounding at a few metres.
+                out.points_m.push(p.map(|c| c as f32));
+                out.origins.push(PointOrigin {
+                    camera: self.camera_index,
+                    // Fits: `Intrinsics::validate` (run in `new`) caps the pixel count
+                    // at u32::MAX.
+                    pixel: pixel as u32,
+                });
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Back-projects one depth image of `camera` (see [`DepthBackProjector::back_project`]).
+/// Builds the camera's ray table each call; keep a [`DepthBackProjector`] to project many
+/// frames of one camera.
+pub fn back_project(
+    depth_raw: &[u16],
+    camera: &RgbdCamera,
+    camera_index: u8,
+    opts: &BackProjectOptions,
+) -> Result<BackProjected, CalibError> {
+    DepthBackProjector::new(camera, camera_index)?.back_project(depth_raw, opts)
+}

@@ -1,0 +1,119 @@
+//! iai_kinect2 calibration folders (`kinect2_calibration`'s output, one folder per sensor
+//! serial): `calib_color.yaml`, `calib_ir.yaml`, `calib_pose.yaml`, `calib_depth.yaml`.
+
+use std::path::Path;
+
+use crate::opencv_yaml::FileStorage;
+use crate::{CalibError, DEFAULT_DEPTH_SCALE, Intrinsics, Pose, RgbdCamera};
+
+/// Kinect v2 colour image size, pixels (iai_kinect2 does not store it).
+pub const KINECT2_COLOR_SIZE: [u32; 2] = [1920, 1080];
+/// Kinect v2 depth (IR) image size, pixels.
+pub const KINECT2_DEPTH_SIZE: [u32; 2] = [512, 424];
+
+/// Reads an iai_kinect2 calibration folder into a camera named after the folder.
+///
+/// - `calib_color.yaml`, `calib_ir.yaml`: `cameraMatrix` (3×3) and
+///   `distortionCoefficients` (1×5, k1 k2 p1 p2 k3). The image size is taken from
+///   `image_width`/`image_height` when present, else the Kinect v2 sizes
+///   ([`KINECT2_COLOR_SIZE`], [`KINECT2_DEPTH_SIZE`]).
+/// - `calib_pose.yaml`: `rotation` (3×3) and `translation` (3×1, metres) map the IR frame
+///   into the colour frame, `X_c = R·X_ir + T`: this is `color_from_depth`.
+/// - `calib_depth.yaml`: `depthShift`, millimetres, added to raw depth → `depth_shift_mm`.
+///
+/// `world_from_depth` is the identity (the folder knows nothing of the world) and
+/// `depth_scale` is 1000 (Kinect v2 depth is in millimetres).
+pub fn read_iai_kinect2(dir: &Path) -> Result<RgbdCamera, CalibError> {
+    if !dir.is_dir() {
+        return Err(CalibError::Read {
+            source: std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "not an iai_kinect2 calibration folder",
+            ),
+            path: dir.to_path_buf(),
+        });
+    }
+    let color = read_intrinsics(&dir.join("calib_color.yaml"), KINECT2_COLOR_SIZE)?;
+    let depth = read_intrinsics(&dir.join("calib_ir.yaml"), KINECT2_DEPTH_SIZE)?;
+
+    let pose_path = dir.join("calib_pose.yaml");
+    let pose = FileStorage::read(&pose_path)?;
+    let r = pose.matrix("rotation", 3, 3)?;
+    let t = pose.matrix("translation", 3, 1)?;
+    let color_from_depth = Pose::from_rotation_translation(
+        [[r[0], r[1], r[2]], [r[3], r[4], r[5]], [r[6], r[7], r[8]]],
+        [t[0], t[1], t[2]],
+    )
+    .map_err(|e| in_file(e, "rotation", &pose_path))?;
+
+    let depth_path = dir.join("calib_depth.yaml");
+    let depth_shift_mm = FileStorage::read(&depth_path)?.number("depthShift")?;
+
+    let name = dir.file_name().map_or_else(
+        || "kinect2".to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    Ok(RgbdCamera {
+        name,
+        depth,
+        color,
+        color_from_depth,
+        world_from_depth: Pose::identity(),
+        depth_scale: DEFAULT_DEPTH_SCALE,
+        depth_shift_mm,
+    })
+}
+
+/// Turns a value error into one naming the file and its key.
+fn in_file(e: CalibError, key: &str, path: &Path) -> CalibError {
+    match e {
+        CalibError::Invalid { field, reason } => CalibError::BadValue {
+            key: key.to_string(),
+            reason: format!("{field} {reason}"),
+            path: path.to_path_buf(),
+        },
+        other => other,
+    }
+}
+
+fn read_intrinsics(path: &Path, default_size: [u32; 2]) -> Result<Intrinsics, CalibError> {
+    let fs = FileStorage::read(path)?;
+    let k = fs.matrix("cameraMatrix", 3, 3)?;
+    let d = fs.matrix("distortionCoefficients", 1, 5)?;
+    let size = |key: &str, default: u32| -> Result<u32, CalibError> {
+        if !fs.has(key) {
+            return Ok(default);
+        }
+        let v = fs.number(key)?;
+        if v.fract() != 0.0 || !(1.0..=f64::from(u32::MAX)).contains(&v) {
+            return Err(CalibError::BadValue {
+                key: key.to_string(),
+                reason: format!("must be a positive pixel count, got {v}"),
+                path: path.to_path_buf(),
+            });
+        }
+        Ok(v as u32)
+    };
+    let intrinsics = Intrinsics {
+        width: size("image_width", default_size[0])?,
+        height: size("image_height", default_size[1])?,
+        fx: k[0],
+        fy: k[4],
+        cx: k[2],
+        cy: k[5],
+        distortion: [d[0], d[1], d[2], d[3], d[4]],
+    };
+    intrinsics.validate().map_err(|e| match e {
+        CalibError::Invalid { field, reason } => CalibError::BadValue {
+            key: if field == "distortion" {
+                "distortionCoefficients".to_string()
+            } else {
+                "cameraMatrix".to_string()
+            },
+            reason: format!("{field} {reason}"),
+            path: path.to_path_buf(),
+        },
+        other => other,
+    })?;
+    Ok(intrinsics)
+}

@@ -1,0 +1,59 @@
+//! bodyseg-calib: camera models, RGB-D rigs, calibration files and depth back-projection.
+//!
+//! Place in the pipeline: the first stage after reading a recording. A [`Rig`] (read from
+//! `rig.toml` or assembled from vendor calibration files such as iai_kinect2 folders) turns
+//! each camera's depth image into points with their origins ([`back_project`]); the
+//! projection stage (`bodyseg-project`) then uses the same cameras to look each point up
+//! in the colour image ([`Intrinsics::project`] after `color_from_depth`). Depth image →
+//! points; depends only on `bodyseg-core`. ALGORITHM.md §1.
+//!
+//! # Conventions
+//! - Camera frames: OpenCV optical frame of each sensor, x right, y down, z forward.
+//! - Pixels: (u, v) = (column, row); integer coordinates are pixel centres, so an image
+//!   spans `[-0.5, width - 0.5) × [-0.5, height - 0.5)`. A pixel index is `v * width + u`.
+//! - Units: metres for all geometry; millimetres only for raw depth and `depth_shift_mm`;
+//!   focal lengths and principal points in pixels; distortion coefficients unitless.
+//! - Transforms are named `a_from_b` and map points of frame b into frame a:
+//!   `p_color = color_from_depth · p_depth`, `p_world = world_from_depth · p_depth`.
+//! - Distortion: Brown-Conrady with OpenCV's coefficient order `[k1, k2, p1, p2, k3]`
+//!   (`cv::projectPoints`), applied to normalised coordinates (x/z, y/z).
+//! - World frame: right-handed, z up (ALGORITHM.md §0).
+//! - Depth: raw `u16`, 0 = no measurement; metres = `raw / depth_scale + depth_shift_mm / 1000`.
+//!
+//! # Example
+//! ```
+//! use bodyseg_calib::{BackProjectOptions, CloudFrame, Intrinsics, RgbdCamera, back_project};
+//!
+//! let depth = Intrinsics {
+//!     width: 4, height: 3, fx: 2.0, fy: 2.0, cx: 1.5, cy: 1.0, distortion: [0.0; 5],
+//! };
+//! let camera = RgbdCamera::new("cam0", depth, depth);
+//! let image = [0, 1000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 2000_u16];
+//! let opts = BackProjectOptions { frame: CloudFrame::Depth, ..Default::default() };
+//! let cloud = back_project(&image, &camera, 0, &opts)?;
+//! assert_eq!(cloud.origins.iter().map(|o| o.pixel).collect::<Vec<_>>(), [1, 11]);
+//! // Pixel 11 is (u 3, v 2) at 2 m: x = (3 - 1.5) / 2 · 2, y = (2 - 1) / 2 · 2.
+//! assert_eq!(cloud.points_m[1], [1.5, 1.0, 2.0]);
+//! let uv = camera.depth.project([1.5, 1.0, 2.0]).expect("in front of the camera");
+//! assert_eq!(uv, [3.0, 2.0]);
+//! # Ok::<(), bodyseg_calib::CalibError>(())
+//! ```
+
+mod back_project;
+mod camera;
+mod error;
+mod iai_kinect2;
+mod intrinsics;
+mod opencv_yaml;
+mod pose;
+mod rig_toml;
+
+pub use back_project::{
+    BackProjectOptions, BackProjected, CloudFrame, DepthBackProjector, RayTable, back_project,
+};
+pub use camera::{DEFAULT_DEPTH_SCALE, RgbdCamera, Rig};
+pub use error::CalibError;
+pub use iai_kinect2::{KINECT2_COLOR_SIZE, KINECT2_DEPTH_SIZE, read_iai_kinect2};
+pub use intrinsics::Intrinsics;
+pub use pose::{Pose, QUATERNION_NORM_TOLERANCE, ROTATION_TOLERANCE};
+pub use rig_toml::{parse_rig_toml, read_rig_toml, rig_to_toml_string, write_rig_toml};

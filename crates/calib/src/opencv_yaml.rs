@@ -1,0 +1,351 @@
+//! A reader for the subset of OpenCV's FileStorage YAML (`%YAML:1.0`) that calibration
+//! tools write: top-level `key: scalar` and `key: !!opencv-matrix` blocks with `rows`,
+//! `cols`, `dt` and a `data: [ ... ]` list that may span lines.
+//!
+//! This dialect is not standard YAML (the `%YAML:1.0` directive, the `!!opencv-matrix`
+//! tag), so it is parsed by hand. Other top-level blocks (nested maps, sequences) are
+//! skipped; keys are looked up when a reader asks for them, so errors name the file and
+//! the key.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use crate::CalibError;
+
+/// One top-level entry.
+#[derive(Debug, Clone, PartialEq)]
+enum Entry {
+    /// `key: value` (quotes removed).
+    Scalar(String),
+    /// `key: !!opencv-matrix`.
+    Matrix {
+        rows: String,
+        cols: String,
+        /// The raw items of `data`, unparsed.
+        data: Vec<String>,
+    },
+    /// Anything else (nested maps, sequences): kept only so that its key is known.
+    Other,
+}
+
+/// A parsed FileStorage document.
+#[derive(Debug, Clone)]
+pub(crate) struct FileStorage {
+    entries: BTreeMap<String, (usize, Entry)>,
+    path: PathBuf,
+}
+
+fn syntax(line: usize, reason: impl Into<String>, path: &Path) -> CalibError {
+    CalibError::Syntax {
+        line,
+        reason: reason.into(),
+        path: path.to_path_buf(),
+    }
+}
+
+/// Splits `key: rest` (the key may be quoted); `None` when the line has no colon.
+fn split_key(line: &str) -> Option<(&str, &str)> {
+    let (key, rest) = line.split_once(':')?;
+    Some((key.trim().trim_matches('"'), rest.trim()))
+}
+
+fn strip_comment(line: &str) -> &str {
+    // FileStorage never writes '#' inside values it emits for calibration data.
+    line.split_once('#').map_or(line, |(before, _)| before)
+}
+
+impl FileStorage {
+    /// Reads and parses a file.
+    pub(crate) fn read(path: &Path) -> Result<Self, CalibError> {
+        let text = std::fs::read_to_string(path).map_err(|source| CalibError::Read {
+            source,
+            path: path.to_path_buf(),
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses the text of a file; `path` is used in error messages only.
+    pub(crate) fn parse(text: &str, path: &Path) -> Result<Self, CalibError> {
+        let lines: Vec<&str> = text.lines().map(strip_comment).collect();
+        let first = lines.iter().position(|l| !l.trim().is_empty());
+        match first.map(|i| lines[i].trim()) {
+            Some(header) if header.starts_with("%YAML") => {}
+            _ => {
+                return Err(syntax(
+                    first.map_or(1, |i| i + 1),
+                    "not an OpenCV FileStorage file (no %YAML:1.0 header)",
+                    path,
+                ));
+            }
+        }
+        let mut entries = BTreeMap::new();
+        let mut i = first.map_or(0, |f| f + 1);
+        while i < lines.len() {
+            let line = lines[i];
+            let line_no = i + 1;
+            i += 1;
+            let trimmed = line.trim();
+            if trimmed.is_empty() || trimmed == "---" || trimmed == "..." {
+                continue;
+            }
+            if line.starts_with([' ', '\t']) {
+                return Err(syntax(line_no, "indented line outside a block", path));
+            }
+            let Some((key, rest)) = split_key(trimmed) else {
+                return Err(syntax(
+                    line_no,
+                    format!("expected `key: value`, got {trimmed:?}"),
+                    path,
+                ));
+            };
+            // The block: the following indented (or empty) lines.
+            let start = i;
+            while i < lines.len()
+                && (lines[i].trim().is_empty() || lines[i].starts_with([' ', '\t']))
+            {
+                i += 1;
+            }
+            let block = &lines[start..i];
+            let entry = if rest.starts_with("!!opencv-matrix") {
+                parse_matrix(key, block, start + 1, path)?
+            } else if rest.is_empty() || rest.starts_with(['[', '{', '!']) {
+                Entry::Other
+            } else {
+                Entry::Scalar(rest.trim_matches('"').to_string())
+            };
+            entries.insert(key.to_string(), (line_no, entry));
+        }
+        Ok(FileStorage {
+            entries,
+            path: path.to_path_buf(),
+        })
+    }
+
+    fn missing(&self, key: &str) -> CalibError {
+        CalibError::MissingKey {
+            key: key.to_string(),
+            path: self.path.clone(),
+        }
+    }
+
+    fn bad(&self, key: &str, reason: impl Into<String>) -> CalibError {
+        CalibError::BadValue {
+            key: key.to_string(),
+            reason: reason.into(),
+            path: self.path.clone(),
+        }
+    }
+
+    /// True when the document has this top-level key.
+    pub(crate) fn has(&self, key: &str) -> bool {
+        self.entries.contains_key(key)
+    }
+
+    /// A scalar as a finite number.
+    pub(crate) fn number(&self, key: &str) -> Result<f64, CalibError> {
+        match self.entries.get(key) {
+            None => Err(self.missing(key)),
+            Some((_, Entry::Scalar(s))) => parse_number(s)
+                .ok_or_else(|| self.bad(key, format!("{s:?} is not a finite number"))),
+            Some((_, _)) => Err(self.bad(key, "must be a single number")),
+        }
+    }
+
+    /// A matrix that must be `rows × cols`; its values row-major, all finite.
+    pub(crate) fn matrix(
+        &self,
+        key: &str,
+        rows: usize,
+        cols: usize,
+    ) -> Result<Vec<f64>, CalibError> {
+        let Some((_, entry)) = self.entries.get(key) else {
+            return Err(self.missing(key));
+        };
+        let Entry::Matrix {
+            rows: r,
+            cols: c,
+            data,
+        } = entry
+        else {
+            return Err(self.bad(key, "must be an !!opencv-matrix"));
+        };
+        let dim = |name: &str, s: &str| {
+            s.parse::<usize>()
+                .map_err(|_| self.bad(key, format!("{name} {s:?} is not a count")))
+        };
+        let (got_rows, got_cols) = (dim("rows", r)?, dim("cols", c)?);
+        if (got_rows, got_cols) != (rows, cols) {
+            return Err(self.bad(
+                key,
+                format!("must be a {rows}x{cols} matrix, the file says {got_rows}x{got_cols}"),
+            ));
+        }
+        if data.len() != rows * cols {
+            return Err(self.bad(
+                key,
+                format!(
+                    "a {rows}x{cols} matrix needs {} values, data has {}",
+                    rows * cols,
+                    data.len()
+                ),
+            ));
+        }
+        data.iter()
+            .enumerate()
+            .map(|(k, s)| {
+                parse_number(s).ok_or_else(|| {
+                    self.bad(key, format!("data[{k}] = {s:?} is not a finite number"))
+                })
+            })
+            .collect()
+    }
+}
+
+/// Parses a finite number as FileStorage prints it (`1.`, `-5.2e-02`, `.5`).
+fn parse_number(s: &str) -> Option<f64> {
+    s.trim().parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
+fn parse_matrix(
+    key: &str,
+    block: &[&str],
+    first_line: usize,
+    path: &Path,
+) -> Result<Entry, CalibError> {
+    let mut rows = None;
+    let mut cols = None;
+    let mut data = None;
+    let mut j = 0;
+    while j < block.len() {
+        let line_no = first_line + j;
+        let line = block[j].trim();
+        j += 1;
+        if line.is_empty() {
+            continue;
+        }
+        let Some((sub, rest)) = split_key(line) else {
+            return Err(syntax(
+                line_no,
+                format!("{key}: expected `name: value`, got {line:?}"),
+                path,
+            ));
+        };
+        match sub {
+            "rows" => rows = Some(rest.to_string()),
+            "cols" => cols = Some(rest.to_string()),
+            "dt" => {}
+            "data" => {
+                let Some(after) = rest.strip_prefix('[') else {
+                    return Err(syntax(
+                        line_no,
+                        format!("{key}: data must start with '['"),
+                        path,
+                    ));
+                };
+                let mut text = after.to_string();
+                while !text.contains(']') {
+                    let Some(next) = block.get(j) else {
+                        return Err(syntax(
+                            line_no,
+                            format!("{key}: data has no closing ']'"),
+                            path,
+                        ));
+                    };
+                    text.push(',');
+                    text.push_str(next);
+                    j += 1;
+                }
+                let inside = text.split(']').next().unwrap_or_default();
+                data = Some(
+                    inside
+                        .split(',')
+                        .map(str::trim)
+                        .filter(|s| !s.is_empty())
+                        .map(str::to_string)
+                        .collect::<Vec<_>>(),
+                );
+            }
+            _ => {}
+        }
+    }
+    let missing = |name: &str| {
+        syntax(
+            first_line.saturating_sub(1),
+            format!("{key}: matrix has no {name}"),
+            path,
+        )
+    };
+    Ok(Entry::Matrix {
+        rows: rows.ok_or_else(|| missing("rows"))?,
+        cols: cols.ok_or_else(|| missing("cols"))?,
+        data: data.ok_or_else(|| missing("data"))?,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SAMPLE: &str = "%YAML:1.0\n---\nshift: -1.5e+01\nname: \"kinect\"\n\
+        m: !!opencv-matrix\n   rows: 2\n   cols: 2\n   dt: d\n   data: [ 1., -2.5e-01,\n       3.,\n       4. ]\n\
+        nested:\n   a: 1\nv: !!opencv-matrix\n   rows: 1\n   cols: 3\n   dt: d\n   data: [ 1., x, 3. ]\n";
+
+    fn sample() -> FileStorage {
+        FileStorage::parse(SAMPLE, Path::new("s.yaml")).expect("valid sample")
+    }
+
+    #[test]
+    fn reads_scalars_and_multi_line_matrices() {
+        let fs = sample();
+        assert_eq!(fs.number("shift").expect("number"), -15.0);
+        assert_eq!(
+            fs.matrix("m", 2, 2).expect("2x2"),
+            vec![1.0, -0.25, 3.0, 4.0]
+        );
+        assert!(fs.has("nested"));
+        assert!(!fs.has("a"), "keys of nested blocks are not top-level");
+    }
+
+    #[test]
+    fn errors_name_key_and_file() {
+        let fs = sample();
+        let msg = fs.matrix("m", 3, 3).expect_err("wrong shape").to_string();
+        assert!(
+            msg.starts_with("m: must be a 3x3 matrix") && msg.ends_with("s.yaml"),
+            "{msg}"
+        );
+        let msg = fs.matrix("v", 1, 3).expect_err("non-numeric").to_string();
+        assert!(
+            msg.contains("data[1] = \"x\"") && msg.ends_with("s.yaml"),
+            "{msg}"
+        );
+        let msg = fs.number("name").expect_err("string").to_string();
+        assert!(
+            msg.starts_with("name: \"kinect\" is not a finite number"),
+            "{msg}"
+        );
+        let msg = fs.number("absent").expect_err("missing").to_string();
+        assert_eq!(msg, "missing key absent: s.yaml");
+    }
+
+    #[test]
+    fn rejects_files_without_header_or_with_unclosed_data() {
+        let err = FileStorage::parse("a: 1\n", Path::new("x.yaml")).expect_err("no header");
+        assert!(err.to_string().contains("%YAML:1.0"), "{err}");
+        let text =
+            "%YAML:1.0\nm: !!opencv-matrix\n   rows: 1\n   cols: 2\n   dt: d\n   data: [ 1., 2.\n";
+        let err = FileStorage::parse(text, Path::new("x.yaml")).expect_err("unclosed");
+        assert!(err.to_string().contains("no closing ']'"), "{err}");
+    }
+
+    #[test]
+    fn count_mismatch_is_reported() {
+        let text = "%YAML:1.0\nm: !!opencv-matrix\n   rows: 3\n   cols: 1\n   dt: d\n   data: [ 1., 2. ]\n";
+        let fs = FileStorage::parse(text, Path::new("x.yaml")).expect("syntax is fine");
+        let msg = fs
+            .matrix("m", 3, 1)
+            .expect_err("2 values for 3x1")
+            .to_string();
+        assert_eq!(msg, "m: a 3x1 matrix needs 3 values, data has 2: x.yaml");
+    }
+}
