@@ -8,3 +8,4 @@ mod cli_bad_input;
 mod cli_eval;
 mod cli_help;
 mod cli_refine;
+mod cli_rig;

@@ -4,7 +4,7 @@
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
     DEFAULT_PREDICTION_NAME, EvalOptions, NamedPrediction, PipelineConfig, RefineOptions,
-    RefineOverrides, ReportFormat,
+    RefineOverrides, ReportFormat, RigFormat, RigImportOptions,
 };
 use bodyseg_refine::Steps;
 use clap::{ArgAction, Args, Parser, Subcommand, ValueEnum};
@@ -27,6 +27,7 @@ const MAIN_EXAMPLES: &str = "\
 Examples:
   bodyseg refine --cloud frame.ply --boxes frame_boxes.json --out refined.ply
   bodyseg eval --pred refined.ply --gt truth.ply
+  bodyseg rig import --from iai_kinect2 calib/cam0 calib/cam1 --out rig.toml
   bodyseg refine --help
 
 Logging: RUST_LOG=debug (default warn); -v is info, -vv debug.";
@@ -72,6 +73,9 @@ pub enum Command {
     /// reports
     #[command(long_about = EVAL_LONG_ABOUT, after_help = EVAL_EXAMPLES)]
     Eval(EvalArgs),
+    /// Camera rigs: import calibration files into a rig.toml, show a rig
+    #[command(subcommand)]
+    Rig(RigCommand),
 }
 
 const REFINE_LONG_ABOUT: &str = "\
@@ -292,6 +296,117 @@ fn split_named(value: &str) -> (Option<String>, PathBuf) {
     }
 }
 
+/// `bodyseg rig ...`.
+#[derive(Debug, Subcommand)]
+pub enum RigCommand {
+    /// Assemble a rig.toml from one calibration folder per camera (iai_kinect2)
+    #[command(long_about = RIG_IMPORT_LONG_ABOUT, after_help = RIG_IMPORT_EXAMPLES)]
+    Import(RigImportArgs),
+    /// Print a short summary of a rig.toml: sensor sizes and intrinsics, baseline, depth
+    /// shift, world position of each camera
+    #[command(after_help = RIG_SHOW_EXAMPLES)]
+    Show(RigShowArgs),
+}
+
+const RIG_IMPORT_LONG_ABOUT: &str = "\
+Assemble a rig.toml (shared/FORMATS.md) from calibration files: one folder per camera, \
+cameras in the order given (the rig order: camera index i of a point is the i-th folder).
+
+--from iai_kinect2: each folder is a kinect2_calibration output (calib_color.yaml, \
+calib_ir.yaml, calib_pose.yaml, calib_depth.yaml). calib_pose maps the IR (depth) sensor into \
+the colour sensor (metres) and becomes color_from_depth; depthShift (millimetres) becomes \
+depth_shift_mm; depth_scale is 1000 (millimetres); image sizes are the Kinect v2 ones \
+(512x424 depth, 1920x1080 colour) unless the files give image_width/image_height.
+
+World poses: iai_kinect2 files hold no world pose, so every camera's world_from_depth is the \
+identity. Set the real poses with `bodyseg calibrate world` or by editing the [camera.\
+world_from_depth] tables of the written file; a note says so unless \
+--world-from-depth-identity is given.
+
+Camera names are the folder names, or --name (once per folder, same order); they must be \
+distinct. Writes --out atomically: nothing is written when a folder cannot be read.";
+
+const RIG_IMPORT_EXAMPLES: &str = "\
+Examples:
+  # Three Kinect v2 cameras, named after their serial-number folders:
+  bodyseg rig import --from iai_kinect2 calib/011054343347 calib/021401644747 \\
+      calib/196605135147 --out rig.toml
+  # The same, with chosen names (one --name per folder, in order):
+  bodyseg rig import --from iai_kinect2 calib/011054343347 calib/021401644747 \\
+      calib/196605135147 --name left --name front --name right --out rig.toml
+  # Check what was imported:
+  bodyseg rig show rig.toml";
+
+/// `bodyseg rig import`.
+#[derive(Debug, Args)]
+pub struct RigImportArgs {
+    /// Format of the calibration folders
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub from: ImportFormat,
+
+    /// Calibration folders, one per camera, in rig order
+    #[arg(value_name = "DIR", required = true, num_args = 1..)]
+    pub dirs: Vec<PathBuf>,
+
+    /// Camera name: once per folder, in the same order [default: the folder names]
+    #[arg(long = "name", value_name = "NAME")]
+    pub names: Vec<String>,
+
+    /// Accept identity world poses (world_from_depth) for formats that have none, without
+    /// the note saying so; the rig is the same either way
+    #[arg(long)]
+    pub world_from_depth_identity: bool,
+
+    /// Where to write the rig (TOML); an existing file is replaced only on success
+    #[arg(long, value_name = "RIG.toml")]
+    pub out: PathBuf,
+}
+
+/// `--from`: the calibration formats `rig import` reads. More are being added to
+/// bodyseg-calib (ROS camera_info, OpenPTrack, Azure Kinect): each becomes a variant here
+/// and in [`RigFormat`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ImportFormat {
+    /// iai_kinect2 folders: calib_color.yaml, calib_ir.yaml, calib_pose.yaml,
+    /// calib_depth.yaml (no world pose)
+    #[value(name = "iai_kinect2")]
+    IaiKinect2,
+}
+
+impl From<ImportFormat> for RigFormat {
+    fn from(f: ImportFormat) -> RigFormat {
+        match f {
+            ImportFormat::IaiKinect2 => RigFormat::IaiKinect2,
+        }
+    }
+}
+
+impl RigImportArgs {
+    /// The pipeline's options for `import_rig`.
+    pub fn options(&self) -> RigImportOptions {
+        RigImportOptions {
+            format: self.from.into(),
+            inputs: self.dirs.clone(),
+            names: self.names.clone(),
+            world_from_depth_identity: self.world_from_depth_identity,
+            out: self.out.clone(),
+        }
+    }
+}
+
+const RIG_SHOW_EXAMPLES: &str = "\
+Examples:
+  bodyseg rig show rig.toml
+  bodyseg rig show recording/rig.toml";
+
+/// `bodyseg rig show`.
+#[derive(Debug, Args)]
+pub struct RigShowArgs {
+    /// The rig to show (rig.toml, shared/FORMATS.md)
+    #[arg(value_name = "RIG.toml")]
+    pub rig: PathBuf,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -355,6 +470,51 @@ mod tests {
         assert_eq!(
             e,
             "--eps-m: refine.eps_m must be a finite number > 0, got -1"
+        );
+    }
+
+    #[test]
+    fn rig_import_takes_folders_and_names_in_order() {
+        let cli = Cli::try_parse_from([
+            "bodyseg",
+            "rig",
+            "import",
+            "--from",
+            "iai_kinect2",
+            "a",
+            "b",
+            "--name",
+            "left",
+            "--name",
+            "right",
+            "--out",
+            "rig.toml",
+        ])
+        .expect("valid command line");
+        let Command::Rig(RigCommand::Import(r)) = cli.command else {
+            panic!("parsed as rig import");
+        };
+        let o = r.options();
+        assert_eq!(o.format, RigFormat::IaiKinect2);
+        assert_eq!(o.inputs, [PathBuf::from("a"), PathBuf::from("b")]);
+        assert_eq!(o.names, ["left", "right"]);
+        assert!(!o.world_from_depth_identity);
+        // A folder is required, and so is a known format.
+        assert!(
+            Cli::try_parse_from([
+                "bodyseg",
+                "rig",
+                "import",
+                "--from",
+                "iai_kinect2",
+                "--out",
+                "r"
+            ])
+            .is_err()
+        );
+        assert!(
+            Cli::try_parse_from(["bodyseg", "rig", "import", "--from", "x", "a", "--out", "r"])
+                .is_err()
         );
     }
 

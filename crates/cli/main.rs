@@ -7,8 +7,11 @@
 mod args;
 
 use anyhow::Result;
-use args::{Cli, Command, EvalArgs, RefineArgs};
-use bodyseg_pipeline::{Stage, eval_files, merge_reports, refine_file, render_report, write_text};
+use args::{Cli, Command, EvalArgs, RefineArgs, RigCommand};
+use bodyseg_pipeline::{
+    Stage, describe_rig, eval_files, import_rig, merge_reports, read_rig, refine_file,
+    render_report, write_text,
+};
 use clap::Parser;
 use std::io::Write;
 use std::process::ExitCode;
@@ -54,6 +57,7 @@ fn run(cli: &Cli) -> Result<()> {
     let stages = match &cli.command {
         Command::Refine(args) => refine(args)?,
         Command::Eval(args) => eval(args)?,
+        Command::Rig(cmd) => rig(cmd)?,
     };
     if !cli.quiet {
         for s in stages {
@@ -98,12 +102,31 @@ fn eval(args: &EvalArgs) -> Result<Vec<Stage>> {
     Ok(stages)
 }
 
+fn rig(cmd: &RigCommand) -> Result<Vec<Stage>> {
+    match cmd {
+        RigCommand::Import(args) => {
+            let summary = import_rig(&args.options())?;
+            for note in &summary.notes {
+                eprintln!("note: {note}");
+            }
+            Ok(summary.stages)
+        }
+        RigCommand::Show(args) => {
+            let start = Instant::now();
+            let rig = read_rig(&args.rig)?;
+            let read = Stage::new("read", start.elapsed(), args.rig.display().to_string());
+            print_stdout(&describe_rig(&rig))?;
+            Ok(vec![read])
+        }
+    }
+}
+
 /// Prints to stdout; a closed pipe (`bodyseg eval ... | head`) is not an error.
 fn print_stdout(text: &str) -> Result<()> {
     let mut out = std::io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(anyhow::Error::new(e).context("cannot write the report to stdout"))
+            Err(anyhow::Error::new(e).context("cannot write to stdout"))
         }
         _ => Ok(()),
     }

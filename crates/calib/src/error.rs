@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 /// Why a camera model, a rig or a calibration file is not usable.
 ///
-/// Variants that concern a file carry its path, and their messages end with it.
+/// Variants that concern a file carry its path, and their messages end with it. An I/O
+/// cause is part of the message and deliberately not exposed as `source()` (the field is
+/// `cause`, not `source`), so an error chain (`{:#}`) prints it once.
 #[derive(Debug, thiserror::Error)]
 pub enum CalibError {
     /// A value (intrinsics, pose, option) is out of its valid range; no file involved.
@@ -16,18 +18,18 @@ pub enum CalibError {
         reason: String,
     },
     /// A file or folder could not be read.
-    #[error("cannot read ({source}): {path}")]
+    #[error("cannot read ({cause}): {path}")]
     Read {
         /// The underlying I/O error.
-        source: std::io::Error,
+        cause: std::io::Error,
         /// The file that could not be read.
         path: PathBuf,
     },
     /// A file could not be written (nothing is left half-written).
-    #[error("cannot write ({source}): {path}")]
+    #[error("cannot write ({cause}): {path}")]
     Write {
         /// The underlying I/O error.
-        source: std::io::Error,
+        cause: std::io::Error,
         /// The file that could not be written.
         path: PathBuf,
     },

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use crate::opencv_yaml::FileStorage;
+use crate::files::write_atomic;
+use crate::opencv_yaml::{FileStorage, format_matrix, format_number};
 use crate::{CalibError, DEFAULT_DEPTH_SCALE, Intrinsics, Pose, RgbdCamera};
 
 /// Kinect v2 colour image size, pixels (iai_kinect2 does not store it).
@@ -26,7 +27,7 @@ pub const KINECT2_DEPTH_SIZE: [u32; 2] = [512, 424];
 pub fn read_iai_kinect2(dir: &Path) -> Result<RgbdCamera, CalibError> {
     if !dir.is_dir() {
         return Err(CalibError::Read {
-            source: std::io::Error::new(
+            cause: std::io::Error::new(
                 std::io::ErrorKind::NotFound,
                 "not an iai_kinect2 calibration folder",
             ),
@@ -62,6 +63,116 @@ pub fn read_iai_kinect2(dir: &Path) -> Result<RgbdCamera, CalibError> {
         depth_scale: DEFAULT_DEPTH_SCALE,
         depth_shift_mm,
     })
+}
+
+/// Writes an iai_kinect2 calibration folder for `camera`: the four files in the layout
+/// `kinect2_calibration` writes (OpenCV FileStorage `%YAML:1.0`, doubles as `%.16e`), so
+/// that [`read_iai_kinect2`] — and iai_kinect2 itself — read them back. The folder is
+/// created if needed; each file is written through a temporary and a rename.
+///
+/// - `calib_color.yaml`, `calib_ir.yaml`: `cameraMatrix`, `distortionCoefficients`,
+///   `rotation` (identity) and `projection` (`[K | 0; 0 0 0 1]`), like the tool; plus
+///   `image_width`/`image_height` only when the size is not the Kinect v2 one (the tool
+///   never writes them, the reader accepts them).
+/// - `calib_pose.yaml`: `rotation`, `translation` (`color_from_depth`), and the stereo
+///   `essential` (`[t]× R`) and `fundamental` (`K_c⁻ᵀ E K_ir⁻¹`, scaled so its last entry is
+///   1) matrices the tool also writes; readers ignore the last two.
+/// - `calib_depth.yaml`: `depthShift` = `depth_shift_mm`.
+///
+/// The format has no `world_from_depth` (it is dropped) and no depth scale: a camera
+/// whose `depth_scale` is not 1000 is refused (error on `depth_scale`). All written
+/// values are printed with 17 significant digits, so a round trip is bit-exact.
+pub fn write_iai_kinect2(dir: &Path, camera: &RgbdCamera) -> Result<(), CalibError> {
+    camera.validate()?;
+    if camera.depth_scale != DEFAULT_DEPTH_SCALE {
+        return Err(CalibError::invalid(
+            "depth_scale",
+            format!(
+                "must be {DEFAULT_DEPTH_SCALE} for an iai_kinect2 folder (Kinect v2 depth is in millimetres), got {}",
+                camera.depth_scale
+            ),
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|cause| CalibError::Write {
+        cause,
+        path: dir.to_path_buf(),
+    })?;
+    write_atomic(
+        &dir.join("calib_color.yaml"),
+        &intrinsics_text(&camera.color, KINECT2_COLOR_SIZE),
+    )?;
+    write_atomic(
+        &dir.join("calib_ir.yaml"),
+        &intrinsics_text(&camera.depth, KINECT2_DEPTH_SIZE),
+    )?;
+
+    let r = camera.color_from_depth.rotation();
+    let t = camera.color_from_depth.translation_m();
+    let tx = [[0.0, -t[2], t[1]], [t[2], 0.0, -t[0]], [-t[1], t[0], 0.0]];
+    let essential = mat_mul(&tx, &r);
+    let k_inv = |i: &Intrinsics| {
+        [
+            [1.0 / i.fx, 0.0, -i.cx / i.fx],
+            [0.0, 1.0 / i.fy, -i.cy / i.fy],
+            [0.0, 0.0, 1.0],
+        ]
+    };
+    let kc_inv = k_inv(&camera.color);
+    let kc_inv_t = std::array::from_fn(|a| std::array::from_fn(|b| kc_inv[b][a]));
+    let mut fundamental = mat_mul(&mat_mul(&kc_inv_t, &essential), &k_inv(&camera.depth));
+    let scale = fundamental[2][2];
+    if scale != 0.0 {
+        fundamental = fundamental.map(|row| row.map(|v| v / scale));
+    }
+    let flat = |m: &[[f64; 3]; 3]| m.iter().flatten().copied().collect::<Vec<_>>();
+    let pose_text = format!(
+        "%YAML:1.0\n{}{}{}{}",
+        format_matrix("rotation", 3, 3, &flat(&r)),
+        format_matrix("translation", 3, 1, &t),
+        format_matrix("essential", 3, 3, &flat(&essential)),
+        format_matrix("fundamental", 3, 3, &flat(&fundamental)),
+    );
+    write_atomic(&dir.join("calib_pose.yaml"), &pose_text)?;
+    write_atomic(
+        &dir.join("calib_depth.yaml"),
+        &format!(
+            "%YAML:1.0\ndepthShift: {}\n",
+            format_number(camera.depth_shift_mm)
+        ),
+    )
+}
+
+fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+fn intrinsics_text(i: &Intrinsics, default_size: [u32; 2]) -> String {
+    let mut out = String::from("%YAML:1.0\n");
+    if [i.width, i.height] != default_size {
+        out += &format!("image_width: {}\nimage_height: {}\n", i.width, i.height);
+    }
+    out += &format_matrix(
+        "cameraMatrix",
+        3,
+        3,
+        &[i.fx, 0.0, i.cx, 0.0, i.fy, i.cy, 0.0, 0.0, 1.0],
+    );
+    out += &format_matrix("distortionCoefficients", 1, 5, &i.distortion);
+    out += &format_matrix(
+        "rotation",
+        3,
+        3,
+        &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+    );
+    out += &format_matrix(
+        "projection",
+        4,
+        4,
+        &[
+            i.fx, 0.0, i.cx, 0.0, 0.0, i.fy, i.cy, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ],
+    );
+    out
 }
 
 /// Turns a value error into one naming the file and its key.

@@ -1,11 +1,23 @@
 //! bodyseg-calib: camera models, RGB-D rigs, calibration files and depth back-projection.
 //!
 //! Place in the pipeline: the first stage after reading a recording. A [`Rig`] (read from
-//! `rig.toml` or assembled from vendor calibration files such as iai_kinect2 folders) turns
+//! `rig.toml` or assembled from vendor calibration files) turns
 //! each camera's depth image into points with their origins ([`back_project`]); the
 //! projection stage (`bodyseg-project`) then uses the same cameras to look each point up
 //! in the colour image ([`Intrinsics::project`] after `color_from_depth`). Depth image →
 //! points; depends only on `bodyseg-core`. ALGORITHM.md §1.
+//!
+//! # Calibration files
+//! Each format has a reader and a writer (writers go through a temporary file and a rename;
+//! reader errors name the file and the key):
+//! - `rig.toml` ⇄ [`Rig`]: [`read_rig_toml`], [`write_rig_toml`];
+//! - iai_kinect2 folders ⇄ [`RgbdCamera`]: [`read_iai_kinect2`], [`write_iai_kinect2`];
+//! - ROS `camera_info` YAML ⇄ [`Intrinsics`]: [`read_ros_camera_info`],
+//!   [`write_ros_camera_info`] (`plumb_bob` only);
+//! - OpenPTrack `camera_poses.yaml` ⇄ `(name, world_from_sensor)`:
+//!   [`read_openptrack_poses`], [`write_openptrack_poses`];
+//! - Azure Kinect factory calibration JSON ⇄ [`RgbdCamera`]: [`read_azure_kinect_json`]
+//!   (with warnings for the dropped rational coefficients), [`write_azure_kinect_json`].
 //!
 //! # Conventions
 //! - Camera frames: OpenCV optical frame of each sensor, x right, y down, z forward.
@@ -39,21 +51,41 @@
 //! # Ok::<(), bodyseg_calib::CalibError>(())
 //! ```
 
+mod azure_kinect;
 mod back_project;
 mod camera;
 mod error;
+mod files;
 mod iai_kinect2;
 mod intrinsics;
 mod opencv_yaml;
+mod openptrack;
 mod pose;
 mod rig_toml;
+mod ros_camera_info;
+mod yaml;
 
+pub use azure_kinect::{
+    AZURE_COLOR_LOCATION, AZURE_DEPTH_LOCATION, AzureKinectCalibration,
+    azure_kinect_json_to_string, parse_azure_kinect_json, read_azure_kinect_json,
+    write_azure_kinect_json,
+};
 pub use back_project::{
     BackProjectOptions, BackProjected, CloudFrame, DepthBackProjector, RayTable, back_project,
 };
 pub use camera::{DEFAULT_DEPTH_SCALE, RgbdCamera, Rig};
 pub use error::CalibError;
-pub use iai_kinect2::{KINECT2_COLOR_SIZE, KINECT2_DEPTH_SIZE, read_iai_kinect2};
+pub use iai_kinect2::{
+    KINECT2_COLOR_SIZE, KINECT2_DEPTH_SIZE, read_iai_kinect2, write_iai_kinect2,
+};
 pub use intrinsics::Intrinsics;
+pub use openptrack::{
+    openptrack_poses_to_string, parse_openptrack_poses, read_openptrack_poses,
+    write_openptrack_poses,
+};
 pub use pose::{Pose, QUATERNION_NORM_TOLERANCE, ROTATION_TOLERANCE};
 pub use rig_toml::{parse_rig_toml, read_rig_toml, rig_to_toml_string, write_rig_toml};
+pub use ros_camera_info::{
+    ROS_PLUMB_BOB, RosCameraInfo, parse_ros_camera_info, read_ros_camera_info,
+    ros_camera_info_to_string, write_ros_camera_info,
+};

@@ -57,8 +57,8 @@ fn strip_comment(line: &str) -> &str {
 impl FileStorage {
     /// Reads and parses a file.
     pub(crate) fn read(path: &Path) -> Result<Self, CalibError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CalibError::Read {
-            source,
+        let text = std::fs::read_to_string(path).map_err(|cause| CalibError::Read {
+            cause,
             path: path.to_path_buf(),
         })?;
         Self::parse(&text, path)
@@ -282,6 +282,44 @@ fn parse_matrix(
     })
 }
 
+/// A number as OpenCV's FileStorage prints a double: integers as `1.`, `-2.`, `0.`,
+/// everything else as `%.16e` (`1.0599465578241038e+03`). 17 significant digits always
+/// parse back to the same `f64`, so writing then reading is bit-exact.
+pub(crate) fn format_number(v: f64) -> String {
+    if v == v.trunc() && v.abs() < 1e15 {
+        let sign = if v.is_sign_negative() { "-" } else { "" };
+        return format!("{sign}{}.", v.abs() as u64);
+    }
+    let text = format!("{v:.16e}");
+    let (mantissa, exp) = text.split_once('e').unwrap_or((&text, "0"));
+    let exp: i32 = exp.parse().unwrap_or(0);
+    let sign = if exp < 0 { '-' } else { '+' };
+    format!("{mantissa}e{sign}{:02}", exp.abs())
+}
+
+/// A top-level `key: !!opencv-matrix` block, data wrapped like OpenCV wraps it (lines of
+/// at most about 70 characters, continuation lines indented by 7 spaces).
+pub(crate) fn format_matrix(key: &str, rows: usize, cols: usize, data: &[f64]) -> String {
+    let mut out =
+        format!("{key}: !!opencv-matrix\n   rows: {rows}\n   cols: {cols}\n   dt: d\n   data: [ ");
+    let mut line_len = 12;
+    for (i, &v) in data.iter().enumerate() {
+        let mut item = format_number(v);
+        item.push_str(if i + 1 == data.len() { " ]" } else { "," });
+        if line_len + item.len() > 70 && line_len > 12 {
+            out.push_str("\n       ");
+            line_len = 7;
+        } else if i > 0 {
+            out.push(' ');
+            line_len += 1;
+        }
+        line_len += item.len();
+        out.push_str(&item);
+    }
+    out.push('\n');
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -336,6 +374,37 @@ mod tests {
             "%YAML:1.0\nm: !!opencv-matrix\n   rows: 1\n   cols: 2\n   dt: d\n   data: [ 1., 2.\n";
         let err = FileStorage::parse(text, Path::new("x.yaml")).expect_err("unclosed");
         assert!(err.to_string().contains("no closing ']'"), "{err}");
+    }
+
+    #[test]
+    // The literals are written as OpenCV prints them.
+    #[allow(clippy::excessive_precision)]
+    fn written_numbers_and_matrices_read_back_bit_exact() {
+        assert_eq!(format_number(1059.9465578241038), "1.0599465578241038e+03");
+        assert_eq!(
+            format_number(-5.2052476112081990e-02),
+            "-5.2052476112081990e-02"
+        );
+        assert_eq!(format_number(1.0), "1.");
+        assert_eq!(format_number(0.0), "0.");
+        assert_eq!(format_number(-3.0), "-3.");
+        let data = [
+            1.0599465578241038e+03,
+            0.0,
+            1e-300,
+            -2.5,
+            0.1,
+            1.0 / 3.0,
+            7.0,
+            8.5,
+            -0.0,
+        ];
+        let text = format!("%YAML:1.0\n{}", format_matrix("m", 3, 3, &data));
+        let fs = FileStorage::parse(&text, Path::new("w.yaml")).expect("own output parses");
+        let back = fs.matrix("m", 3, 3).expect("3x3");
+        for (a, b) in back.iter().zip(&data) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{a} vs {b}");
+        }
     }
 
     #[test]

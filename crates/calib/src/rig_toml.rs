@@ -6,7 +6,7 @@
 //! writer always writes rotations as 3×3 matrices, with floats printed to round-trip
 //! exactly.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Serialize;
 use toml::{Table, Value};
@@ -15,10 +15,7 @@ use crate::{CalibError, DEFAULT_DEPTH_SCALE, Intrinsics, Pose, RgbdCamera, Rig};
 
 /// Reads and validates a `rig.toml`.
 pub fn read_rig_toml(path: &Path) -> Result<Rig, CalibError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CalibError::Read {
-        source,
-        path: path.to_path_buf(),
-    })?;
+    let text = crate::files::read_text(path)?;
     parse_rig_toml(&text, path)
 }
 
@@ -353,26 +350,5 @@ pub fn rig_to_toml_string(rig: &Rig) -> Result<String, CalibError> {
 /// Writes a `rig.toml`: to a temporary file beside `path`, then renamed over it, so a
 /// failure never leaves a half-written rig.
 pub fn write_rig_toml(rig: &Rig, path: &Path) -> Result<(), CalibError> {
-    let text = rig_to_toml_string(rig)?;
-    let tmp = temporary_path(path);
-    let write_err = |source| CalibError::Write {
-        source,
-        path: path.to_path_buf(),
-    };
-    if let Err(e) = std::fs::write(&tmp, text) {
-        // Best effort: the temporary may not exist at all.
-        let _ = std::fs::remove_file(&tmp);
-        return Err(write_err(e));
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        write_err(e)
-    })
-}
-
-fn temporary_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map_or_else(|| "rig.toml".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.tmp{}", std::process::id()))
+    crate::files::write_atomic(path, &rig_to_toml_string(rig)?)
 }

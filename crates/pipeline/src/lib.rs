@@ -8,6 +8,8 @@
 //! refine_file:   cloud PLY + boxes JSON → bodyseg_refine::refine → refined PLY (+ resolved config)
 //! eval_files:    predicted PLY(s) + ground-truth PLY → bodyseg_eval::match_clouds → Report
 //! merge_reports: report JSON files → Report::merge → Report
+//! import_rig:    calibration folders (iai_kinect2) → bodyseg_calib::Rig → rig.toml
+//! describe_rig:  rig.toml → human-readable summary
 //! ```
 //!
 //! No command-line parsing here (that is `crates/cli`): each command takes an options
@@ -26,6 +28,7 @@ mod config;
 mod eval;
 mod fs;
 mod refine;
+mod rig;
 mod stage;
 
 pub use config::{PipelineConfig, RefineOverrides};
@@ -35,4 +38,5 @@ pub use eval::{
 };
 pub use fs::write_text;
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
+pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
 pub use stage::Stage;
