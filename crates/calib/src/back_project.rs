@@ -1,11 +1,24 @@
 //! Depth image → points (ALGORITHM.md §1): every valid depth pixel becomes
 //! `z · (x', y', 1)`, with (x', y') the undistorted normalised ray of the pixel, optionally
 //! moved into the world frame. Each point keeps its origin (camera, pixel).
+//!
+//! Parallelism (rayon): one image is cut into chunks of rows ([`PIXELS_PER_CHUNK`]
+//! pixels each) projected in parallel and concatenated in row-major order, so the output is
+//! the sequential one bit for bit ([`DepthBackProjector::back_project_sequential`] is the
+//! reference); a rig's cameras run in parallel too ([`RigBackProjector`]).
+
+use std::ops::Range;
 
 use bodyseg_core::PointOrigin;
 use bodyseg_core::math::Vec3;
+use rayon::prelude::*;
 
-use crate::{CalibError, Intrinsics, RgbdCamera};
+use crate::{CalibError, Intrinsics, RgbdCamera, Rig};
+
+/// About how many pixels one parallel chunk of rows holds (16 rows of a 512-pixel Kinect v2
+/// depth image): large enough that rayon's per-task cost (~µs) is small against the chunk's
+/// work, small enough that two to sixteen cores each get several chunks of a 512×424 image.
+pub const PIXELS_PER_CHUNK: usize = 8192;
 
 /// The frame back-projected points are expressed in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -145,24 +158,88 @@ impl DepthBackProjector {
     /// Back-projects one depth image (raw `u16` values, row-major, the depth sensor's
     /// size). Raw 0, depths outside `[depth_min_m, depth_max_m]`, non-positive depths
     /// after the shift and pixels without a ray give no point.
+    ///
+    /// Chunks of rows run in parallel on rayon's current pool; the output (points and
+    /// origins, row-major) is bit for bit that of [`Self::back_project_sequential`].
     pub fn back_project(
         &self,
         depth_raw: &[u16],
         opts: &BackProjectOptions,
     ) -> Result<BackProjected, CalibError> {
+        self.check(depth_raw, opts)?;
+        let rows = self.strided_rows(opts);
+        let w = self.camera.depth.width as usize;
+        let rows_per_chunk = (PIXELS_PER_CHUNK / w.max(1)).max(1);
+        let chunks: Vec<Range<usize>> = (0..rows.len())
+            .step_by(rows_per_chunk)
+            .map(|start| start..(start + rows_per_chunk).min(rows.len()))
+            .collect();
+        if chunks.len() <= 1 {
+            return Ok(self.project_rows(depth_raw, opts, &rows));
+        }
+        let parts: Vec<BackProjected> = chunks
+            .into_par_iter()
+            .map(|range| self.project_rows(depth_raw, opts, &rows[range]))
+            .collect();
+        let n = parts.iter().map(|p| p.points_m.len()).sum();
+        let mut out = BackProjected {
+            points_m: Vec::with_capacity(n),
+            origins: Vec::with_capacity(n),
+        };
+        for part in parts {
+            out.points_m.extend_from_slice(&part.points_m);
+            out.origins.extend_from_slice(&part.origins);
+        }
+        Ok(out)
+    }
+
+    /// [`Self::back_project`] on the calling thread only: the reference the parallel
+    /// version is tested against.
+    pub fn back_project_sequential(
+        &self,
+        depth_raw: &[u16],
+        opts: &BackProjectOptions,
+    ) -> Result<BackProjected, CalibError> {
+        self.check(depth_raw, opts)?;
+        Ok(self.project_rows(depth_raw, opts, &self.strided_rows(opts)))
+    }
+
+    fn check(&self, depth_raw: &[u16], opts: &BackProjectOptions) -> Result<(), CalibError> {
         opts.validate()?;
-        let (w, h) = (self.camera.depth.width, self.camera.depth.height);
         if depth_raw.len() != self.camera.depth.num_pixels() {
             return Err(CalibError::DepthSize {
                 camera: self.camera.name.clone(),
                 got: depth_raw.len(),
-                want_w: w,
-                want_h: h,
+                want_w: self.camera.depth.width,
+                want_h: self.camera.depth.height,
             });
         }
-        let mut out = BackProjected::default();
+        Ok(())
+    }
+
+    /// The rows `v` visited with this stride.
+    fn strided_rows(&self, opts: &BackProjectOptions) -> Vec<u32> {
+        (0..self.camera.depth.height)
+            .step_by(opts.stride as usize)
+            .collect()
+    }
+
+    /// Points of the given rows, row-major. `depth_raw` has the sensor's size (checked).
+    fn project_rows(
+        &self,
+        depth_raw: &[u16],
+        opts: &BackProjectOptions,
+        rows: &[u32],
+    ) -> BackProjected {
+        let w = self.camera.depth.width;
         let step = opts.stride as usize;
-        for v in (0..h).step_by(step) {
+        // Upper bound (every visited pixel valid): no reallocation while pushing.
+        let cap = rows.len() * (w as usize).div_ceil(step);
+        let mut out = BackProjected {
+            points_m: Vec::with_capacity(cap),
+            origins: Vec::with_capacity(cap),
+        };
+        for &v in rows {
             for u in (0..w).step_by(step) {
                 let pixel = v as usize * w as usize + u as usize;
                 let Some(z) = self.camera.depth_m(depth_raw[pixel]) else {
@@ -189,8 +266,103 @@ impl DepthBackProjector {
                 });
             }
         }
+        out
+    }
+}
+
+/// Back-projects the depth images of all cameras of a rig, one [`DepthBackProjector`] per
+/// camera (ray tables computed once), cameras in parallel (rayon) and, within each, chunks
+/// of rows in parallel.
+#[derive(Debug, Clone)]
+pub struct RigBackProjector {
+    projectors: Vec<DepthBackProjector>,
+}
+
+impl RigBackProjector {
+    /// Validates the rig and computes each camera's ray table; camera `i` of the rig gets
+    /// index `i` in the points' origins.
+    pub fn new(rig: &Rig) -> Result<Self, CalibError> {
+        rig.validate()?;
+        let projectors = rig
+            .cameras
+            .par_iter()
+            .enumerate()
+            .map(|(i, cam)| {
+                // Fits: `Rig::validate` caps the rig at `Rig::MAX_CAMERAS` = 256.
+                DepthBackProjector::new(cam, i as u8)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(RigBackProjector { projectors })
+    }
+
+    /// The per-camera projectors, in rig order.
+    pub fn projectors(&self) -> &[DepthBackProjector] {
+        &self.projectors
+    }
+
+    /// Back-projects one depth image per camera (`depths[i]` belongs to camera `i`), each
+    /// in the frame `opts.frame` asks for; the result is in rig order. Errors: a count of
+    /// images other than the number of cameras, or any camera's error (wrong image size).
+    pub fn back_project_each(
+        &self,
+        depths: &[&[u16]],
+        opts: &BackProjectOptions,
+    ) -> Result<Vec<BackProjected>, CalibError> {
+        if depths.len() != self.projectors.len() {
+            return Err(CalibError::invalid(
+                "depths",
+                format!(
+                    "one depth image per camera: the rig has {} cameras, got {} images",
+                    self.projectors.len(),
+                    depths.len()
+                ),
+            ));
+        }
+        self.projectors
+            .par_iter()
+            .zip(depths.par_iter())
+            .map(|(p, d)| p.back_project(d, opts))
+            .collect()
+    }
+
+    /// One world-frame cloud of all cameras: the clouds of [`Self::back_project_each`]
+    /// concatenated in rig order, each point with its origin (camera, pixel).
+    /// `opts.frame` must be [`CloudFrame::World`] (points of different depth frames cannot
+    /// share a cloud); anything else is an error on `frame`.
+    pub fn back_project(
+        &self,
+        depths: &[&[u16]],
+        opts: &BackProjectOptions,
+    ) -> Result<BackProjected, CalibError> {
+        if opts.frame != CloudFrame::World {
+            return Err(CalibError::invalid(
+                "frame",
+                "a cloud of several cameras must be in the world frame",
+            ));
+        }
+        let parts = self.back_project_each(depths, opts)?;
+        let n = parts.iter().map(|p| p.points_m.len()).sum();
+        let mut out = BackProjected {
+            points_m: Vec::with_capacity(n),
+            origins: Vec::with_capacity(n),
+        };
+        for part in parts {
+            out.points_m.extend_from_slice(&part.points_m);
+            out.origins.extend_from_slice(&part.origins);
+        }
         Ok(out)
     }
+}
+
+/// Back-projects one depth image per camera of `rig` into one world-frame cloud, in rig
+/// order (see [`RigBackProjector::back_project`]). Builds every ray table each call; keep
+/// a [`RigBackProjector`] to project many frames.
+pub fn back_project_rig(
+    depths: &[&[u16]],
+    rig: &Rig,
+    opts: &BackProjectOptions,
+) -> Result<BackProjected, CalibError> {
+    RigBackProjector::new(rig)?.back_project(depths, opts)
 }
 
 /// Back-projects one depth image of `camera` (see [`DepthBackProjector::back_project`]).

@@ -2,7 +2,9 @@
 //!
 //! Place in the pipeline: the first stage after reading a recording. A [`Rig`] (read from
 //! `rig.toml` or assembled from vendor calibration files) turns
-//! each camera's depth image into points with their origins ([`back_project`]); the
+//! each camera's depth image into points with their origins ([`back_project`]; a whole
+//! rig into one world-frame cloud with [`RigBackProjector`], rayon across cameras and
+//! rows); the
 //! projection stage (`bodyseg-project`) then uses the same cameras to look each point up
 //! in the colour image ([`Intrinsics::project`] after `color_from_depth`). Depth image →
 //! points; depends only on `bodyseg-core`. ALGORITHM.md §1.
@@ -71,7 +73,8 @@ pub use azure_kinect::{
     write_azure_kinect_json,
 };
 pub use back_project::{
-    BackProjectOptions, BackProjected, CloudFrame, DepthBackProjector, RayTable, back_project,
+    BackProjectOptions, BackProjected, CloudFrame, DepthBackProjector, PIXELS_PER_CHUNK, RayTable,
+    RigBackProjector, back_project, back_project_rig,
 };
 pub use camera::{DEFAULT_DEPTH_SCALE, RgbdCamera, Rig};
 pub use error::CalibError;

@@ -13,9 +13,11 @@
 
 pub mod class;
 pub mod cloud;
+pub mod image;
 pub mod math;
 pub mod person;
 
 pub use class::{Class, Label, NUM_CLASSES};
 pub use cloud::{CloudError, LabeledCloud, PointOrigin, RefinedCloud};
+pub use image::{ImageError, LabelImage};
 pub use person::{BoxTest, PersonBox, PersonBoxes};

@@ -1,0 +1,142 @@
+//! Guards the back-projection half of the per-frame budget (issue 4: back-projection +
+//! DSA projection of one 3-camera Kinect v2 frame ≤ 10 ms on 2 cores): three 512×424 depth
+//! images with the real iai_kinect2 intrinsics (`shared/data/iai_kinect2/196605135147`,
+//! distortion included), a synthetic scene of a floor plane and a box with ~15% holes,
+//! back-projected into one world-frame cloud with origins by [`RigBackProjector`]. Measured
+//! on a 2-thread rayon pool (the budget's machine), on rayon's default pool, and
+//! sequentially (one camera after another, one thread) for the parallel speed-up.
+//! Elements = depth pixels (3 × 512 × 424).
+
+// criterion_group!/criterion_main! generate undocumented items.
+#![allow(missing_docs)]
+
+use std::hint::black_box;
+use std::path::Path;
+
+use bodyseg_calib::{
+    BackProjectOptions, Pose, RgbdCamera, Rig, RigBackProjector, read_iai_kinect2,
+};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+/// Fixed seed of the hole pattern.
+const SEED: u64 = 0x00B0_D15E_6BEC_0001;
+
+fn kinect() -> RgbdCamera {
+    let dir =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147");
+    read_iai_kinect2(&dir).unwrap_or_else(|e| panic!("bench data: {e}"))
+}
+
+/// Three cameras 2.2 m up on a circle of radius 3 m around the world origin, looking at
+/// it 30° down.
+fn rig() -> Rig {
+    let base = kinect();
+    let cameras = (0..3)
+        .map(|i| {
+            let yaw = f64::from(i) * 120f64.to_radians();
+            let (sy, cy) = yaw.sin_cos();
+            let (st, ct) = 30f64.to_radians().sin_cos();
+            // Optical axes in world coordinates: z forward (towards the centre, tilted
+            // down), x right (horizontal), y down = z × x.
+            let fwd = [-cy * ct, -sy * ct, -st];
+            let right = [sy, -cy, 0.0];
+            let down = [
+                fwd[1] * right[2] - fwd[2] * right[1],
+                fwd[2] * right[0] - fwd[0] * right[2],
+                fwd[0] * right[1] - fwd[1] * right[0],
+            ];
+            let rotation = std::array::from_fn(|r| [right[r], down[r], fwd[r]]);
+            let mut cam = base.clone();
+            cam.name = format!("cam{i}");
+            cam.world_from_depth =
+                Pose::from_rotation_translation(rotation, [3.0 * cy, 3.0 * sy, 2.2])
+                    .expect("an orthonormal rotation");
+            cam
+        })
+        .collect();
+    Rig { cameras }
+}
+
+/// A depth image (mm) of a slanted plane with a box in front of it; ~15% of the pixels
+/// are holes (0), as on a real Kinect v2 frame (edges, dark and shiny surfaces).
+fn depth_image(width: u32, height: u32, seed: u64) -> Vec<u16> {
+    let mut state = seed.max(1);
+    let mut unit = move || {
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for v in 0..height {
+        for u in 0..width {
+            let in_box = (180..330).contains(&u) && (140..320).contains(&v);
+            let z_mm = if in_box {
+                2000.0 + 0.8 * f64::from(u - 180)
+            } else {
+                // Floor seen from above: farther towards the top of the image.
+                4500.0 - 6.0 * f64::from(v)
+            };
+            let hole = unit() < 0.15;
+            out.push(if hole { 0 } else { z_mm as u16 });
+        }
+    }
+    out
+}
+
+fn bench(c: &mut Criterion) {
+    let rig = rig();
+    let projector = RigBackProjector::new(&rig).expect("a valid rig");
+    let images: Vec<Vec<u16>> = rig
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(i, cam)| depth_image(cam.depth.width, cam.depth.height, SEED + i as u64))
+        .collect();
+    let depths: Vec<&[u16]> = images.iter().map(Vec::as_slice).collect();
+    let opts = BackProjectOptions::default();
+    let pixels: usize = rig.cameras.iter().map(|c| c.depth.num_pixels()).sum();
+    let valid = images.iter().flatten().filter(|&&d| d != 0).count();
+    eprintln!(
+        "back_project bench: {pixels} depth pixels, {:.1}% valid",
+        100.0 * valid as f64 / pixels as f64
+    );
+    let size = format!(
+        "3x{}x{}",
+        rig.cameras[0].depth.width, rig.cameras[0].depth.height
+    );
+
+    let mut group = c.benchmark_group("back_project_rig_world");
+    group.throughput(Throughput::Elements(pixels as u64));
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("a 2-thread pool");
+    group.bench_with_input(
+        BenchmarkId::new("rayon_2_threads", &size),
+        &depths,
+        |b, d| {
+            b.iter(|| two.install(|| projector.back_project(black_box(d), &opts).expect("ok")));
+        },
+    );
+    group.bench_with_input(BenchmarkId::new("rayon_default", &size), &depths, |b, d| {
+        b.iter(|| projector.back_project(black_box(d), &opts).expect("ok"));
+    });
+    group.bench_with_input(BenchmarkId::new("sequential", &size), &depths, |b, d| {
+        b.iter(|| {
+            projector
+                .projectors()
+                .iter()
+                .zip(black_box(d))
+                .map(|(p, img)| p.back_project_sequential(img, &opts).expect("ok"))
+                .collect::<Vec<_>>()
+        });
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
