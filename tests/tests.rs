@@ -7,5 +7,6 @@ mod common;
 mod cli_bad_input;
 mod cli_eval;
 mod cli_help;
+mod cli_project;
 mod cli_refine;
 mod cli_rig;

@@ -3,8 +3,8 @@
 
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
-    DEFAULT_PREDICTION_NAME, EvalOptions, NamedPrediction, PipelineConfig, RefineOptions,
-    RefineOverrides, ReportFormat, RigFormat, RigImportOptions,
+    DEFAULT_PREDICTION_NAME, EvalOptions, NamedPrediction, PipelineConfig, ProjectMode,
+    ProjectOptions, RefineOptions, RefineOverrides, ReportFormat, RigFormat, RigImportOptions,
 };
 use bodyseg_refine::Steps;
 use clap::{ArgAction, Args, Parser, Subcommand, ValueEnum};
@@ -25,6 +25,7 @@ each command.";
 
 const MAIN_EXAMPLES: &str = "\
 Examples:
+  bodyseg project --recording rec --frame 000012 --out frame.ply
   bodyseg refine --cloud frame.ply --boxes frame_boxes.json --out refined.ply
   bodyseg eval --pred refined.ply --gt truth.ply
   bodyseg rig import --from iai_kinect2 calib/cam0 calib/cam1 --out rig.toml
@@ -66,6 +67,10 @@ pub struct Cli {
 /// The commands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Label the depth points of one recorded frame with its 2D body-part labels (naive or
+    /// DSA-aware projection) and write one world-frame cloud
+    #[command(long_about = PROJECT_LONG_ABOUT, after_help = PROJECT_EXAMPLES)]
+    Project(ProjectArgs),
     /// Repair the body-part labels of a point cloud (clustering refinement: M, R, N steps)
     #[command(long_about = REFINE_LONG_ABOUT, after_help = REFINE_EXAMPLES)]
     Refine(RefineArgs),
@@ -76,6 +81,110 @@ pub enum Command {
     /// Camera rigs: import calibration files into a rig.toml, show a rig
     #[command(subcommand)]
     Rig(RigCommand),
+}
+
+const PROJECT_LONG_ABOUT: &str = "\
+Label the depth points of one frame of a recording: every camera's depth image is \
+back-projected, each point looks up the label of the colour pixel it projects to in that \
+camera's parsing image, and the cameras' points are moved to the world frame and \
+concatenated (cameras in rig order, pixels row-major).
+
+Modes: `naive` (the paper's baseline: the nearest colour pixel's label) or `dsa` (default: \
+the same, guarded against depth-segmentation association errors by an occlusion z-buffer, \
+a depth-edge / flying-pixel test and a label-boundary vote; a point no check lets through \
+is `unknown`, label 255).
+
+Reads, in the recording folder REC (shared/FORMATS.md): REC/rig.toml, and for each camera \
+of the rig REC/<camera>/depth/<FRAME>.png (16-bit millimetres, depth sensor size) and \
+REC/<camera>/parsing/<FRAME>.png (8-bit class ids, 255 = not labelled, colour sensor size). \
+Writes: the labelled cloud (--out, PLY: x y z in metres, world frame; label, camera and \
+pixel per point) and beside it the exact configuration used (--out frame.ply writes \
+frame.config.resolved.toml). Nothing is written when the command fails.
+
+Configuration: built-in defaults (configs/default.toml, sections [backproject] and \
+[project]) < --config FILE < --mode.";
+
+const PROJECT_EXAMPLES: &str = "\
+Examples:
+  # DSA-aware projection of frame 000012 of recording rec/:
+  bodyseg project --recording rec --frame 000012 --out frame.ply
+  # The paper's naive baseline, ASCII output:
+  bodyseg project --recording rec --frame 000012 --mode naive --ascii --out naive.ply
+  # Settings from a file (see configs/default.toml for every key):
+  bodyseg project --config my.toml --recording rec --frame 000012 --out frame.ply";
+
+/// `bodyseg project`.
+#[derive(Debug, Args)]
+pub struct ProjectArgs {
+    /// Recording folder: rig.toml and per camera <camera>/depth/ and <camera>/parsing/
+    #[arg(long, value_name = "REC")]
+    pub recording: PathBuf,
+
+    /// Frame to project: the file stem of its images (e.g. 000012 for depth/000012.png)
+    #[arg(long, value_name = "STEM")]
+    pub frame: String,
+
+    /// Projection: naive (nearest colour pixel) or dsa (with the DSA checks) [default:
+    /// project.mode of the configuration, dsa]
+    #[arg(long, value_enum)]
+    pub mode: Option<Mode>,
+
+    /// Configuration file (TOML, sections [backproject] and [project]); keys left out keep
+    /// the defaults of configs/default.toml
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+
+    /// Write ASCII PLY (default: binary little-endian)
+    #[arg(long)]
+    pub ascii: bool,
+
+    /// Where to write the labelled cloud (PLY); an existing file is replaced only on
+    /// success
+    #[arg(long, value_name = "OUT.ply")]
+    pub out: PathBuf,
+}
+
+/// `--mode`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Mode {
+    /// The label of the nearest colour pixel (the paper's baseline)
+    Naive,
+    /// Nearest colour pixel guarded by the DSA checks (occlusion, depth edges, label
+    /// boundaries)
+    Dsa,
+}
+
+impl From<Mode> for ProjectMode {
+    fn from(m: Mode) -> ProjectMode {
+        match m {
+            Mode::Naive => ProjectMode::Naive,
+            Mode::Dsa => ProjectMode::Dsa,
+        }
+    }
+}
+
+impl ProjectArgs {
+    /// The resolved configuration: defaults < --config < --mode, validated.
+    pub fn config(&self) -> Result<PipelineConfig> {
+        let mut config = match &self.config {
+            Some(path) => PipelineConfig::load(path)?,
+            None => PipelineConfig::default(),
+        };
+        config.apply_project_mode(self.mode.map(ProjectMode::from));
+        Ok(config)
+    }
+
+    /// The pipeline's options for `project_file`.
+    pub fn options(&self) -> Result<ProjectOptions> {
+        Ok(ProjectOptions {
+            recording: self.recording.clone(),
+            frame: self.frame.clone(),
+            config: self.config()?,
+            out: self.out.clone(),
+            ascii: self.ascii,
+            write_resolved_config: true,
+        })
+    }
 }
 
 const REFINE_LONG_ABOUT: &str = "\
@@ -415,6 +524,48 @@ mod tests {
     #[test]
     fn clap_definition_is_consistent() {
         Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn project_mode_flag_overrides_the_config() {
+        let parse = |extra: &[&str]| {
+            let mut all = vec![
+                "bodyseg",
+                "project",
+                "--recording",
+                "rec",
+                "--frame",
+                "000012",
+                "--out",
+                "o.ply",
+            ];
+            all.extend_from_slice(extra);
+            let cli = Cli::try_parse_from(all).expect("valid command line");
+            let Command::Project(p) = cli.command else {
+                panic!("parsed as project");
+            };
+            p.options().expect("valid options")
+        };
+        assert_eq!(parse(&[]).config.project.mode, ProjectMode::Dsa);
+        let o = parse(&["--mode", "naive", "--ascii"]);
+        assert_eq!(o.config.project.mode, ProjectMode::Naive);
+        assert!(o.ascii);
+        assert_eq!(o.frame, "000012");
+        assert!(
+            Cli::try_parse_from([
+                "bodyseg",
+                "project",
+                "--recording",
+                "r",
+                "--frame",
+                "f",
+                "--mode",
+                "x",
+                "--out",
+                "o"
+            ])
+            .is_err()
+        );
     }
 
     #[test]

@@ -7,10 +7,10 @@
 mod args;
 
 use anyhow::Result;
-use args::{Cli, Command, EvalArgs, RefineArgs, RigCommand};
+use args::{Cli, Command, EvalArgs, ProjectArgs, RefineArgs, RigCommand};
 use bodyseg_pipeline::{
-    Stage, describe_rig, eval_files, import_rig, merge_reports, read_rig, refine_file,
-    render_report, write_text,
+    Stage, describe_rig, eval_files, import_rig, merge_reports, project_file, read_rig,
+    refine_file, render_report, write_text,
 };
 use clap::Parser;
 use std::io::Write;
@@ -55,6 +55,7 @@ fn init_logging(verbose: u8) {
 
 fn run(cli: &Cli) -> Result<()> {
     let stages = match &cli.command {
+        Command::Project(args) => project(args)?,
         Command::Refine(args) => refine(args)?,
         Command::Eval(args) => eval(args)?,
         Command::Rig(cmd) => rig(cmd)?,
@@ -65,6 +66,11 @@ fn run(cli: &Cli) -> Result<()> {
         }
     }
     Ok(())
+}
+
+fn project(args: &ProjectArgs) -> Result<Vec<Stage>> {
+    let summary = project_file(&args.options()?)?;
+    Ok(summary.stages)
 }
 
 fn refine(args: &RefineArgs) -> Result<Vec<Stage>> {

@@ -184,4 +184,58 @@ pub enum IoError {
         /// The file.
         path: PathBuf,
     },
+    /// A PNG file cannot be decoded (not a PNG, truncated, corrupt), or an image handed
+    /// to a PNG writer cannot be encoded.
+    #[error("{}: bad PNG: {cause}", .path.display())]
+    Png {
+        /// What the PNG decoder or encoder said.
+        cause: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A PNG decodes but its pixel format is not the one the file must have (an 8-bit
+    /// depth image, an RGB label image).
+    #[error("{}: {what} is {got}, expected {expected}", .path.display())]
+    PixelFormat {
+        /// Which image (`depth PNG`, `label PNG`).
+        what: &'static str,
+        /// Its pixel format (`8-bit`, `8-bit RGB`).
+        got: String,
+        /// The format it must have (`16-bit millimetres`).
+        expected: &'static str,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A label image pixel holds an id that is neither a class (0..=6) nor 255.
+    #[error(
+        "{}: pixel (u {u}, v {v}): label id {id} is not a class id (0..=6) or 255 (not labelled)",
+        .path.display()
+    )]
+    BadLabelPixel {
+        /// Column, pixels.
+        u: u32,
+        /// Row, pixels.
+        v: u32,
+        /// The offending id.
+        id: u8,
+        /// The file.
+        path: PathBuf,
+    },
+    /// An image handed to a writer is inconsistent (its pixel array does not hold
+    /// `width * height` values); nothing was written.
+    #[error("{}: refusing to write an invalid image: {reason}", .path.display())]
+    InvalidImage {
+        /// What is wrong with it.
+        reason: String,
+        /// The destination file.
+        path: PathBuf,
+    },
+    /// A folder the caller needs does not exist (or is not a folder).
+    #[error("{}: {what} folder is missing", .path.display())]
+    MissingFolder {
+        /// What the folder is (`camera`).
+        what: String,
+        /// The folder.
+        path: PathBuf,
+    },
 }

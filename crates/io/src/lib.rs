@@ -4,6 +4,9 @@
 //! that cross stage boundaries so any intermediate can be stored and inspected:
 //! [`LabeledCloud`](bodyseg_core::LabeledCloud) ⇄ PLY ([`read_ply`], [`write_ply`]) and
 //! [`PersonBoxes`](bodyseg_core::PersonBoxes) ⇄ JSON ([`read_boxes`], [`write_boxes`]).
+//! A recording's images: depth PNGs ⇄ [`DepthImage`] ([`read_depth_png`],
+//! [`write_depth_png`]) and label PNGs ⇄ [`LabelImage`](bodyseg_core::LabelImage)
+//! ([`read_label_png`], [`write_label_png`]).
 //! Other crates' text files (configurations, reports) go through [`read_text`] and
 //! [`write_bytes_atomic`].
 //! Layouts are those of FORMATS.md. Readers are tolerant (unknown PLY properties and
@@ -18,6 +21,8 @@
 //!   index in that camera's depth image. A PLY without `camera`/`pixel` reads as camera 0
 //!   and the vertex index, as [`LabeledCloud::origins`](bodyseg_core::LabeledCloud::origins)
 //!   documents.
+//! - Depth PNGs are 16-bit grayscale raw depth (millimetres), 0 = no measurement; label
+//!   PNGs are 8-bit grayscale class ids, 255 = not labelled; pixels row-major.
 //! - PLY is written binary little-endian by default; readers accept ASCII and both byte
 //!   orders.
 //! - Every write goes through [`write_atomic`]: a temporary file in the destination's
@@ -30,11 +35,15 @@
 mod atomic;
 mod boxes;
 mod error;
+mod folder;
+mod image;
 mod ply;
 mod text;
 
 pub use atomic::{write_atomic, write_bytes_atomic};
 pub use boxes::{parse_boxes, read_boxes, write_boxes};
 pub use error::IoError;
+pub use folder::require_folder;
+pub use image::{DepthImage, read_depth_png, read_label_png, write_depth_png, write_label_png};
 pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};
 pub use text::read_text;

@@ -1,12 +1,14 @@
 //! [`PipelineConfig`]: every stage's configuration in one TOML document.
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
+use bodyseg_calib::{BackProjectOptions, CloudFrame};
+use bodyseg_project::{ProjectConfig, ProjectMode};
 use bodyseg_refine::{RefineConfig, RefineError, Steps};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// The whole configuration, one section per stage (`[refine]`, and later `[project]`,
-/// `[people]`, `[parsing]`, ...). It only nests the stages' own configurations: each stage
+/// The whole configuration, one section per stage (`[backproject]`, `[project]`,
+/// `[refine]`, and later `[people]`, `[parsing]`, ...). It only nests the stages' own configurations: each stage
 /// crate documents its fields, units and defaults.
 ///
 /// Precedence: built-in defaults ([`PipelineConfig::default`], equal to
@@ -16,8 +18,74 @@ use std::path::Path;
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineConfig {
+    /// Depth back-projection before the label projection (`[backproject]`).
+    pub backproject: BackProjectConfig,
+    /// The 2D → 3D label projection (`[project]`, bodyseg-project's [`ProjectConfig`]).
+    pub project: ProjectConfig,
     /// The clustering refinement (`[refine]`).
     pub refine: RefineConfig,
+}
+
+/// Which depth pixels become points (`[backproject]`): the serializable part of
+/// bodyseg-calib's [`BackProjectOptions`] (whose output frame the projection fixes).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BackProjectConfig {
+    /// Depths below this give no point, metres (after `depth_scale` and
+    /// `depth_shift_mm`). Must be finite and >= 0. Default 0: every measured depth.
+    pub depth_min_m: f64,
+    /// Depths above this give no point, metres. Must be >= `depth_min_m`; `inf` = no
+    /// limit. Default `inf` (Kinect v2 data is unreliable beyond ~4.5 m: lower it there).
+    pub depth_max_m: f64,
+    /// Keep every `stride`-th depth pixel along rows and columns (`u % stride == 0` and
+    /// `v % stride == 0`). Must be >= 1. Default 1: every pixel. Raise
+    /// `project.splat_radius_px` with it: sparser points leave holes in the z-buffer.
+    pub stride: u32,
+}
+
+impl Default for BackProjectConfig {
+    fn default() -> Self {
+        let o = BackProjectOptions::default();
+        BackProjectConfig {
+            depth_min_m: o.depth_min_m,
+            depth_max_m: o.depth_max_m,
+            stride: o.stride,
+        }
+    }
+}
+
+impl BackProjectConfig {
+    /// bodyseg-calib's options for these values, world frame.
+    pub fn options(&self) -> BackProjectOptions {
+        BackProjectOptions {
+            depth_min_m: self.depth_min_m,
+            depth_max_m: self.depth_max_m,
+            stride: self.stride,
+            frame: CloudFrame::World,
+        }
+    }
+
+    /// Checks the ranges; the error names the field (`backproject.stride must be >= 1,
+    /// got 0`).
+    pub fn validate(&self) -> Result<()> {
+        if self.stride == 0 {
+            bail!("backproject.stride must be >= 1, got 0");
+        }
+        if !(self.depth_min_m.is_finite() && self.depth_min_m >= 0.0) {
+            bail!(
+                "backproject.depth_min_m must be a finite number >= 0, got {}",
+                self.depth_min_m
+            );
+        }
+        if self.depth_max_m.is_nan() || self.depth_max_m < self.depth_min_m {
+            bail!(
+                "backproject.depth_max_m must be >= backproject.depth_min_m ({}), got {}",
+                self.depth_min_m,
+                self.depth_max_m
+            );
+        }
+        Ok(())
+    }
 }
 
 /// Command-line values that replace the `[refine]` section's; `None` leaves a field as the
@@ -70,8 +138,18 @@ impl PipelineConfig {
     ///
     /// # Errors
     /// The first field out of range.
-    pub fn validate(&self) -> Result<(), RefineError> {
-        self.refine.validate()
+    pub fn validate(&self) -> Result<()> {
+        self.backproject.validate()?;
+        self.project.validate()?;
+        self.refine.validate()?;
+        Ok(())
+    }
+
+    /// Applies `--mode` over `project.mode` (`None` keeps it).
+    pub fn apply_project_mode(&mut self, mode: Option<ProjectMode>) {
+        if let Some(mode) = mode {
+            self.project.mode = mode;
+        }
     }
 
     /// Applies command-line values over this configuration and validates the result.
@@ -93,7 +171,7 @@ impl PipelineConfig {
         if let Some(keep) = o.keep_outside_boxes {
             r.keep_outside_boxes = keep;
         }
-        self.validate().map_err(|e| match &e {
+        self.refine.validate().map_err(|e| match &e {
             RefineError::InvalidConfig { field, .. } => {
                 anyhow!("--{}: {e}", field.replace('_', "-"))
             }
@@ -212,6 +290,38 @@ mod tests {
     }
 
     #[test]
+    fn project_and_backproject_sections_are_read_and_validated() {
+        let c = parse("[project]\nmode = \"naive\"\n[backproject]\ndepth_max_m = 4.5\n")
+            .expect("valid");
+        assert_eq!(c.project.mode, ProjectMode::Naive);
+        assert_eq!(c.backproject.options().depth_max_m, 4.5);
+        assert_eq!(c.backproject.options().frame, CloudFrame::World);
+        let e = format!(
+            "{:#}",
+            parse("[backproject]\nstride = 0\n").expect_err("error")
+        );
+        assert_eq!(e, "c.toml: backproject.stride must be >= 1, got 0");
+        let e = format!(
+            "{:#}",
+            parse("[project]\nocclusion_tol_m = -1\n").expect_err("error")
+        );
+        assert!(
+            e.starts_with("c.toml: project.occlusion_tol_m must be"),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            parse("[project]\nmode = \"x\"\n").expect_err("error")
+        );
+        assert!(e.contains("line 2, in [project]"), "{e}");
+        let mut c = PipelineConfig::default();
+        c.apply_project_mode(Some(ProjectMode::Naive));
+        assert_eq!(c.project.mode, ProjectMode::Naive);
+        c.apply_project_mode(None);
+        assert_eq!(c.project.mode, ProjectMode::Naive);
+    }
+
+    #[test]
     fn overrides_win_and_are_validated_naming_the_flag() {
         let mut c = PipelineConfig::default();
         let o = RefineOverrides {
@@ -242,6 +352,12 @@ mod tests {
             refine: RefineConfig {
                 eps_m: 0.03,
                 steps: "m-n".parse().expect("valid steps"),
+                ..Default::default()
+            },
+            project: ProjectConfig::naive(),
+            backproject: BackProjectConfig {
+                depth_max_m: 4.5,
+                stride: 2,
                 ..Default::default()
             },
         };

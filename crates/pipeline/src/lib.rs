@@ -5,6 +5,7 @@
 //! order and writes the outputs:
 //!
 //! ```text
+//! project_file:  recording frame (rig.toml, depth + parsing PNGs) → bodyseg_project::project_frame → labelled PLY
 //! refine_file:   cloud PLY + boxes JSON → bodyseg_refine::refine → refined PLY (+ resolved config)
 //! eval_files:    predicted PLY(s) + ground-truth PLY → bodyseg_eval::match_clouds → Report
 //! merge_reports: report JSON files → Report::merge → Report
@@ -27,16 +28,19 @@
 mod config;
 mod eval;
 mod fs;
+mod project;
 mod refine;
 mod rig;
 mod stage;
 
-pub use config::{PipelineConfig, RefineOverrides};
+pub use bodyseg_project::ProjectMode;
+pub use config::{BackProjectConfig, PipelineConfig, RefineOverrides};
 pub use eval::{
     DEFAULT_PREDICTION_NAME, EvalOptions, EvalSummary, NamedPrediction, ReportFormat, eval_files,
     merge_reports, render_report,
 };
 pub use fs::write_text;
+pub use project::{ProjectOptions, ProjectSummary, depth_path, parsing_path, project_file};
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
 pub use stage::Stage;

@@ -87,7 +87,13 @@ pub fn project_labels(
     let zbuffer = cfg.occlusion.then(|| splat_zbuffer(&hits, labels, cfg));
     let depth_w = camera.depth.width as usize;
     let depth_h = camera.depth.height as usize;
-    let depth_at = |pixel: usize| camera.depth_m(depth_raw[pixel]).filter(|&z| z > 0.0);
+    // Depth in metres per depth pixel, NaN where there is none, converted once: the edge
+    // test and the vote read each pixel up to 9 times.
+    let depth_table_m: Vec<f64> = depth_raw
+        .par_iter()
+        .map(|&raw| camera.depth_m(raw).filter(|&z| z > 0.0).unwrap_or(f64::NAN))
+        .collect();
+    let depth_at = |pixel: usize| Some(depth_table_m[pixel]).filter(|z| !z.is_nan());
 
     let checked: Vec<Label> = (0..hits.len())
         .into_par_iter()
@@ -106,9 +112,11 @@ pub fn project_labels(
             {
                 let r = cfg.edge_radius_px as usize;
                 let jump = cfg.edge_jump_ratio * z;
-                let on_edge = window(pixel, depth_w, depth_h, r)
-                    .filter_map(depth_at)
-                    .any(|zn| (zn - z).abs() > jump);
+                // The centre (|Δz| = 0 ≤ jump) and pixels without depth (NaN compares
+                // false) are no jump.
+                let on_edge = any_row_in_square(pixel, depth_w, depth_h, r, |row| {
+                    depth_table_m[row].iter().any(|&zn| (zn - z).abs() > jump)
+                });
                 if on_edge {
                     return Label::UNKNOWN;
                 }
@@ -139,8 +147,12 @@ pub fn project_labels(
                 return own;
             };
             let r = cfg.boundary_radius_px as usize;
-            let near_change = window(hit.pixel, labels.width as usize, labels.height as usize, r)
-                .any(|p| labels.labels[p] != own);
+            // The centre holds `own` (the checks only ever make a label unknown), so
+            // scanning whole rows of the square is the same test.
+            let (w, h) = (labels.width as usize, labels.height as usize);
+            let near_change = any_row_in_square(hit.pixel, w, h, r, |row| {
+                labels.labels[row].iter().any(|&l| l != own)
+            });
             if !near_change {
                 return own;
             }
@@ -187,6 +199,22 @@ fn window(pixel: usize, w: usize, h: usize, r: usize) -> impl Iterator<Item = us
     (v0..=v1)
         .flat_map(move |vn| (u0..=u1).map(move |un| vn * w + un))
         .filter(move |&p| p != pixel)
+}
+
+/// Whether `f` holds for one row segment of the square of radius `r` around `pixel`
+/// (row-major index in a `w × h` image), clipped to the image, centre included; each
+/// segment is given as a range of row-major indices.
+fn any_row_in_square(
+    pixel: usize,
+    w: usize,
+    h: usize,
+    r: usize,
+    mut f: impl FnMut(std::ops::Range<usize>) -> bool,
+) -> bool {
+    let (u, v) = (pixel % w, pixel / w);
+    let (u0, u1) = (u.saturating_sub(r), (u + r).min(w - 1));
+    let (v0, v1) = (v.saturating_sub(r), (v + r).min(h - 1));
+    (v0..=v1).any(|vn| f(vn * w + u0..vn * w + u1 + 1))
 }
 
 /// Nearest colour-frame depth (metres, f32 to halve the buffer) per colour pixel over the
@@ -275,5 +303,17 @@ mod tests {
         assert_eq!(inner, [0, 1, 2, 4, 6, 8, 9, 10]);
         // Radius 2 from the last pixel (3, 2): columns 1..=3, rows 0..=2, minus itself.
         assert_eq!(window(11, 4, 3, 2).count(), 8);
+        // The same squares as row segments, centre included.
+        let rows = |pixel, r| {
+            let mut out = Vec::new();
+            any_row_in_square(pixel, 4, 3, r, |row| {
+                out.push(row);
+                false
+            });
+            out
+        };
+        assert_eq!(rows(0, 1), [0..2, 4..6]);
+        assert_eq!(rows(5, 1), [0..3, 4..7, 8..11]);
+        assert_eq!(rows(11, 2), [1..4, 5..8, 9..12]);
     }
 }

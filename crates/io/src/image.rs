@@ -1,0 +1,306 @@
+//! Depth and label PNGs of a recording (FORMATS.md, "Recording"):
+//! `<camera>/depth/<stem>.png` (16-bit grayscale, raw depth units, millimetres for Kinect
+//! data, 0 = no measurement) and `<camera>/parsing/<stem>.png` (8-bit grayscale class ids,
+//! 255 = not labelled).
+
+use crate::{IoError, write_atomic};
+use bodyseg_core::{Label, LabelImage};
+use image::codecs::png::PngEncoder;
+use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
+use std::io::Cursor;
+use std::path::Path;
+
+/// One raw depth image, as stored in a recording.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct DepthImage {
+    /// Width, pixels (the depth sensor's).
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// Raw depth per pixel, row-major (`v * width + u`), `width * height` entries; the
+    /// camera's `depth_scale` says the unit (millimetres for Kinect data); 0 = no
+    /// measurement.
+    pub depth_mm: Vec<u16>,
+}
+
+impl DepthImage {
+    /// Number of pixels, `width * height`.
+    pub fn num_pixels(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// What a depth PNG must hold.
+const DEPTH_EXPECTED: &str = "16-bit millimetres";
+/// What a label PNG must hold.
+const LABEL_EXPECTED: &str = "8-bit grayscale class ids";
+
+/// Reads and decodes a PNG file.
+fn decode_png(path: &Path) -> Result<DynamicImage, IoError> {
+    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
+        cause,
+        path: path.to_path_buf(),
+    })?;
+    image::load(Cursor::new(bytes), ImageFormat::Png).map_err(|e| IoError::Png {
+        cause: e.to_string(),
+        path: path.to_path_buf(),
+    })
+}
+
+/// `8-bit`, `16-bit RGB`, ...: a decoded image's pixel format as users know it.
+fn describe_format(image: &DynamicImage) -> String {
+    let color = image.color();
+    let bits = color.bits_per_pixel() / u16::from(color.channel_count());
+    let channels = match color.channel_count() {
+        1 => "",
+        2 => " grayscale with alpha",
+        3 => " RGB",
+        _ => " RGBA",
+    };
+    format!("{bits}-bit{channels}")
+}
+
+/// Reads a depth PNG: 16-bit grayscale, raw depth units (millimetres), 0 = no
+/// measurement.
+///
+/// # Errors
+/// [`IoError::Read`] when the file cannot be read; [`IoError::Png`] when it is not a
+/// valid PNG; [`IoError::PixelFormat`] when it is not 16-bit grayscale (an 8-bit PNG reads
+/// `x.png: depth PNG is 8-bit, expected 16-bit millimetres`).
+pub fn read_depth_png(path: &Path) -> Result<DepthImage, IoError> {
+    let image = decode_png(path)?;
+    let (width, height) = (image.width(), image.height());
+    match image {
+        DynamicImage::ImageLuma16(buf) => Ok(DepthImage {
+            width,
+            height,
+            depth_mm: buf.into_raw(),
+        }),
+        other => Err(IoError::PixelFormat {
+            what: "depth PNG",
+            got: describe_format(&other),
+            expected: DEPTH_EXPECTED,
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// Reads a label PNG: 8-bit grayscale class ids (ALGORITHM.md §0), 255 = not labelled
+/// ([`Label::UNKNOWN`]). The image has no probabilities.
+///
+/// # Errors
+/// [`IoError::Read`], [`IoError::Png`] as [`read_depth_png`]; [`IoError::PixelFormat`]
+/// when it is not 8-bit grayscale; [`IoError::BadLabelPixel`] naming the first pixel (row
+/// by row) whose id is 7..=254.
+pub fn read_label_png(path: &Path) -> Result<LabelImage, IoError> {
+    let image = decode_png(path)?;
+    let (width, height) = (image.width(), image.height());
+    let DynamicImage::ImageLuma8(buf) = image else {
+        return Err(IoError::PixelFormat {
+            what: "label PNG",
+            got: describe_format(&image),
+            expected: LABEL_EXPECTED,
+            path: path.to_path_buf(),
+        });
+    };
+    let ids = buf.into_raw();
+    let mut labels = Vec::with_capacity(ids.len());
+    for (i, &id) in ids.iter().enumerate() {
+        let Some(label) = Label::from_id(id) else {
+            // width > 0 here: the image has at least pixel i.
+            let w = width as usize;
+            return Err(IoError::BadLabelPixel {
+                u: (i % w) as u32,
+                v: (i / w) as u32,
+                id,
+                path: path.to_path_buf(),
+            });
+        };
+        labels.push(label);
+    }
+    LabelImage::new(width, height, labels).map_err(|e| IoError::Png {
+        cause: e.to_string(),
+        path: path.to_path_buf(),
+    })
+}
+
+/// Encodes `bytes` (native-endian samples) as a grayscale PNG and writes it atomically.
+fn write_png(
+    path: &Path,
+    bytes: &[u8],
+    width: u32,
+    height: u32,
+    color: ExtendedColorType,
+) -> Result<(), IoError> {
+    let mut encoded = Vec::new();
+    PngEncoder::new(&mut encoded)
+        .write_image(bytes, width, height, color)
+        .map_err(|e| IoError::Png {
+            cause: e.to_string(),
+            path: path.to_path_buf(),
+        })?;
+    write_atomic(path, |w| w.write_all(&encoded))
+}
+
+/// Writes a depth image as a 16-bit grayscale PNG, atomically (see [`write_atomic`]).
+///
+/// # Errors
+/// [`IoError::InvalidImage`] when `depth_mm` does not hold `width * height` values or the
+/// image is empty (nothing is written); [`IoError::Write`] on I/O failure.
+pub fn write_depth_png(path: &Path, image: &DepthImage) -> Result<(), IoError> {
+    check_size(path, image.width, image.height, image.depth_mm.len())?;
+    let bytes: Vec<u8> = image
+        .depth_mm
+        .iter()
+        .flat_map(|d| d.to_ne_bytes())
+        .collect();
+    write_png(
+        path,
+        &bytes,
+        image.width,
+        image.height,
+        ExtendedColorType::L16,
+    )
+}
+
+/// Writes a label image as an 8-bit grayscale PNG of class ids (255 = unknown),
+/// atomically. Probabilities, if any, are not stored.
+///
+/// # Errors
+/// As [`write_depth_png`].
+pub fn write_label_png(path: &Path, image: &LabelImage) -> Result<(), IoError> {
+    check_size(path, image.width, image.height, image.labels.len())?;
+    let bytes: Vec<u8> = image.labels.iter().map(|l| l.id()).collect();
+    write_png(
+        path,
+        &bytes,
+        image.width,
+        image.height,
+        ExtendedColorType::L8,
+    )
+}
+
+/// `len == width * height > 0`, else [`IoError::InvalidImage`].
+fn check_size(path: &Path, width: u32, height: u32, len: usize) -> Result<(), IoError> {
+    let want = width as usize * height as usize;
+    if want == 0 || len != want {
+        return Err(IoError::InvalidImage {
+            reason: format!("{width}x{height} image with {len} pixel values"),
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bodyseg_core::Class;
+
+    fn tempdir() -> tempfile::TempDir {
+        tempfile::tempdir().expect("create temp dir")
+    }
+
+    #[test]
+    fn depth_round_trips_every_value() {
+        let dir = tempdir();
+        let path = dir.path().join("d.png");
+        // Values that differ in both bytes: a byte-order slip would show.
+        let depth_mm: Vec<u16> = (0..12u16).map(|i| i.wrapping_mul(5471) ^ 0x0102).collect();
+        let image = DepthImage {
+            width: 4,
+            height: 3,
+            depth_mm,
+        };
+        write_depth_png(&path, &image).expect("write");
+        assert_eq!(read_depth_png(&path).expect("read"), image);
+    }
+
+    #[test]
+    fn labels_round_trip_with_unknown() {
+        let dir = tempdir();
+        let path = dir.path().join("l.png");
+        let mut labels = vec![Label::BACKGROUND; 6];
+        labels[1] = Label::from(Class::Head);
+        labels[5] = Label::UNKNOWN;
+        let image = LabelImage::new(3, 2, labels).expect("6 labels");
+        write_label_png(&path, &image).expect("write");
+        assert_eq!(read_label_png(&path).expect("read"), image);
+    }
+
+    #[test]
+    fn eight_bit_depth_is_refused_naming_the_file() {
+        let dir = tempdir();
+        let path = dir.path().join("d8.png");
+        let image = LabelImage::filled(4, 2, Label::BACKGROUND);
+        write_label_png(&path, &image).expect("write");
+        let e = read_depth_png(&path).expect_err("8-bit").to_string();
+        assert_eq!(
+            e,
+            format!(
+                "{}: depth PNG is 8-bit, expected 16-bit millimetres",
+                path.display()
+            )
+        );
+    }
+
+    #[test]
+    fn sixteen_bit_labels_and_bad_ids_are_refused() {
+        let dir = tempdir();
+        let path = dir.path().join("l16.png");
+        let depth = DepthImage {
+            width: 2,
+            height: 2,
+            depth_mm: vec![0; 4],
+        };
+        write_depth_png(&path, &depth).expect("write");
+        let e = read_label_png(&path).expect_err("16-bit").to_string();
+        assert!(
+            e.ends_with("label PNG is 16-bit, expected 8-bit grayscale class ids"),
+            "{e}"
+        );
+
+        let path = dir.path().join("bad.png");
+        let mut bytes = vec![0u8; 6];
+        bytes[4] = 7; // (u 1, v 1) of a 3x2 image
+        write_png(&path, &bytes, 3, 2, ExtendedColorType::L8).expect("write");
+        let e = read_label_png(&path).expect_err("id 7").to_string();
+        assert!(
+            e.contains("pixel (u 1, v 1): label id 7 is not a class id"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn missing_and_corrupt_files_name_the_file() {
+        let dir = tempdir();
+        let path = dir.path().join("none.png");
+        let e = read_depth_png(&path).expect_err("missing").to_string();
+        assert!(
+            e.starts_with(&format!("{}: cannot read: ", path.display())),
+            "{e}"
+        );
+        std::fs::write(&path, b"not a png").expect("write junk");
+        let e = read_label_png(&path).expect_err("junk").to_string();
+        assert!(
+            e.starts_with(&format!("{}: bad PNG: ", path.display())),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn writers_refuse_inconsistent_images_and_write_nothing() {
+        let dir = tempdir();
+        let path = dir.path().join("x.png");
+        let image = DepthImage {
+            width: 3,
+            height: 2,
+            depth_mm: vec![0; 5],
+        };
+        assert!(matches!(
+            write_depth_png(&path, &image),
+            Err(IoError::InvalidImage { .. })
+        ));
+        assert!(!path.exists());
+    }
+}

@@ -1,0 +1,239 @@
+//! `bodyseg project`: one frame of a recording (rig.toml, depth and parsing PNGs) →
+//! labelled world-frame PLY.
+
+use crate::config::PipelineConfig;
+use crate::fs::write_text;
+use crate::refine::resolved_config_path;
+use crate::stage::{Stage, plural, timed};
+use anyhow::{Context, Result, bail};
+use bodyseg_calib::Rig;
+use bodyseg_core::LabelImage;
+use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
+use bodyseg_project::{CameraImages, ProjectMode};
+use std::path::{Path, PathBuf};
+
+/// What [`project_file`] reads, writes and how.
+#[derive(Clone, Debug)]
+pub struct ProjectOptions {
+    /// The recording folder (FORMATS.md, "Recording"): `rig.toml`, and per camera
+    /// `<camera>/depth/<frame>.png` and `<camera>/parsing/<frame>.png`.
+    pub recording: PathBuf,
+    /// The frame's file stem (`000012`), without folder or extension.
+    pub frame: String,
+    /// The resolved configuration (defaults < file < flags), already validated; its
+    /// `[backproject]` and `[project]` sections are used.
+    pub config: PipelineConfig,
+    /// Labelled cloud to write (PLY). Replaced atomically; untouched when the command
+    /// fails.
+    pub out: PathBuf,
+    /// Write ASCII PLY instead of binary little-endian.
+    pub ascii: bool,
+    /// Also write the resolved configuration beside the output
+    /// ([`resolved_config_path`]).
+    pub write_resolved_config: bool,
+}
+
+/// What [`project_file`] did.
+#[derive(Clone, Debug)]
+pub struct ProjectSummary {
+    /// Points written (every back-projected depth point, labelled or not).
+    pub points: usize,
+    /// Points whose label is `unknown` (255).
+    pub unknown: usize,
+    /// Points per camera, rig order.
+    pub points_per_camera: Vec<usize>,
+    /// The mode that ran.
+    pub mode: ProjectMode,
+    /// The resolved configuration written beside the output, if any.
+    pub resolved_config: Option<PathBuf>,
+    /// Per stage (read, project, write): time and a one-line summary.
+    pub stages: Vec<Stage>,
+}
+
+/// The depth image of `camera` for `frame`: `REC/<camera>/depth/<frame>.png`.
+pub fn depth_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
+    recording
+        .join(camera)
+        .join("depth")
+        .join(format!("{frame}.png"))
+}
+
+/// The predicted label image of `camera` for `frame`: `REC/<camera>/parsing/<frame>.png`.
+pub fn parsing_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
+    recording
+        .join(camera)
+        .join("parsing")
+        .join(format!("{frame}.png"))
+}
+
+/// One camera's images, read and checked against the rig.
+struct CameraFiles {
+    depth: DepthImage,
+    labels: LabelImage,
+}
+
+/// Reads and checks one camera's depth and parsing PNGs.
+fn read_camera(rig: &Rig, index: usize, opts: &ProjectOptions) -> Result<CameraFiles> {
+    let camera = &rig.cameras[index];
+    let name = &camera.name;
+    bodyseg_io::require_folder(&opts.recording.join(name), "camera")
+        .with_context(|| format!("camera {name} of rig.toml"))?;
+    let path = depth_path(&opts.recording, name, &opts.frame);
+    let depth = bodyseg_io::read_depth_png(&path).with_context(|| format!("camera {name}"))?;
+    let (want_w, want_h) = (camera.depth.width, camera.depth.height);
+    if (depth.width, depth.height) != (want_w, want_h) {
+        bail!(
+            "camera {name}: {}: depth image is {}x{}, rig.toml says {want_w}x{want_h}",
+            path.display(),
+            depth.width,
+            depth.height
+        );
+    }
+    let path = parsing_path(&opts.recording, name, &opts.frame);
+    let labels = bodyseg_io::read_label_png(&path).with_context(|| format!("camera {name}"))?;
+    let (want_w, want_h) = (camera.color.width, camera.color.height);
+    if (labels.width, labels.height) != (want_w, want_h) {
+        bail!(
+            "camera {name}: {}: label image is {}x{}, rig.toml says the colour sensor is \
+             {want_w}x{want_h}",
+            path.display(),
+            labels.width,
+            labels.height
+        );
+    }
+    Ok(CameraFiles { depth, labels })
+}
+
+/// Checks that a frame stem names a file, not a path.
+fn check_frame(frame: &str) -> Result<()> {
+    if frame.is_empty() || frame == "." || frame == ".." || frame.contains(['/', '\\']) {
+        bail!("frame {frame:?}: give the file stem of a frame (e.g. 000012), not a path");
+    }
+    Ok(())
+}
+
+/// Projects the labels of one frame of a recording onto its depth points
+/// ([`bodyseg_project::project_frame`]) and writes the labelled world-frame cloud (PLY,
+/// FORMATS.md): cameras in rig order, pixels row-major, every back-projected point kept
+/// (those no label reaches are `unknown`).
+///
+/// # Errors
+/// The frame stem is a path; `rig.toml` cannot be read or is invalid; a camera folder of
+/// the rig is missing (the error names the folder); a depth or parsing PNG is missing,
+/// not a PNG, of the wrong pixel format (an 8-bit depth PNG) or of a size other than the
+/// rig's sensor (the error names the file and both sizes); writing fails. Nothing is
+/// written unless every earlier step succeeded.
+pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
+    check_frame(&opts.frame)?;
+    let cfg = &opts.config;
+    let rig_path = opts.recording.join("rig.toml");
+    let ((rig, cameras), read) = timed(|| -> Result<_> {
+        let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
+        let cameras = (0..rig.cameras.len())
+            .map(|i| read_camera(&rig, i, opts))
+            .collect::<Result<Vec<_>>>()?;
+        Ok((rig, cameras))
+    })?;
+    let mut stages = vec![Stage::new(
+        "read",
+        read,
+        format!(
+            "{}, frame {}",
+            plural(rig.cameras.len(), "camera", "cameras"),
+            opts.frame
+        ),
+    )];
+    tracing::info!(recording = %opts.recording.display(), frame = %opts.frame, "read frame");
+
+    let (cloud, took) = timed(|| {
+        let images: Vec<CameraImages<'_>> = cameras
+            .iter()
+            .map(|c| CameraImages {
+                depth_raw: &c.depth.depth_mm,
+                labels: &c.labels,
+            })
+            .collect();
+        bodyseg_project::project_frame(&rig, &images, &cfg.backproject.options(), &cfg.project)
+            .with_context(|| format!("{}: frame {}", opts.recording.display(), opts.frame))
+    })?;
+    let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
+    let mut points_per_camera = vec![0; rig.cameras.len()];
+    for o in &cloud.origins {
+        if let Some(n) = points_per_camera.get_mut(usize::from(o.camera)) {
+            *n += 1;
+        }
+    }
+    let mode = cfg.project.mode;
+    let mode_name = match mode {
+        ProjectMode::Naive => "naive",
+        ProjectMode::Dsa => "dsa",
+    };
+    stages.push(Stage::new(
+        "project",
+        took,
+        format!(
+            "{}, {} unknown (mode {mode_name})",
+            plural(cloud.len(), "point", "points"),
+            unknown
+        ),
+    ));
+
+    let ply = PlyWriteOptions {
+        format: if opts.ascii {
+            PlyFormat::Ascii
+        } else {
+            PlyFormat::BinaryLittleEndian
+        },
+        ..Default::default()
+    };
+    let resolved_config = opts
+        .write_resolved_config
+        .then(|| resolved_config_path(&opts.out));
+    let ((), took) = timed(|| -> Result<()> {
+        bodyseg_io::write_ply(&opts.out, &cloud, &ply).context("labelled cloud (--out)")?;
+        if let Some(path) = &resolved_config {
+            write_text(path, &cfg.resolved_toml()?).context("resolved configuration")?;
+        }
+        Ok(())
+    })?;
+    let mut written = opts.out.display().to_string();
+    if let Some(path) = &resolved_config {
+        written.push_str(&format!(", {}", path.display()));
+    }
+    stages.push(Stage::new("write", took, written));
+
+    Ok(ProjectSummary {
+        points: cloud.len(),
+        unknown,
+        points_per_camera,
+        mode,
+        resolved_config,
+        stages,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_paths_follow_the_recording_layout() {
+        assert_eq!(
+            depth_path(Path::new("rec"), "cam0", "000012"),
+            Path::new("rec/cam0/depth/000012.png")
+        );
+        assert_eq!(
+            parsing_path(Path::new("rec"), "cam0", "000012"),
+            Path::new("rec/cam0/parsing/000012.png")
+        );
+    }
+
+    #[test]
+    fn frame_must_be_a_stem() {
+        assert!(check_frame("000012").is_ok());
+        for bad in ["", "..", "a/b", "..\\x"] {
+            let e = check_frame(bad).expect_err("a path").to_string();
+            assert!(e.contains("file stem"), "{e}");
+        }
+    }
+}
