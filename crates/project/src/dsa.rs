@@ -10,12 +10,19 @@ use crate::{ProjectConfig, ProjectError, ProjectMode};
 /// Where a point lands in the colour image.
 #[derive(Clone, Copy)]
 struct Hit {
-    /// Nearest colour pixel, row-major index.
-    pixel: usize,
+    /// Nearest colour pixel, column and row.
     u: u32,
     v: u32,
     /// Depth along the colour camera's z, metres.
     z_color_m: f64,
+}
+
+impl Hit {
+    /// Nearest colour pixel, row-major index in an image `w` wide.
+    #[inline]
+    fn pixel(&self, w: usize) -> usize {
+        self.v as usize * w + self.u as usize
+    }
 }
 
 /// Labels of one camera's depth points, in their order (ALGORITHM.md §3).
@@ -55,6 +62,7 @@ pub fn project_labels(
     check_inputs(camera, depth_points_m, origins, depth_raw, labels)?;
 
     let color = &camera.color;
+    let color_w = color.width as usize;
     let hits: Vec<Option<Hit>> = depth_points_m
         .par_iter()
         .map(|p| {
@@ -65,10 +73,9 @@ pub fn project_labels(
             }
             // `contains` keeps u in [-0.5, w - 0.5): rounding gives 0..w (the clamp only
             // guards the half-open edge against rounding up).
-            let u = (uv[0].round().max(0.0) as u32).min(color.width - 1);
-            let v = (uv[1].round().max(0.0) as u32).min(color.height - 1);
+            let u = round_index(uv[0]).min(color.width - 1);
+            let v = round_index(uv[1]).min(color.height - 1);
             Some(Hit {
-                pixel: v as usize * color.width as usize + u as usize,
                 u,
                 v,
                 z_color_m: p_color[2],
@@ -78,13 +85,15 @@ pub fn project_labels(
 
     let naive: Vec<Label> = hits
         .iter()
-        .map(|h| h.map_or(Label::UNKNOWN, |h| labels.labels[h.pixel]))
+        .map(|h| h.map_or(Label::UNKNOWN, |h| labels.labels[h.pixel(color_w)]))
         .collect();
     if cfg.mode == ProjectMode::Naive {
         return Ok(naive);
     }
 
-    let zbuffer = cfg.occlusion.then(|| splat_zbuffer(&hits, labels, cfg));
+    let zbuffer = cfg
+        .occlusion
+        .then(|| ZBuffer::splat(&hits, cfg.splat_radius_px as usize));
     let depth_w = camera.depth.width as usize;
     let depth_h = camera.depth.height as usize;
     // Depth in metres per depth pixel, NaN where there is none, converted once: the edge
@@ -94,6 +103,15 @@ pub fn project_labels(
         .map(|&raw| camera.depth_m(raw).filter(|&z| z > 0.0).unwrap_or(f64::NAN))
         .collect();
     let depth_at = |pixel: usize| Some(depth_table_m[pixel]).filter(|z| !z.is_nan());
+    let on_edge = cfg.depth_edge.then(|| {
+        edge_map(
+            &depth_table_m,
+            depth_w,
+            depth_h,
+            cfg.edge_radius_px as usize,
+            cfg.edge_jump_ratio,
+        )
+    });
 
     let checked: Vec<Label> = (0..hits.len())
         .into_par_iter()
@@ -102,28 +120,18 @@ pub fn project_labels(
                 return Label::UNKNOWN;
             };
             if let Some(zb) = &zbuffer
-                && hit.z_color_m > f64::from(zb[hit.pixel]) + cfg.occlusion_tol_m
+                && hit.z_color_m > f64::from(zb.at(hit.u, hit.v)) + cfg.occlusion_tol_m
             {
                 return Label::UNKNOWN;
             }
-            let pixel = origins[i].pixel as usize;
-            if cfg.depth_edge
-                && let Some(z) = depth_at(pixel)
+            if let Some(edge) = &on_edge
+                && edge[origins[i].pixel as usize]
             {
-                let r = cfg.edge_radius_px as usize;
-                let jump = cfg.edge_jump_ratio * z;
-                // The centre (|Δz| = 0 ≤ jump) and pixels without depth (NaN compares
-                // false) are no jump.
-                let on_edge = any_row_in_square(pixel, depth_w, depth_h, r, |row| {
-                    depth_table_m[row].iter().any(|&zn| (zn - z).abs() > jump)
-                });
-                if on_edge {
-                    return Label::UNKNOWN;
-                }
+                return Label::UNKNOWN;
             }
             if cfg.min_probability > 0.0
                 && let Some(probs) = &labels.probs
-                && probs[hit.pixel] < cfg.min_probability
+                && probs[hit.pixel(color_w)] < cfg.min_probability
             {
                 return Label::UNKNOWN;
             }
@@ -139,6 +147,12 @@ pub fn project_labels(
     for (o, &l) in origins.iter().zip(&checked) {
         by_pixel[o.pixel as usize] = l;
     }
+    let near_change = label_change_map(
+        &labels.labels,
+        labels.width as usize,
+        labels.height as usize,
+        cfg.boundary_radius_px as usize,
+    );
     let voted = (0..hits.len())
         .into_par_iter()
         .map(|i| {
@@ -146,14 +160,10 @@ pub fn project_labels(
             let (Some(hit), Some(own_class)) = (hits[i], own.class()) else {
                 return own;
             };
-            let r = cfg.boundary_radius_px as usize;
-            // The centre holds `own` (the checks only ever make a label unknown), so
-            // scanning whole rows of the square is the same test.
-            let (w, h) = (labels.width as usize, labels.height as usize);
-            let near_change = any_row_in_square(hit.pixel, w, h, r, |row| {
-                labels.labels[row].iter().any(|&l| l != own)
-            });
-            if !near_change {
+            // `own` is the label at `hit.pixel` (the checks only ever make a label
+            // unknown), so "a different label within the radius" is "the square is not
+            // uniform".
+            if !near_change[hit.pixel(color_w)] {
                 return own;
             }
             let pixel = origins[i].pixel as usize;
@@ -190,6 +200,17 @@ pub fn project_labels(
     Ok(voted)
 }
 
+/// `x.round().max(0.0) as u32` for `x` in [-0.5, 2³¹), without the `round` libm call:
+/// for `x ≥ 0` the fraction `x − ⌊x⌋` is exact, and rounding takes half away from zero.
+#[inline]
+fn round_index(x: f64) -> u32 {
+    if x <= 0.0 {
+        return 0;
+    }
+    let t = x as u32;
+    if x - f64::from(t) >= 0.5 { t + 1 } else { t }
+}
+
 /// The pixels of the square of radius `r` around `pixel` (row-major index in a `w × h`
 /// image), clipped to the image, without `pixel` itself.
 fn window(pixel: usize, w: usize, h: usize, r: usize) -> impl Iterator<Item = usize> {
@@ -204,6 +225,7 @@ fn window(pixel: usize, w: usize, h: usize, r: usize) -> impl Iterator<Item = us
 /// Whether `f` holds for one row segment of the square of radius `r` around `pixel`
 /// (row-major index in a `w × h` image), clipped to the image, centre included; each
 /// segment is given as a range of row-major indices.
+#[cfg(test)]
 fn any_row_in_square(
     pixel: usize,
     w: usize,
@@ -218,24 +240,205 @@ fn any_row_in_square(
 }
 
 /// Nearest colour-frame depth (metres, f32 to halve the buffer) per colour pixel over the
-/// splat squares of all points; +∞ where no point lands.
-fn splat_zbuffer(hits: &[Option<Hit>], labels: &LabelImage, cfg: &ProjectConfig) -> Vec<f32> {
-    let (w, h) = (labels.width as usize, labels.height as usize);
-    let mut zb = vec![f32::INFINITY; w * h];
-    let r = cfg.splat_radius_px as usize;
-    for hit in hits.iter().flatten() {
-        let z = hit.z_color_m as f32;
-        let (u, v) = (hit.u as usize, hit.v as usize);
-        for vn in v.saturating_sub(r)..=(v + r).min(h - 1) {
-            for un in u.saturating_sub(r)..=(u + r).min(w - 1) {
-                let cell = &mut zb[vn * w + un];
-                if z < *cell {
-                    *cell = z;
-                }
+/// splat squares of all points, over the bounding box of the points' pixels (the only
+/// pixels read); +∞ where no point lands.
+struct ZBuffer {
+    u0: u32,
+    v0: u32,
+    w: usize,
+    h: usize,
+    /// Splat radius.
+    r: usize,
+    /// Nearest z of the points whose pixel this is (the centres of the splats).
+    z: Vec<f32>,
+}
+
+impl ZBuffer {
+    /// The nearest z per pixel; [`ZBuffer::at`] takes the minimum over the square of
+    /// radius `r` around a pixel, the same as splatting every point's square (z is
+    /// finite, never NaN: `project` rejects non-finite points, so the order of the minima
+    /// does not matter).
+    fn splat(hits: &[Option<Hit>], r: usize) -> Self {
+        let (mut u0, mut v0, mut u1, mut v1) = (u32::MAX, u32::MAX, 0, 0);
+        for h in hits.iter().flatten() {
+            u0 = u0.min(h.u);
+            v0 = v0.min(h.v);
+            u1 = u1.max(h.u);
+            v1 = v1.max(h.v);
+        }
+        if u0 > u1 {
+            return ZBuffer {
+                u0: 0,
+                v0: 0,
+                w: 0,
+                h: 0,
+                r,
+                z: Vec::new(),
+            };
+        }
+        let w = (u1 - u0 + 1) as usize;
+        let h = (v1 - v0 + 1) as usize;
+        let mut centre = vec![f32::INFINITY; w * h];
+        for hit in hits.iter().flatten() {
+            let z = hit.z_color_m as f32;
+            let cell = &mut centre[(hit.v - v0) as usize * w + (hit.u - u0) as usize];
+            if z < *cell {
+                *cell = z;
             }
         }
+        ZBuffer {
+            u0,
+            v0,
+            w,
+            h,
+            r,
+            z: centre,
+        }
     }
-    zb
+
+    /// The z-buffer at colour pixel (u, v), one of the points' pixels.
+    fn at(&self, u: u32, v: u32) -> f32 {
+        let (u, v) = ((u - self.u0) as usize, (v - self.v0) as usize);
+        let (ua, ub) = (u.saturating_sub(self.r), (u + self.r).min(self.w - 1));
+        let mut best = f32::INFINITY;
+        for vn in v.saturating_sub(self.r)..=(v + self.r).min(self.h - 1) {
+            for &z in &self.z[vn * self.w + ua..=vn * self.w + ub] {
+                best = if z < best { z } else { best };
+            }
+        }
+        best
+    }
+}
+
+/// Per depth pixel: whether the depth-edge test flags it, i.e. it has depth z and some
+/// pixel of the square of radius `r` around it (clipped) has depth zn with
+/// `|zn - z| > ratio · z` (pixels without depth, NaN, never do). Exactly the per-pixel
+/// test: the rounded difference is monotonic in zn, so testing the window's largest and
+/// smallest depths (NaN skipped; separable) is the same.
+fn edge_map(depth_m: &[f64], w: usize, h: usize, r: usize, ratio: f64) -> Vec<bool> {
+    if w == 0 || h == 0 {
+        return vec![false; w * h];
+    }
+    // Smallest and largest depth over the square, pixels without depth skipped (as +∞
+    // and −∞); separable: rows, then columns.
+    let mut lo = vec![0.0; w * h];
+    let mut hi = vec![0.0; w * h];
+    lo.par_chunks_mut(w)
+        .zip(hi.par_chunks_mut(w))
+        .zip(depth_m.par_chunks(w))
+        .for_each(|((lo, hi), src)| {
+            for ((l, h), &z) in lo.iter_mut().zip(hi.iter_mut()).zip(src) {
+                let none = z.is_nan();
+                *l = if none { f64::INFINITY } else { z };
+                *h = if none { f64::NEG_INFINITY } else { z };
+            }
+            let (l0, h0) = (lo.to_vec(), hi.to_vec());
+            for k in 1..=r.min(w - 1) {
+                min_into(&mut lo[k..], &l0[..w - k]);
+                min_into(&mut lo[..w - k], &l0[k..]);
+                max_into(&mut hi[k..], &h0[..w - k]);
+                max_into(&mut hi[..w - k], &h0[k..]);
+            }
+        });
+    let mut out = vec![false; w * h];
+    out.par_chunks_mut(w).enumerate().for_each(|(v, dst)| {
+        let (v0, v1) = (v.saturating_sub(r), (v + r).min(h - 1));
+        let mut a = lo[v0 * w..(v0 + 1) * w].to_vec();
+        let mut b = hi[v0 * w..(v0 + 1) * w].to_vec();
+        for vn in v0 + 1..=v1 {
+            min_into(&mut a, &lo[vn * w..(vn + 1) * w]);
+            max_into(&mut b, &hi[vn * w..(vn + 1) * w]);
+        }
+        for (((d, &z), &a), &b) in dst
+            .iter_mut()
+            .zip(&depth_m[v * w..(v + 1) * w])
+            .zip(&a)
+            .zip(&b)
+        {
+            // A pixel with depth is in its own square, so a ≤ z ≤ b, both finite, and
+            // the largest |zn − z| is b − z or z − a (rounding is monotonic).
+            let jump = ratio * z;
+            *d = !z.is_nan() && ((b - z).abs() > jump || (a - z).abs() > jump);
+        }
+    });
+    out
+}
+
+fn min_into(dst: &mut [f64], src: &[f64]) {
+    for (d, &s) in dst.iter_mut().zip(src) {
+        *d = if s < *d { s } else { *d };
+    }
+}
+
+fn max_into(dst: &mut [f64], src: &[f64]) {
+    for (d, &s) in dst.iter_mut().zip(src) {
+        *d = if s > *d { s } else { *d };
+    }
+}
+
+/// Per colour pixel: whether the square of radius `r` around it (clipped to the image)
+/// holds more than one label. The square is connected, so it is not uniform iff it holds
+/// two 4-neighbours with different labels: a horizontal pair (u, u + 1) with both in the
+/// square, i.e. u in [u_c - r, u_c + r - 1] and row in [v_c - r, v_c + r], or a vertical
+/// pair (v, v + 1) with column in [u_c - r, u_c + r], v in [v_c - r, v_c + r - 1]. Pairs
+/// that would leave the image do not exist, so clipping the offsets to the image is exact.
+fn label_change_map(labels: &[Label], w: usize, h: usize, r: usize) -> Vec<bool> {
+    if r == 0 || w == 0 || h == 0 {
+        return vec![false; w * h];
+    }
+    // Per row: horizontal changes dilated over columns [-r, r - 1], vertical changes
+    // (with the next row) dilated over columns [-r, r].
+    let mut hd = vec![false; w * h];
+    let mut vd = vec![false; w * h];
+    hd.par_chunks_mut(w)
+        .zip(vd.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(v, (hrow, vrow))| {
+            let row = &labels[v * w..(v + 1) * w];
+            let mut raw = vec![false; w];
+            for (d, pair) in raw.iter_mut().zip(row.windows(2)) {
+                *d = pair[0] != pair[1];
+            }
+            dilate_row(&raw, hrow, r, r - 1);
+            if v + 1 < h {
+                let next = &labels[(v + 1) * w..(v + 2) * w];
+                for ((d, a), b) in raw.iter_mut().zip(row).zip(next) {
+                    *d = a != b;
+                }
+                dilate_row(&raw, vrow, r, r);
+            }
+        });
+    let mut out = vec![false; w * h];
+    out.par_chunks_mut(w).enumerate().for_each(|(v, dst)| {
+        for vn in v.saturating_sub(r)..=(v + r).min(h - 1) {
+            for (d, &s) in dst.iter_mut().zip(&hd[vn * w..(vn + 1) * w]) {
+                *d |= s;
+            }
+        }
+        for vn in v.saturating_sub(r)..=(v + r - 1).min(h - 1) {
+            for (d, &s) in dst.iter_mut().zip(&vd[vn * w..(vn + 1) * w]) {
+                *d |= s;
+            }
+        }
+    });
+    out
+}
+
+/// `dst[u]` = OR of `src[u - left ..= u + right]`, clipped to the row.
+fn dilate_row(src: &[bool], dst: &mut [bool], left: usize, right: usize) {
+    let w = src.len();
+    dst.fill(false);
+    // Offset +k: dst[u] |= src[u + k].
+    for k in 0..=right.min(w.saturating_sub(1)) {
+        for (d, &s) in dst[..w - k].iter_mut().zip(&src[k..]) {
+            *d |= s;
+        }
+    }
+    for k in 1..=left.min(w.saturating_sub(1)) {
+        for (d, &s) in dst[k..].iter_mut().zip(&src[..w - k]) {
+            *d |= s;
+        }
+    }
 }
 
 fn check_inputs(

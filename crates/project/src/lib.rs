@@ -115,7 +115,13 @@ impl FrameProjector {
                 })
             })
             .collect::<Result<_, ProjectError>>()?;
-        let mut out = LabeledCloud::default();
+        let total: usize = parts.iter().map(|p| p.labels.len()).sum();
+        let mut out = LabeledCloud {
+            positions_m: Vec::with_capacity(total),
+            labels: Vec::with_capacity(total),
+            colors: None,
+            origins: Vec::with_capacity(total),
+        };
         for part in parts {
             out.positions_m.extend_from_slice(&part.positions_m);
             out.labels.extend_from_slice(&part.labels);
