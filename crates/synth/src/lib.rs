@@ -1,0 +1,17 @@
+//! Seeded synthetic multi-camera RGB-D recordings of people with exact ground truth
+//! (the synth issue): articulated people, a static scene, a Kinect v2-like rig, ray-cast
+//! depth and colour with sensor faults, exact 2D and per-depth-pixel truth, true person
+//! boxes, simulated parser predictions and DSA error sources.
+//!
+//! This crate computes images in memory; writing a recording is `bodyseg-pipeline`'s job
+//! (only `io` touches the file system).
+
+pub mod config;
+pub mod errors;
+pub mod geometry;
+pub mod people;
+
+pub use config::{
+    CameraPlacement, DepthFaultsConfig, DsaConfig, ParsingErrorsConfig, PeopleConfig,
+    RigConfig, SceneConfig, StaticSceneConfig, SynthError, preset, PRESETS,
+};
