@@ -7,10 +7,10 @@
 mod args;
 
 use anyhow::Result;
-use args::{Cli, Command, EvalArgs, ProjectArgs, RefineArgs, RigCommand};
+use args::{Cli, Command, EvalArgs, ProjectArgs, RefineArgs, RigCommand, SynthArgs};
 use bodyseg_pipeline::{
     Stage, describe_rig, eval_files, import_rig, merge_reports, project_file, read_rig,
-    refine_file, render_report, write_text,
+    refine_file, render_report, synth_recording, write_text,
 };
 use clap::Parser;
 use std::io::Write;
@@ -55,6 +55,7 @@ fn init_logging(verbose: u8) {
 
 fn run(cli: &Cli) -> Result<()> {
     let stages = match &cli.command {
+        Command::Synth(args) => synth(args, cli.quiet)?,
         Command::Project(args) => project(args)?,
         Command::Refine(args) => refine(args)?,
         Command::Eval(args) => eval(args)?,
@@ -66,6 +67,24 @@ fn run(cli: &Cli) -> Result<()> {
         }
     }
     Ok(())
+}
+
+fn synth(args: &SynthArgs, quiet: bool) -> Result<Vec<Stage>> {
+    let options = args.options();
+    let total = options.frames;
+    let start = Instant::now();
+    let show = !quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let progress = |done: usize| {
+        if show {
+            let fps = done as f64 / start.elapsed().as_secs_f64().max(1e-9);
+            eprint!("\rsynth: {done}/{total} frames ({fps:.1} frames/s)");
+            if done == total {
+                eprintln!();
+            }
+        }
+    };
+    let summary = synth_recording(&options, &progress)?;
+    Ok(summary.stages)
 }
 
 fn project(args: &ProjectArgs) -> Result<Vec<Stage>> {

@@ -180,6 +180,30 @@ pub fn write_label_png(path: &Path, image: &LabelImage) -> Result<(), IoError> {
     )
 }
 
+/// Writes an RGB8 image (`rgb` row-major, 3 bytes per pixel) as PNG, atomically.
+///
+/// # Errors
+/// As [`write_depth_png`].
+pub fn write_rgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), IoError> {
+    check_size(path, width, height, rgb.len() / 3)?;
+    if !rgb.len().is_multiple_of(3) {
+        return Err(IoError::InvalidImage {
+            reason: format!("RGB buffer of {} bytes is not a multiple of 3", rgb.len()),
+            path: path.to_path_buf(),
+        });
+    }
+    write_png(path, rgb, width, height, ExtendedColorType::Rgb8)
+}
+
+/// Writes 8-bit values (class ids, person ids) as an 8-bit grayscale PNG, atomically.
+///
+/// # Errors
+/// As [`write_depth_png`].
+pub fn write_gray8_png(path: &Path, width: u32, height: u32, values: &[u8]) -> Result<(), IoError> {
+    check_size(path, width, height, values.len())?;
+    write_png(path, values, width, height, ExtendedColorType::L8)
+}
+
 /// `len == width * height > 0`, else [`IoError::InvalidImage`].
 fn check_size(path: &Path, width: u32, height: u32, len: usize) -> Result<(), IoError> {
     let want = width as usize * height as usize;

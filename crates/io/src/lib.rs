@@ -43,7 +43,10 @@ mod text;
 pub use atomic::{write_atomic, write_bytes_atomic};
 pub use boxes::{parse_boxes, read_boxes, write_boxes};
 pub use error::IoError;
-pub use folder::require_folder;
-pub use image::{DepthImage, read_depth_png, read_label_png, write_depth_png, write_label_png};
+pub use folder::{create_folder, discard_folder, publish_folder, require_folder, staging_folder};
+pub use image::{
+    DepthImage, read_depth_png, read_label_png, write_depth_png, write_gray8_png, write_label_png,
+    write_rgb_png,
+};
 pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};
 pub use text::read_text;

@@ -32,6 +32,7 @@ mod project;
 mod refine;
 mod rig;
 mod stage;
+mod synth;
 
 pub use bodyseg_project::ProjectMode;
 pub use config::{BackProjectConfig, PipelineConfig, RefineOverrides};
@@ -44,3 +45,6 @@ pub use project::{ProjectOptions, ProjectSummary, depth_path, parsing_path, proj
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
 pub use stage::Stage;
+pub use synth::{
+    SceneSource, SynthOptions, SynthSummary, load_scene, synth_recording, write_frame,
+};

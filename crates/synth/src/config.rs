@@ -267,9 +267,9 @@ pub struct ParsingErrorsConfig {
 impl Default for ParsingErrorsConfig {
     fn default() -> Self {
         ParsingErrorsConfig {
-            small_part_dilation_px: 12.0,
-            part_dilation_px: 4.0,
-            boundary_jitter_px: 6.0,
+            small_part_dilation_px: 6.0,
+            part_dilation_px: 2.0,
+            boundary_jitter_px: 4.0,
             swap_prob: 0.15,
             swap_band_px: 30.0,
             miss_prob: 0.03,
@@ -370,6 +370,50 @@ impl SceneConfig {
         Ok(config)
     }
 
+    /// Parses a scene TOML, applies `key=value` overrides (dotted keys such as
+    /// `rig.cameras=4` or `dsa.color_time_offset_s=0.03`; values in TOML syntax, bare
+    /// words taken as strings) and validates the result.
+    pub fn from_toml_with_overrides(
+        text: &str,
+        overrides: &[String],
+    ) -> Result<SceneConfig, SynthError> {
+        let mut table: toml::Table =
+            toml::from_str(text).map_err(|e| SynthError::Parse(e.message().to_string()))?;
+        for item in overrides {
+            let Some((key, value)) = item.split_once('=') else {
+                return Err(SynthError::Parse(format!(
+                    "override `{item}` is not KEY=VALUE (e.g. rig.cameras=4)"
+                )));
+            };
+            let key = key.trim();
+            let value = value.trim();
+            let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
+                .ok()
+                .and_then(|mut t| t.remove("v"))
+                .unwrap_or_else(|| toml::Value::String(value.to_string()));
+            let parts: Vec<&str> = key.split('.').collect();
+            let mut node = &mut table;
+            for part in &parts[..parts.len() - 1] {
+                let entry = node
+                    .entry(part.to_string())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+                let toml::Value::Table(next) = entry else {
+                    return Err(SynthError::Invalid {
+                        field: key.to_string(),
+                        reason: format!("`{part}` is not a table"),
+                    });
+                };
+                node = next;
+            }
+            node.insert(parts[parts.len() - 1].to_string(), parsed);
+        }
+        let config: SceneConfig = toml::Value::Table(table)
+            .try_into()
+            .map_err(|e: toml::de::Error| SynthError::Parse(e.message().to_string()))?;
+        config.validate()?;
+        Ok(config)
+    }
+
     /// The TOML text of this configuration (what `scene.toml` in a recording holds).
     pub fn to_toml(&self) -> String {
         // Serialising plain structs of numbers, strings and vectors cannot fail.
@@ -401,7 +445,12 @@ impl SceneConfig {
                 "needs people.count >= 2 (two people pass the object)",
             ));
         }
-        check_range("people.handover_distance_m", p.handover_distance_m, 0.3, 1.5)?;
+        check_range(
+            "people.handover_distance_m",
+            p.handover_distance_m,
+            0.3,
+            1.5,
+        )?;
         check_positive("people.area_half_m", p.area_half_m)?;
         check_non_negative("people.min_spacing_m", p.min_spacing_m)?;
         check_non_negative("people.walk_speed_m_s", p.walk_speed_m_s)?;
@@ -410,7 +459,10 @@ impl SceneConfig {
         let s = &self.scene;
         check_positive("scene.room_half_m", s.room_half_m)?;
         if s.boxes > 16 {
-            return Err(invalid("scene.boxes", format!("must be <= 16, got {}", s.boxes)));
+            return Err(invalid(
+                "scene.boxes",
+                format!("must be <= 16, got {}", s.boxes),
+            ));
         }
 
         let r = &self.rig;
@@ -434,7 +486,12 @@ impl SceneConfig {
         }
         for (i, c) in r.placements.iter().enumerate() {
             check_positive(&format!("rig.placements[{i}].distance_m"), c.distance_m)?;
-            check_range(&format!("rig.placements[{i}].height_m"), c.height_m, 0.1, 10.0)?;
+            check_range(
+                &format!("rig.placements[{i}].height_m"),
+                c.height_m,
+                0.1,
+                10.0,
+            )?;
             if !c.azimuth_deg.is_finite() {
                 return Err(invalid(
                     &format!("rig.placements[{i}].azimuth_deg"),
@@ -446,7 +503,7 @@ impl SceneConfig {
         if !r.first_azimuth_deg.is_finite() {
             return Err(invalid("rig.first_azimuth_deg", "must be finite"));
         }
-        if !(64..=3840).contains(&r.color_width) || r.color_width % 16 != 0 {
+        if !(64..=3840).contains(&r.color_width) || !r.color_width.is_multiple_of(16) {
             return Err(invalid(
                 "rig.color_width",
                 format!(
@@ -472,7 +529,12 @@ impl SceneConfig {
             100.0,
         )?;
         check_range("parsing.part_dilation_px", e.part_dilation_px, 0.0, 100.0)?;
-        check_range("parsing.boundary_jitter_px", e.boundary_jitter_px, 0.0, 100.0)?;
+        check_range(
+            "parsing.boundary_jitter_px",
+            e.boundary_jitter_px,
+            0.0,
+            100.0,
+        )?;
         check_range("parsing.swap_prob", e.swap_prob, 0.0, 1.0)?;
         check_range("parsing.swap_band_px", e.swap_band_px, 0.0, 500.0)?;
         check_range("parsing.miss_prob", e.miss_prob, 0.0, 1.0)?;
@@ -533,4 +595,53 @@ pub fn preset(name: &str) -> Result<SceneConfig, SynthError> {
         SynthError::Parse(m) => SynthError::Parse(format!("preset `{name}`: {m}")),
         other => other,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_parse_and_validate() {
+        for (name, _) in PRESETS {
+            let c = preset(name).expect(name);
+            assert_eq!(c.name, name);
+        }
+        assert_eq!(preset("handover").expect("handover").people.count, 2);
+        assert!(preset("robot_cell").expect("robot_cell").scene.robot_arm);
+        assert!(matches!(preset("nope"), Err(SynthError::UnknownPreset(..))));
+    }
+
+    #[test]
+    fn bad_configs_name_the_field() {
+        let err = |text: &str| SceneConfig::from_toml(text).expect_err(text).to_string();
+        assert!(err("[people]\ncount = 2\nbogus = 1").contains("bogus"));
+        assert!(err("[rig]\ncameras = 0").contains("rig.cameras"));
+        assert!(err("[scene]\nroom_half_m = -1.0").contains("scene.room_half_m"));
+        assert!(err("[people]\nheight_m = [1.9, 1.6]").contains("people.height_m"));
+        assert!(err("[people]\nposes = [\"moonwalk\"]").contains("moonwalk"));
+        assert!(err("[depth]\nrange_m = [-1.0, 4.5]").contains("depth.range_m"));
+    }
+
+    #[test]
+    fn overrides_set_dotted_keys_and_round_trip() {
+        let text = PRESETS[0].1;
+        let c = SceneConfig::from_toml_with_overrides(
+            text,
+            &[
+                "rig.cameras=4".into(),
+                "dsa.color_time_offset_s = 0.03".into(),
+                "name=x".into(),
+            ],
+        )
+        .expect("overrides");
+        assert_eq!(c.rig.cameras, 4);
+        assert_eq!(c.dsa.color_time_offset_s, 0.03);
+        assert_eq!(c.name, "x");
+        let e = SceneConfig::from_toml_with_overrides(text, &["rig.camras=4".into()])
+            .expect_err("typo");
+        assert!(e.to_string().contains("camras"), "{e}");
+        assert!(SceneConfig::from_toml_with_overrides(text, &["rig.cameras".into()]).is_err());
+        assert_eq!(SceneConfig::from_toml(&c.to_toml()).expect("round trip"), c);
+    }
 }

@@ -311,43 +311,57 @@ pub struct Primitive {
 }
 
 impl Shape {
-    /// An axis-aligned bounding box `(min, max)` of the shape.
+    /// An axis-aligned bounding box `(min, max)` of the shape (exact: the extent along
+    /// each world axis).
     pub fn aabb(&self) -> (V3, V3) {
+        let mut lo = [0.0; 3];
+        let mut hi = [0.0; 3];
+        for (i, u) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+            .into_iter()
+            .enumerate()
+        {
+            (lo[i], hi[i]) = self.extent_along(u);
+        }
+        (lo, hi)
+    }
+
+    /// `(min, max)` of the shape's points projected on the unit direction `u` (exact).
+    pub fn extent_along(&self, u: V3) -> (f32, f32) {
         match *self {
-            Shape::Capsule { a, b, radius } | Shape::Cylinder { a, b, radius } => {
-                segment_aabb(a, b, radius)
+            Shape::Capsule { a, b, radius } => {
+                let (pa, pb) = (dot(a, u), dot(b, u));
+                (pa.min(pb) - radius, pa.max(pb) + radius)
+            }
+            Shape::Cylinder { a, b, radius } => {
+                // A cap disc of normal n spans ±r·sqrt(1 − (n·u)²) along u.
+                let n = normalize(sub(b, a));
+                let e = radius * (1.0 - dot(n, u).powi(2)).max(0.0).sqrt();
+                let (pa, pb) = (dot(a, u), dot(b, u));
+                (pa.min(pb) - e, pa.max(pb) + e)
             }
             Shape::Ellipsoid {
                 center,
                 axes,
                 radii,
-            } => oriented_aabb(center, axes, radii),
-            Shape::Box { center, axes, half } => oriented_aabb(center, axes, half),
+            } => {
+                let mut e2 = 0.0;
+                for i in 0..3 {
+                    let k = radii[i] * dot(axes[i], u);
+                    e2 += k * k;
+                }
+                let c = dot(center, u);
+                (c - e2.sqrt(), c + e2.sqrt())
+            }
+            Shape::Box { center, axes, half } => {
+                let mut e = 0.0;
+                for i in 0..3 {
+                    e += half[i] * dot(axes[i], u).abs();
+                }
+                let c = dot(center, u);
+                (c - e, c + e)
+            }
         }
     }
-}
-
-fn segment_aabb(a: V3, b: V3, r: f32) -> (V3, V3) {
-    let mut lo = [0.0; 3];
-    let mut hi = [0.0; 3];
-    for i in 0..3 {
-        lo[i] = a[i].min(b[i]) - r;
-        hi[i] = a[i].max(b[i]) + r;
-    }
-    (lo, hi)
-}
-
-fn oriented_aabb(center: V3, axes: [V3; 3], half: V3) -> (V3, V3) {
-    let mut lo = center;
-    let mut hi = center;
-    for i in 0..3 {
-        let e = (axes[0][i] * half[0]).abs()
-            + (axes[1][i] * half[1]).abs()
-            + (axes[2][i] * half[2]).abs();
-        lo[i] -= e;
-        hi[i] += e;
-    }
-    (lo, hi)
 }
 
 /// Rotation about world z by `yaw_rad` applied to `v`.

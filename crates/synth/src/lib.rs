@@ -8,10 +8,19 @@
 
 pub mod config;
 pub mod errors;
+pub mod frame;
 pub mod geometry;
+pub mod hash;
 pub mod people;
+pub mod preview;
+pub mod render;
+pub mod rig;
+pub mod scene;
+pub mod shade;
 
 pub use config::{
-    CameraPlacement, DepthFaultsConfig, DsaConfig, ParsingErrorsConfig, PeopleConfig,
-    RigConfig, SceneConfig, StaticSceneConfig, SynthError, preset, PRESETS,
+    CameraPlacement, DepthFaultsConfig, DsaConfig, PRESETS, ParsingErrorsConfig, PeopleConfig,
+    RigConfig, SceneConfig, StaticSceneConfig, SynthError, preset,
 };
+pub use frame::{CameraFrame, NO_SURFACE, Synth, SynthFrame, frame_stem};
+pub use preview::{RgbImage, preview};
