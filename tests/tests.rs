@@ -10,3 +10,4 @@ mod cli_help;
 mod cli_project;
 mod cli_refine;
 mod cli_rig;
+mod cli_synth;

@@ -29,6 +29,7 @@ mod config;
 mod eval;
 mod fs;
 mod project;
+mod projection_study;
 mod refine;
 mod rig;
 mod stage;
@@ -42,6 +43,7 @@ pub use eval::{
 };
 pub use fs::write_text;
 pub use project::{ProjectOptions, ProjectSummary, depth_path, parsing_path, project_file};
+pub use projection_study::{ProjectionStats, projection_stats};
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
 pub use stage::Stage;

@@ -23,8 +23,8 @@ use rayon::prelude::*;
 pub const NO_SURFACE: u8 = 255;
 
 /// Margin added around a person's exact extent for the true box, metres: depth noise at
-/// 4 m is σ ≈ 24 mm (the sensor model's σ₁·z²), so 0.05 m keeps ≥ 99% of the person's
-/// noisy points inside.
+/// 4 m is σ ≈ 16 mm with the default faults (σ₁·z², σ₁ = 1 mm), so 0.05 m keeps ≥ 99% of
+/// the person's noisy points inside.
 pub const BOX_MARGIN_M: f32 = 0.05;
 
 /// One camera's images of one frame, row-major.

@@ -22,9 +22,9 @@ fn transform(pose: &Pose, p: [f64; 3]) -> [f64; 3] {
     pose.transform_point(p)
 }
 
-/// σ of the depth noise at `z_m` for the default faults (1.5 mm at 1 m, ∝ z²).
+/// σ of the depth noise at `z_m` for the default faults (1 mm at 1 m, ∝ z²).
 fn sigma_m(z_m: f32) -> f32 {
-    0.0015 * z_m * z_m
+    0.001 * z_m * z_m
 }
 
 fn synth(name: &str, seed: u64) -> Synth {
