@@ -87,12 +87,19 @@ struct PixelRay {
     z_per_t: f32,
 }
 
+/// Pixels per span of a row: the renderers find the primitives a span's rays can hit
+/// once per span, then test only those per pixel.
+const SPAN_PX: usize = 16;
+
 #[derive(Clone, Debug)]
 struct SensorRays {
     intrinsics: Intrinsics,
     origin: V3,
     rows: [V3; 3],
     rays: Vec<PixelRay>,
+    /// Per row and span of [`SPAN_PX`] pixels, the bounding rectangle of its rays'
+    /// normalised image coordinates (empty when no ray is valid).
+    spans: Vec<[f32; 4]>,
 }
 
 impl SensorRays {
@@ -130,12 +137,41 @@ impl SensorRays {
                 })
             })
             .collect();
+        let w = intrinsics.width as usize;
+        let spans_per_row = w.div_ceil(SPAN_PX);
+        let mut spans = Vec::with_capacity(spans_per_row * intrinsics.height as usize);
+        for row in rays.chunks(w.max(1)) {
+            for span in row.chunks(SPAN_PX) {
+                let mut b = [
+                    f32::INFINITY,
+                    f32::NEG_INFINITY,
+                    f32::INFINITY,
+                    f32::NEG_INFINITY,
+                ];
+                for r in span.iter().filter(|r| r.z_per_t > 0.0) {
+                    b = [
+                        b[0].min(r.xy[0]),
+                        b[1].max(r.xy[0]),
+                        b[2].min(r.xy[1]),
+                        b[3].max(r.xy[1]),
+                    ];
+                }
+                spans.push(b);
+            }
+        }
         SensorRays {
             intrinsics: *intrinsics,
             origin,
             rows,
             rays,
+            spans,
         }
+    }
+
+    /// The bound of the span holding pixel (u, v).
+    fn span_bound(&self, v: usize, u: usize) -> [f32; 4] {
+        let per_row = (self.intrinsics.width as usize).div_ceil(SPAN_PX);
+        self.spans[v * per_row + u / SPAN_PX]
     }
 }
 
@@ -367,12 +403,18 @@ impl Synth {
             .zip(grazing.par_chunks_mut(w))
             .enumerate()
             .for_each(|(v, (((z_row, l_row), p_row), g_row))| {
+                let mut candidates = Vec::new();
                 for u in 0..w {
+                    if u % SPAN_PX == 0 {
+                        world.candidates(&rects, sensor.span_bound(v, u), &mut candidates);
+                    }
                     let ray = sensor.rays[v * w + u];
                     if ray.z_per_t == 0.0 {
                         continue;
                     }
-                    if let Some(hit) = world.cast(sensor.origin, ray.dir, ray.xy, &rects) {
+                    if let Some(hit) =
+                        world.cast_among(sensor.origin, ray.dir, ray.xy, &rects, &candidates)
+                    {
                         z_row[u] = hit.t * ray.z_per_t;
                         l_row[u] = hit.owner.class_id();
                         p_row[u] = hit.owner.person_id();
@@ -463,13 +505,18 @@ impl Synth {
             .zip(segment.par_chunks_mut(w))
             .enumerate()
             .for_each(|(v, (((c_row, l_row), p_row), s_row))| {
+                let mut candidates = Vec::new();
                 for u in 0..w {
+                    if u % SPAN_PX == 0 {
+                        world.candidates(&rects, sensor.span_bound(v, u), &mut candidates);
+                    }
                     let i = v * w + u;
                     let ray = sensor.rays[i];
                     // Far background where nothing is hit: a dim grey.
                     let mut rgb = [0.05f32, 0.05, 0.06];
                     if ray.z_per_t > 0.0
-                        && let Some(hit) = world.cast(sensor.origin, ray.dir, ray.xy, &rects)
+                        && let Some(hit) =
+                            world.cast_among(sensor.origin, ray.dir, ray.xy, &rects, &candidates)
                     {
                         let p = crate::geometry::add(
                             sensor.origin,

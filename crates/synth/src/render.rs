@@ -123,24 +123,57 @@ impl World {
     /// ray's undistorted normalised image coordinate, tested against `rects` (from
     /// [`World::cull_rects`] for the same camera).
     pub fn cast(&self, origin: V3, dir: V3, image_xy: [f32; 2], rects: &CullRects) -> Option<Hit> {
-        let mut best_t = f32::INFINITY;
-        let mut best: Option<(usize, f32)> = None;
         let [x, y] = image_xy;
-        let outside = |r: &[f32; 4]| x < r[0] || x > r[1] || y < r[2] || y > r[3];
+        let mut candidates = Vec::new();
+        self.candidates(rects, [x, x, y, y], &mut candidates);
+        self.cast_among(origin, dir, image_xy, rects, &candidates)
+    }
+
+    /// The primitives whose rectangle overlaps `bound` (`[x_min, x_max, y_min, y_max]`
+    /// on the same camera's normalised image plane), into `out` (cleared first): the
+    /// only ones a ray through `bound` can hit. Renderers compute them once per span of
+    /// pixels.
+    pub fn candidates(&self, rects: &CullRects, bound: [f32; 4], out: &mut Vec<u32>) {
+        out.clear();
+        let overlaps = |r: &[f32; 4]| {
+            r[0] <= bound[1] && r[1] >= bound[0] && r[2] <= bound[3] && r[3] >= bound[2]
+        };
         for (g, r) in self.groups.iter().zip(&rects.groups) {
-            if outside(r) {
+            if !overlaps(r) {
                 continue;
             }
             for i in g.start..g.end {
-                if outside(&rects.prims[i]) {
-                    continue;
+                if overlaps(&rects.prims[i]) {
+                    out.push(i as u32);
                 }
-                if let Some(t) = intersect(&self.prims[i].shape, origin, dir)
-                    && t < best_t
-                {
-                    best_t = t;
-                    best = Some((i, t));
-                }
+            }
+        }
+    }
+
+    /// [`World::cast`] testing only `candidates` (from [`World::candidates`] for a bound
+    /// that holds `image_xy`): the same hit, fewer tests.
+    pub fn cast_among(
+        &self,
+        origin: V3,
+        dir: V3,
+        image_xy: [f32; 2],
+        rects: &CullRects,
+        candidates: &[u32],
+    ) -> Option<Hit> {
+        let mut best_t = f32::INFINITY;
+        let mut best: Option<(usize, f32)> = None;
+        let [x, y] = image_xy;
+        for &i in candidates {
+            let i = i as usize;
+            let r = &rects.prims[i];
+            if x < r[0] || x > r[1] || y < r[2] || y > r[3] {
+                continue;
+            }
+            if let Some(t) = intersect(&self.prims[i].shape, origin, dir)
+                && t < best_t
+            {
+                best_t = t;
+                best = Some((i, t));
             }
         }
         let room_hit = self
@@ -669,6 +702,10 @@ mod tests {
                 let a = world.cast(origin, d, [x, y], &rects);
                 let b = world.cast(origin, d, [x, y], &all);
                 assert_eq!(a, b);
+                // Candidates of a span that holds the ray give the same hit.
+                let mut span = Vec::new();
+                world.candidates(&rects, [x - 0.05, x + 0.01, y - 0.002, y + 0.03], &mut span);
+                assert_eq!(world.cast_among(origin, d, [x, y], &rects, &span), a);
                 hits += usize::from(a.is_some());
             }
         }
