@@ -6,6 +6,7 @@
 //! This crate computes images in memory; writing a recording is `bodyseg-pipeline`'s job
 //! (only `io` touches the file system).
 
+pub mod chessboard;
 pub mod config;
 pub mod errors;
 pub mod frame;
@@ -18,6 +19,9 @@ pub mod rig;
 pub mod scene;
 pub mod shade;
 
+pub use chessboard::{
+    ChessboardConfig, ChessboardSet, ChessboardView, SensorImages, chessboard_set,
+};
 pub use config::{
     CameraPlacement, DepthFaultsConfig, DsaConfig, PRESETS, ParsingErrorsConfig, PeopleConfig,
     RigConfig, SceneConfig, StaticSceneConfig, SynthError, preset,
