@@ -257,3 +257,19 @@ fn bad_scene_configs_name_the_field() {
         assert!(e.contains(field), "{text}: {e}");
     }
 }
+
+#[test]
+fn frames_do_not_depend_on_the_thread_count() {
+    let synth = synth("robot_cell", 3);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool")
+        .install(|| synth.frame(2));
+    let three = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .expect("pool")
+        .install(|| synth.frame(2));
+    assert_eq!(one, three);
+}
