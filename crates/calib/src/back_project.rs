@@ -97,7 +97,9 @@ pub struct BackProjected {
 pub struct RayTable {
     width: u32,
     height: u32,
-    rays: Vec<Option<[f64; 2]>>,
+    /// NaN where there is no ray: 16 bytes a pixel instead of an `Option`'s 24, which
+    /// the back-projection streams through once per frame.
+    rays: Vec<[f64; 2]>,
 }
 
 impl RayTable {
@@ -109,7 +111,7 @@ impl RayTable {
                 rays.push(
                     intrinsics
                         .unproject(f64::from(u), f64::from(v))
-                        .map(|[x, y, _]| [x, y]),
+                        .map_or([f64::NAN; 2], |[x, y, _]| [x, y]),
                 );
             }
         }
@@ -126,7 +128,8 @@ impl RayTable {
         if u >= self.width || v >= self.height {
             return None;
         }
-        self.rays[v as usize * self.width as usize + u as usize]
+        let ray = self.rays[v as usize * self.width as usize + u as usize];
+        (!ray[0].is_nan()).then_some(ray)
     }
 }
 
@@ -136,6 +139,9 @@ pub struct DepthBackProjector {
     camera: RgbdCamera,
     camera_index: u8,
     rays: RayTable,
+    /// `camera.depth_m(raw)` for every raw value (NaN for none): a look-up instead of a
+    /// division per pixel, the same values bit for bit.
+    depth_lut: Box<[f64; 1 << 16]>,
 }
 
 impl DepthBackProjector {
@@ -143,16 +149,28 @@ impl DepthBackProjector {
     /// place in the rig, stored in every point's origin.
     pub fn new(camera: &RgbdCamera, camera_index: u8) -> Result<Self, CalibError> {
         camera.validate()?;
+        let depth_lut: Vec<f64> = (0..=u16::MAX)
+            .map(|raw| camera.depth_m(raw).unwrap_or(f64::NAN))
+            .collect();
         Ok(DepthBackProjector {
             camera: camera.clone(),
             camera_index,
             rays: RayTable::new(&camera.depth),
+            depth_lut: depth_lut
+                .into_boxed_slice()
+                .try_into()
+                .expect("one entry per u16"),
         })
     }
 
     /// The camera this projector was built for.
     pub fn camera(&self) -> &RgbdCamera {
         &self.camera
+    }
+
+    /// The camera's ray table.
+    pub fn rays(&self) -> &RayTable {
+        &self.rays
     }
 
     /// Back-projects one depth image (raw `u16` values, row-major, the depth sensor's
@@ -239,22 +257,22 @@ impl DepthBackProjector {
             points_m: Vec::with_capacity(cap),
             origins: Vec::with_capacity(cap),
         };
+        let pose = &self.camera.world_from_depth;
+        let (min, max) = (opts.depth_min_m, opts.depth_max_m);
         for &v in rows {
-            for u in (0..w).step_by(step) {
-                let pixel = v as usize * w as usize + u as usize;
-                let Some(z) = self.camera.depth_m(depth_raw[pixel]) else {
-                    continue;
-                };
-                if !(z > 0.0 && z >= opts.depth_min_m && z <= opts.depth_max_m) {
+            let row = v as usize * w as usize..(v as usize + 1) * w as usize;
+            let (depth, rays) = (&depth_raw[row.clone()], &self.rays.rays[row]);
+            for u in (0..w as usize).step_by(step) {
+                let z = self.depth_lut[usize::from(depth[u])];
+                let [x, y] = rays[u];
+                // NaN (no measurement, no ray) fails every comparison.
+                if !(z > 0.0 && z >= min && z <= max && !x.is_nan()) {
                     continue;
                 }
-                let Some([x, y]) = self.rays.ray(u, v) else {
-                    continue;
-                };
                 let p_depth = [z * x, z * y, z];
                 let p = match opts.frame {
                     CloudFrame::Depth => p_depth,
-                    CloudFrame::World => self.camera.world_from_depth.transform_point(p_depth),
+                    CloudFrame::World => pose.transform_point(p_depth),
                 };
                 // Clouds store f32 positions: ~0.1 µm rounding at a few metres.
                 out.points_m.push(p.map(|c| c as f32));
@@ -262,7 +280,7 @@ impl DepthBackProjector {
                     camera: self.camera_index,
                     // Fits: `Intrinsics::validate` (run in `new`) caps the pixel count
                     // at u32::MAX.
-                    pixel: pixel as u32,
+                    pixel: (v as usize * w as usize + u) as u32,
                 });
             }
         }

@@ -2,28 +2,15 @@
 
 use bodyseg_calib::RgbdCamera;
 use bodyseg_core::math::Vec3;
-use bodyseg_core::{Label, LabelImage, NUM_CLASSES, PointOrigin};
+use bodyseg_core::{Class, Label, LabelImage, NUM_CLASSES, PointOrigin};
 use rayon::prelude::*;
 
+use crate::color::{ColorProjection, Hits, HitsView, NO_HIT};
 use crate::{ProjectConfig, ProjectError, ProjectMode};
 
-/// Where a point lands in the colour image.
-#[derive(Clone, Copy)]
-struct Hit {
-    /// Nearest colour pixel, column and row.
-    u: u32,
-    v: u32,
-    /// Depth along the colour camera's z, metres.
-    z_color_m: f64,
-}
-
-impl Hit {
-    /// Nearest colour pixel, row-major index in an image `w` wide.
-    #[inline]
-    fn pixel(&self, w: usize) -> usize {
-        self.v as usize * w + self.u as usize
-    }
-}
+/// Points per parallel task of the per-point passes: rayon's per-task cost (~µs) stays
+/// small against the work, and two cores still get several tasks per camera.
+pub(crate) const POINTS_PER_CHUNK: usize = 8192;
 
 /// Labels of one camera's depth points, in their order (ALGORITHM.md §3).
 ///
@@ -34,6 +21,8 @@ impl Hit {
 ///   depth-edge test and the label-boundary vote;
 /// - `labels`: the parser's label image (colour sensor size).
 ///
+/// The nearest colour pixel is computed in f32 (see the `color` module: within 1e-3 px
+/// of the f64 projection, so a point on a near-tie between two pixels may take either).
 /// A point behind the colour camera or projecting outside the colour image is `unknown`
 /// in both modes. In `dsa` mode, in this order, from the nearest colour pixel's label:
 /// 1. *occlusion* — every point is splatted into a colour z-buffer (a square of
@@ -59,156 +48,340 @@ pub fn project_labels(
     cfg: &ProjectConfig,
 ) -> Result<Vec<Label>, ProjectError> {
     cfg.validate()?;
-    check_inputs(camera, depth_points_m, origins, depth_raw, labels)?;
+    check_images(camera, depth_raw, labels)?;
+    check_points(camera, depth_points_m, origins)?;
 
-    let color = &camera.color;
-    let color_w = color.width as usize;
-    let hits: Vec<Option<Hit>> = depth_points_m
-        .par_iter()
-        .map(|p| {
-            let p_color = camera.color_from_depth.transform_point(p.map(f64::from));
-            let uv = color.project(p_color)?;
-            if !color.contains(uv) {
-                return None;
-            }
-            // `contains` keeps u in [-0.5, w - 0.5): rounding gives 0..w (the clamp only
-            // guards the half-open edge against rounding up).
-            let u = round_index(uv[0]).min(color.width - 1);
-            let v = round_index(uv[1]).min(color.height - 1);
-            Some(Hit {
-                u,
-                v,
-                z_color_m: p_color[2],
-            })
-        })
-        .collect();
-
-    let naive: Vec<Label> = hits
-        .iter()
-        .map(|h| h.map_or(Label::UNKNOWN, |h| labels.labels[h.pixel(color_w)]))
-        .collect();
-    if cfg.mode == ProjectMode::Naive {
-        return Ok(naive);
+    let n = depth_points_m.len();
+    let color = ColorProjection::new(camera);
+    let mut hits = Hits::zeroed(n);
+    let mut out = vec![Label::UNKNOWN; n];
+    depth_points_m
+        .par_chunks(POINTS_PER_CHUNK)
+        .zip(hits.u.par_chunks_mut(POINTS_PER_CHUNK))
+        .zip(hits.v.par_chunks_mut(POINTS_PER_CHUNK))
+        .zip(hits.z_color_m.par_chunks_mut(POINTS_PER_CHUNK))
+        .zip(out.par_chunks_mut(POINTS_PER_CHUNK))
+        .for_each(|((((points, u), v), z), out)| {
+            // Structure of arrays, so the projection loop vectorises.
+            let x: Vec<f32> = points.iter().map(|p| p[0]).collect();
+            let y: Vec<f32> = points.iter().map(|p| p[1]).collect();
+            let zd: Vec<f32> = points.iter().map(|p| p[2]).collect();
+            color.project_batch(&x, &y, &zd, u, v, z);
+            naive_labels(u, v, labels, out);
+        });
+    if cfg.mode == ProjectMode::Dsa {
+        let lut = depth_lut(camera);
+        apply_dsa(
+            camera,
+            &lut,
+            hits.view(),
+            origins,
+            depth_raw,
+            labels,
+            cfg,
+            &mut Vec::new(),
+            &mut out,
+        );
     }
+    Ok(out)
+}
 
+/// `out[i]` = the label at colour pixel `(u[i], v[i])`, `unknown` where there is no hit.
+pub(crate) fn naive_labels(u: &[u32], v: &[u32], labels: &LabelImage, out: &mut [Label]) {
+    let w = labels.width as usize;
+    for ((o, &u), &v) in out.iter_mut().zip(u).zip(v) {
+        *o = if u == NO_HIT {
+            Label::UNKNOWN
+        } else {
+            labels.labels[v as usize * w + u as usize]
+        };
+    }
+}
+
+/// Metres per raw depth value, see [`depth_lut`]. A fixed-size array: indexing it with a
+/// `u16` needs no bounds check.
+pub(crate) type DepthLut = [f64; 1 << 16];
+
+/// Depth in metres of every raw value (`RgbdCamera::depth_m`), NaN for 0 and for
+/// depths ≤ 0 after the shift: one division per raw value instead of one per pixel.
+/// Non-decreasing where not NaN, and NaN only on a prefix (`depth_m` is monotonic).
+pub(crate) fn depth_lut(camera: &RgbdCamera) -> Box<DepthLut> {
+    let lut: Vec<f64> = (0..=u16::MAX)
+        .map(|raw| camera.depth_m(raw).filter(|&z| z > 0.0).unwrap_or(f64::NAN))
+        .collect();
+    lut.into_boxed_slice()
+        .try_into()
+        .expect("one entry per u16")
+}
+
+/// Turns the naive labels `out` of one camera's points into the DSA labels (steps 1–4 of
+/// [`project_labels`]); `hits` and `origins` are those points'. `lut` is
+/// [`depth_lut`] of `camera`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn apply_dsa(
+    camera: &RgbdCamera,
+    lut: &DepthLut,
+    hits: HitsView<'_>,
+    origins: &[PointOrigin],
+    depth_raw: &[u16],
+    labels: &LabelImage,
+    cfg: &ProjectConfig,
+    zkeys: &mut Vec<u32>,
+    out: &mut [Label],
+) {
+    let color_w = labels.width as usize;
     let zbuffer = cfg
         .occlusion
-        .then(|| ZBuffer::splat(&hits, cfg.splat_radius_px as usize));
+        .then(|| ZBuffer::splat(hits, cfg.splat_radius_px as usize, &camera.color, zkeys));
     let depth_w = camera.depth.width as usize;
     let depth_h = camera.depth.height as usize;
-    // Depth in metres per depth pixel, NaN where there is none, converted once: the edge
-    // test and the vote read each pixel up to 9 times.
-    let depth_table_m: Vec<f64> = depth_raw
-        .par_iter()
-        .map(|&raw| camera.depth_m(raw).filter(|&z| z > 0.0).unwrap_or(f64::NAN))
-        .collect();
-    let depth_at = |pixel: usize| Some(depth_table_m[pixel]).filter(|z| !z.is_nan());
     let on_edge = cfg.depth_edge.then(|| {
         edge_map(
-            &depth_table_m,
+            depth_raw,
+            lut,
             depth_w,
             depth_h,
             cfg.edge_radius_px as usize,
             cfg.edge_jump_ratio,
         )
     });
+    let probs = labels
+        .probs
+        .as_deref()
+        .filter(|_| cfg.min_probability > 0.0);
 
-    let checked: Vec<Label> = (0..hits.len())
-        .into_par_iter()
-        .map(|i| {
-            let Some(hit) = hits[i] else {
-                return Label::UNKNOWN;
-            };
-            if let Some(zb) = &zbuffer
-                && hit.z_color_m > f64::from(zb.at(hit.u, hit.v)) + cfg.occlusion_tol_m
-            {
-                return Label::UNKNOWN;
-            }
-            if let Some(edge) = &on_edge
-                && edge[origins[i].pixel as usize]
-            {
-                return Label::UNKNOWN;
-            }
-            if cfg.min_probability > 0.0
-                && let Some(probs) = &labels.probs
-                && probs[hit.pixel(color_w)] < cfg.min_probability
-            {
-                return Label::UNKNOWN;
-            }
-            naive[i]
-        })
-        .collect();
+    // Steps 1–3: they only ever make a label unknown. One tight pass per check that is
+    // on (points without a hit are unknown already).
+    let chunk = POINTS_PER_CHUNK;
+    if let Some(zb) = &zbuffer {
+        out.par_chunks_mut(chunk)
+            .zip(hits.u.par_chunks(chunk))
+            .zip(hits.v.par_chunks(chunk))
+            .zip(hits.z_color_m.par_chunks(chunk))
+            .for_each(|(((out, hu), hv), hz)| {
+                for (((label, &u), &v), &z) in out.iter_mut().zip(hu).zip(hv).zip(hz) {
+                    if u != NO_HIT && f64::from(z) > f64::from(zb.at(u, v)) + cfg.occlusion_tol_m {
+                        *label = Label::UNKNOWN;
+                    }
+                }
+            });
+    }
+    if let Some(edge) = &on_edge {
+        out.par_chunks_mut(chunk)
+            .zip(origins.par_chunks(chunk))
+            .for_each(|(out, origins)| {
+                for (label, o) in out.iter_mut().zip(origins) {
+                    if edge[o.pixel as usize] {
+                        *label = Label::UNKNOWN;
+                    }
+                }
+            });
+    }
+    if let Some(probs) = probs {
+        out.par_chunks_mut(chunk)
+            .zip(hits.u.par_chunks(chunk))
+            .zip(hits.v.par_chunks(chunk))
+            .for_each(|((out, hu), hv)| {
+                for ((label, &u), &v) in out.iter_mut().zip(hu).zip(hv) {
+                    if u != NO_HIT && probs[v as usize * color_w + u as usize] < cfg.min_probability
+                    {
+                        *label = Label::UNKNOWN;
+                    }
+                }
+            });
+    }
     if !cfg.label_boundary {
-        return Ok(checked);
+        return;
     }
 
     // Labels before the vote, per depth pixel (unknown where no point).
     let mut by_pixel = vec![Label::UNKNOWN; depth_w * depth_h];
-    for (o, &l) in origins.iter().zip(&checked) {
+    for (o, &l) in origins.iter().zip(out.iter()) {
         by_pixel[o.pixel as usize] = l;
     }
-    let near_change = label_change_map(
-        &labels.labels,
-        labels.width as usize,
-        labels.height as usize,
-        cfg.boundary_radius_px as usize,
-    );
-    let voted = (0..hits.len())
-        .into_par_iter()
-        .map(|i| {
-            let own = checked[i];
-            let (Some(hit), Some(own_class)) = (hits[i], own.class()) else {
-                return own;
-            };
-            // `own` is the label at `hit.pixel` (the checks only ever make a label
-            // unknown), so "a different label within the radius" is "the square is not
-            // uniform".
-            if !near_change[hit.pixel(color_w)] {
-                return own;
-            }
-            let pixel = origins[i].pixel as usize;
-            let Some(z) = depth_at(pixel) else {
-                return own;
-            };
-            let tol = cfg.edge_jump_ratio * z;
-            let mut counts = [0u32; NUM_CLASSES];
-            for n in window(pixel, depth_w, depth_h, 1) {
-                let Some(c) = by_pixel[n].class() else {
+    let r = cfg.boundary_radius_px as usize;
+    let (color_h, image) = (labels.height as usize, &labels.labels[..]);
+    let blocks = UniformBlocks::new(image, color_w, color_h);
+    out.par_chunks_mut(chunk)
+        .zip(hits.u.par_chunks(chunk))
+        .zip(hits.v.par_chunks(chunk))
+        .zip(origins.par_chunks(chunk))
+        .for_each(|(((out, hu), hv), origins)| {
+            for (((label, &u), &v), o) in out.iter_mut().zip(hu).zip(hv).zip(origins) {
+                let own = *label;
+                let Some(own_class) = own.class() else {
                     continue;
                 };
-                if depth_at(n).is_some_and(|zn| (zn - z).abs() <= tol) {
-                    counts[c.index()] += 1;
+                // `own` is the label at the hit pixel (steps 1–3 only make labels
+                // unknown), so "a different label within the radius" is "the square
+                // holds a label other than `own`".
+                let (u, v) = (u as usize, v as usize);
+                if !blocks.may_hold_other(u, v, r, own)
+                    || !square_holds_other(image, color_w, color_h, (u, v), r, own)
+                {
+                    continue;
+                }
+                if let Some(best) = vote(
+                    o.pixel as usize,
+                    &by_pixel,
+                    (depth_raw, lut),
+                    depth_w,
+                    depth_h,
+                    cfg.edge_jump_ratio,
+                ) && best != own_class
+                {
+                    *label = Label::from(best);
                 }
             }
-            let (best, &best_count) = counts
-                .iter()
-                .enumerate()
-                .max_by_key(|&(k, &c)| (c, std::cmp::Reverse(k)))
-                .expect("NUM_CLASSES > 0");
-            let clear = counts
-                .iter()
-                .enumerate()
-                .all(|(k, &c)| k == best || c < best_count);
-            if clear && best != own_class.index() {
-                // `best < NUM_CLASSES`, a class id.
-                Label::from_id(best as u8).unwrap_or(own)
-            } else {
-                own
-            }
-        })
-        .collect();
-    Ok(voted)
+        });
 }
 
-/// `x.round().max(0.0) as u32` for `x` in [-0.5, 2³¹), without the `round` libm call:
-/// for `x ≥ 0` the fraction `x − ⌊x⌋` is exact, and rounding takes half away from zero.
-#[inline]
-fn round_index(x: f64) -> u32 {
-    if x <= 0.0 {
-        return 0;
+/// The label-boundary vote at depth pixel `pixel`: the class held by strictly more of its
+/// labelled, depth-consistent (`|Δz| ≤ ratio · z`) 8-neighbours than any other, if any.
+/// `by_pixel` holds the labels before the vote and `depth_raw` the raw depths of a
+/// `w × h` depth image, `lut` their metres (NaN: none).
+fn vote(
+    pixel: usize,
+    by_pixel: &[Label],
+    (depth_raw, lut): (&[u16], &DepthLut),
+    w: usize,
+    h: usize,
+    ratio: f64,
+) -> Option<Class> {
+    let depth_m = |p: usize| lut[usize::from(depth_raw[p])];
+    let z = depth_m(pixel);
+    if z.is_nan() {
+        return None;
     }
-    let t = x as u32;
-    if x - f64::from(t) >= 0.5 { t + 1 } else { t }
+    let tol = ratio * z;
+    let mut counts = [0u32; NUM_CLASSES];
+    for n in window(pixel, w, h, 1) {
+        // NaN (no depth) fails the comparison.
+        if let Some(c) = by_pixel[n].class()
+            && (depth_m(n) - z).abs() <= tol
+        {
+            counts[c.index()] += 1;
+        }
+    }
+    let (best, &best_count) = counts
+        .iter()
+        .enumerate()
+        .max_by_key(|&(k, &c)| (c, std::cmp::Reverse(k)))
+        .expect("NUM_CLASSES > 0");
+    let clear = counts
+        .iter()
+        .enumerate()
+        .all(|(k, &c)| k == best || c < best_count);
+    // `best < NUM_CLASSES`, a class id.
+    clear.then(|| Class::from_id(best as u8)).flatten()
+}
+
+/// Per 8×8 block of a label image: its label when all its pixels hold it, else `None`
+/// (also for blocks cut by the image border). A cheap exact pre-test for the
+/// label-change square of the vote: most points lie inside uniform regions.
+struct UniformBlocks {
+    /// Blocks per row.
+    bw: usize,
+    labels: Vec<Option<Label>>,
+}
+
+impl UniformBlocks {
+    /// Side of a block, pixels: one 8-byte word per block row.
+    const SIDE: usize = 8;
+
+    fn new(image: &[Label], w: usize, h: usize) -> Self {
+        let s = Self::SIDE;
+        let (bw, bh) = (w.div_ceil(s), h.div_ceil(s));
+        let mut labels = vec![None; bw * bh];
+        labels
+            .par_chunks_mut(bw.max(1))
+            .enumerate()
+            .for_each(|(by, out)| {
+                if (by + 1) * s > h {
+                    return;
+                }
+                // Whole blocks of this block row (a block cut by the right border stays
+                // `None`): OR over its 8 rows of (8 labels XOR its first label).
+                let rows = &image[by * s * w..(by + 1) * s * w];
+                let firsts: Vec<u64> = rows[..w]
+                    .chunks_exact(s)
+                    .map(|c| u64::from_le_bytes([c[0].id(); 8]))
+                    .collect();
+                let mut diff = vec![0u64; firsts.len()];
+                for row in rows.chunks_exact(w) {
+                    for ((d, &f), c) in diff.iter_mut().zip(&firsts).zip(row.chunks_exact(s)) {
+                        *d |= word(c) ^ f;
+                    }
+                }
+                for ((out, &d), c) in out.iter_mut().zip(&diff).zip(rows[..w].chunks_exact(s)) {
+                    *out = (d == 0).then_some(c[0]);
+                }
+            });
+        UniformBlocks { bw, labels }
+    }
+
+    /// False when the square of radius `r` around `(u, v)` (inside the image) certainly
+    /// holds `own` only: every block it touches is uniformly `own`.
+    #[inline]
+    fn may_hold_other(&self, u: usize, v: usize, r: usize, own: Label) -> bool {
+        let s = Self::SIDE;
+        let (bx0, bx1) = (u.saturating_sub(r) / s, (u + r) / s);
+        let (by0, by1) = (v.saturating_sub(r) / s, (v + r) / s);
+        if bx1 >= self.bw {
+            return true;
+        }
+        let other = |by: usize, bx: usize| self.labels.get(by * self.bw + bx) != Some(&Some(own));
+        if 2 * r < s {
+            // At most 2 × 2 blocks (the default radius 2): their corners are all.
+            return other(by0, bx0) || other(by0, bx1) || other(by1, bx0) || other(by1, bx1);
+        }
+        (by0..=by1).any(|by| (bx0..=bx1).any(|bx| other(by, bx)))
+    }
+}
+
+/// The 8 labels of `b` as one little-endian word (one byte per label).
+#[inline]
+fn word(b: &[Label]) -> u64 {
+    let b: &[Label; 8] = b.try_into().expect("8 labels");
+    u64::from_le_bytes([
+        b[0].id(),
+        b[1].id(),
+        b[2].id(),
+        b[3].id(),
+        b[4].id(),
+        b[5].id(),
+        b[6].id(),
+        b[7].id(),
+    ])
+}
+
+/// Whether the square of radius `r` around pixel `(u, v)` of a `w × h` label image
+/// (clipped) holds a label other than `own`.
+fn square_holds_other(
+    image: &[Label],
+    w: usize,
+    h: usize,
+    (u, v): (usize, usize),
+    r: usize,
+    own: Label,
+) -> bool {
+    let (u0, u1) = (u.saturating_sub(r), (u + r).min(w - 1));
+    let (v0, v1) = (v.saturating_sub(r), (v + r).min(h - 1));
+    let len = u1 - u0 + 1;
+    let last = v1 * w + u0;
+    if len <= 8 && last + 8 <= image.len() {
+        // Fast path (radius ≤ 3, the default 2): each row segment as one 8-byte word,
+        // XOR-ed with `own` in every byte; the bytes past the segment are masked off.
+        let own_bytes = u64::from_le_bytes([own.id(); 8]);
+        let mask = u64::MAX >> (8 * (8 - len));
+        let (mut diff, mut start) = (0, v0 * w + u0);
+        while start <= last {
+            diff |= word(&image[start..start + 8]) ^ own_bytes;
+            start += w;
+        }
+        return diff & mask != 0;
+    }
+    (v0..=v1).any(|vn| image[vn * w + u0..=vn * w + u1].iter().any(|&l| l != own))
 }
 
 /// The pixels of the square of radius `r` around `pixel` (row-major index in a `w × h`
@@ -239,98 +412,127 @@ fn any_row_in_square(
     (v0..=v1).any(|vn| f(vn * w + u0..vn * w + u1 + 1))
 }
 
-/// Nearest colour-frame depth (metres, f32 to halve the buffer) per colour pixel over the
-/// splat squares of all points, over the bounding box of the points' pixels (the only
-/// pixels read); +∞ where no point lands.
-struct ZBuffer {
-    u0: u32,
-    v0: u32,
-    w: usize,
-    h: usize,
+/// Nearest colour-frame depth per colour pixel over the splat squares of all points, on
+/// a buffer of the colour image's size plus a margin of `r` pixels on every side, so that
+/// a query never clips.
+///
+/// Depths are stored as `!z.to_bits()`: for positive finite f32 the bit patterns order
+/// as the values, so the nearest depth is the largest key, and "no point" is key 0. The
+/// buffer is borrowed all zero and given back all zero (on drop, the splatted cells are
+/// reset): kept across frames, it is neither allocated nor cleared per frame.
+struct ZBuffer<'a> {
+    /// Row length of `key`: the image width plus 2r.
+    stride: usize,
     /// Splat radius.
     r: usize,
-    /// Nearest z of the points whose pixel this is (the centres of the splats).
-    z: Vec<f32>,
+    /// Per pixel the key of the nearest point whose pixel this is (the splats' centres).
+    key: &'a mut [u32],
+    hits: HitsView<'a>,
 }
 
-impl ZBuffer {
-    /// The nearest z per pixel; [`ZBuffer::at`] takes the minimum over the square of
-    /// radius `r` around a pixel, the same as splatting every point's square (z is
-    /// finite, never NaN: `project` rejects non-finite points, so the order of the minima
-    /// does not matter).
-    fn splat(hits: &[Option<Hit>], r: usize) -> Self {
-        let (mut u0, mut v0, mut u1, mut v1) = (u32::MAX, u32::MAX, 0, 0);
-        for h in hits.iter().flatten() {
-            u0 = u0.min(h.u);
-            v0 = v0.min(h.v);
-            u1 = u1.max(h.u);
-            v1 = v1.max(h.v);
+impl<'a> ZBuffer<'a> {
+    /// The nearest z per pixel; [`ZBuffer::at`] takes the nearest over the square of
+    /// radius `r` around a pixel, the same as splatting every point's square. The hits'
+    /// z are > 0 and finite (`ColorProjection` gives no hit otherwise). `keys` is all
+    /// zero (any length).
+    fn splat(
+        hits: HitsView<'a>,
+        r: usize,
+        color: &bodyseg_calib::Intrinsics,
+        keys: &'a mut Vec<u32>,
+    ) -> Self {
+        let stride = color.width as usize + 2 * r;
+        let len = stride * (color.height as usize + 2 * r);
+        if keys.len() != len {
+            keys.clear();
+            keys.resize(len, 0);
         }
-        if u0 > u1 {
-            return ZBuffer {
-                u0: 0,
-                v0: 0,
-                w: 0,
-                h: 0,
-                r,
-                z: Vec::new(),
-            };
-        }
-        let w = (u1 - u0 + 1) as usize;
-        let h = (v1 - v0 + 1) as usize;
-        let mut centre = vec![f32::INFINITY; w * h];
-        for hit in hits.iter().flatten() {
-            let z = hit.z_color_m as f32;
-            let cell = &mut centre[(hit.v - v0) as usize * w + (hit.u - u0) as usize];
-            if z < *cell {
-                *cell = z;
+        for ((&u, &v), &z) in hits.u.iter().zip(hits.v).zip(hits.z_color_m) {
+            if u != NO_HIT {
+                let cell = &mut keys[(v as usize + r) * stride + u as usize + r];
+                *cell = (*cell).max(!z.to_bits());
             }
         }
         ZBuffer {
-            u0,
-            v0,
-            w,
-            h,
+            stride,
             r,
-            z: centre,
+            key: keys,
+            hits,
         }
     }
 
-    /// The z-buffer at colour pixel (u, v), one of the points' pixels.
+    /// The z-buffer at colour pixel (u, v), one of the points' pixels (so the square
+    /// holds at least that point, and the key is not 0).
+    #[inline]
     fn at(&self, u: u32, v: u32) -> f32 {
-        let (u, v) = ((u - self.u0) as usize, (v - self.v0) as usize);
-        let (ua, ub) = (u.saturating_sub(self.r), (u + self.r).min(self.w - 1));
-        let mut best = f32::INFINITY;
-        for vn in v.saturating_sub(self.r)..=(v + self.r).min(self.h - 1) {
-            for &z in &self.z[vn * self.w + ua..=vn * self.w + ub] {
-                best = if z < best { z } else { best };
+        // Top-left corner of the square in the padded buffer.
+        let corner = v as usize * self.stride + u as usize;
+        let side = 2 * self.r + 1;
+        let mut best = 0;
+        if side == 3 {
+            // The default radius 1, unrolled.
+            for dv in 0..3 {
+                let start = corner + dv * self.stride;
+                let row: &[u32; 3] = self.key[start..start + 3].try_into().expect("3 wide");
+                best = best.max(row[0]).max(row[1]).max(row[2]);
+            }
+        } else {
+            for dv in 0..side {
+                let start = corner + dv * self.stride;
+                best = self.key[start..start + side]
+                    .iter()
+                    .fold(best, |b, &k| b.max(k));
             }
         }
-        best
+        f32::from_bits(!best)
+    }
+}
+
+impl Drop for ZBuffer<'_> {
+    fn drop(&mut self) {
+        for (&u, &v) in self.hits.u.iter().zip(self.hits.v) {
+            if u != NO_HIT {
+                self.key[(v as usize + self.r) * self.stride + u as usize + self.r] = 0;
+            }
+        }
     }
 }
 
 /// Per depth pixel: whether the depth-edge test flags it, i.e. it has depth z and some
 /// pixel of the square of radius `r` around it (clipped) has depth zn with
-/// `|zn - z| > ratio · z` (pixels without depth, NaN, never do). Exactly the per-pixel
-/// test: the rounded difference is monotonic in zn, so testing the window's largest and
-/// smallest depths (NaN skipped; separable) is the same.
-fn edge_map(depth_m: &[f64], w: usize, h: usize, r: usize, ratio: f64) -> Vec<bool> {
+/// `|zn - z| > ratio · z` (pixels without depth never do). `lut` is [`depth_lut`].
+///
+/// Exactly the per-pixel test: the rounded difference is monotonic in zn, so testing the
+/// window's largest and smallest depths is the same; and metres are a non-decreasing
+/// function of the raw value (`lut`), so those are the depths of the window's largest
+/// and smallest raw values. The min/max filter (separable) therefore runs on the raw
+/// `u16`s, 8 to a SIMD register.
+fn edge_map(
+    depth_raw: &[u16],
+    lut: &DepthLut,
+    w: usize,
+    h: usize,
+    r: usize,
+    ratio: f64,
+) -> Vec<bool> {
     if w == 0 || h == 0 {
         return vec![false; w * h];
     }
-    // Smallest and largest depth over the square, pixels without depth skipped (as +∞
-    // and −∞); separable: rows, then columns.
-    let mut lo = vec![0.0; w * h];
-    let mut hi = vec![0.0; w * h];
+    // Raw values with a depth are exactly those from the first one with a depth on
+    // (non-decreasing metres: once > 0, always > 0).
+    let first_valid = lut.iter().position(|z| !z.is_nan()).unwrap_or(lut.len()) as u32;
+    // Pixels without depth are skipped: u16::MAX for the minimum, 0 for the maximum (a
+    // pixel with depth is in its own window, so they never change its result).
+    let mut lo = vec![0u16; w * h];
+    let mut hi = vec![0u16; w * h];
     lo.par_chunks_mut(w)
         .zip(hi.par_chunks_mut(w))
-        .zip(depth_m.par_chunks(w))
+        .zip(depth_raw.par_chunks(w))
         .for_each(|((lo, hi), src)| {
-            for ((l, h), &z) in lo.iter_mut().zip(hi.iter_mut()).zip(src) {
-                let none = z.is_nan();
-                *l = if none { f64::INFINITY } else { z };
-                *h = if none { f64::NEG_INFINITY } else { z };
+            for ((l, h), &raw) in lo.iter_mut().zip(hi.iter_mut()).zip(src) {
+                let valid = u32::from(raw) >= first_valid;
+                *l = if valid { raw } else { u16::MAX };
+                *h = if valid { raw } else { 0 };
             }
             let (l0, h0) = (lo.to_vec(), hi.to_vec());
             for k in 1..=r.min(w - 1) {
@@ -349,114 +551,48 @@ fn edge_map(depth_m: &[f64], w: usize, h: usize, r: usize, ratio: f64) -> Vec<bo
             min_into(&mut a, &lo[vn * w..(vn + 1) * w]);
             max_into(&mut b, &hi[vn * w..(vn + 1) * w]);
         }
-        for (((d, &z), &a), &b) in dst
+        for (((d, &raw), &a), &b) in dst
             .iter_mut()
-            .zip(&depth_m[v * w..(v + 1) * w])
+            .zip(&depth_raw[v * w..(v + 1) * w])
             .zip(&a)
             .zip(&b)
         {
-            // A pixel with depth is in its own square, so a ≤ z ≤ b, both finite, and
-            // the largest |zn − z| is b − z or z − a (rounding is monotonic).
+            if u32::from(raw) < first_valid {
+                continue;
+            }
+            // a ≤ raw ≤ b, all with depth; the largest |zn − z| is zb − z or z − za.
+            let (z, za, zb) = (
+                lut[usize::from(raw)],
+                lut[usize::from(a)],
+                lut[usize::from(b)],
+            );
             let jump = ratio * z;
-            *d = !z.is_nan() && ((b - z).abs() > jump || (a - z).abs() > jump);
+            *d = (zb - z).abs() > jump || (za - z).abs() > jump;
         }
     });
     out
 }
 
-fn min_into(dst: &mut [f64], src: &[f64]) {
+fn min_into(dst: &mut [u16], src: &[u16]) {
     for (d, &s) in dst.iter_mut().zip(src) {
-        *d = if s < *d { s } else { *d };
+        *d = (*d).min(s);
     }
 }
 
-fn max_into(dst: &mut [f64], src: &[f64]) {
+fn max_into(dst: &mut [u16], src: &[u16]) {
     for (d, &s) in dst.iter_mut().zip(src) {
-        *d = if s > *d { s } else { *d };
+        *d = (*d).max(s);
     }
 }
 
-/// Per colour pixel: whether the square of radius `r` around it (clipped to the image)
-/// holds more than one label. The square is connected, so it is not uniform iff it holds
-/// two 4-neighbours with different labels: a horizontal pair (u, u + 1) with both in the
-/// square, i.e. u in [u_c - r, u_c + r - 1] and row in [v_c - r, v_c + r], or a vertical
-/// pair (v, v + 1) with column in [u_c - r, u_c + r], v in [v_c - r, v_c + r - 1]. Pairs
-/// that would leave the image do not exist, so clipping the offsets to the image is exact.
-fn label_change_map(labels: &[Label], w: usize, h: usize, r: usize) -> Vec<bool> {
-    if r == 0 || w == 0 || h == 0 {
-        return vec![false; w * h];
-    }
-    // Per row: horizontal changes dilated over columns [-r, r - 1], vertical changes
-    // (with the next row) dilated over columns [-r, r].
-    let mut hd = vec![false; w * h];
-    let mut vd = vec![false; w * h];
-    hd.par_chunks_mut(w)
-        .zip(vd.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(v, (hrow, vrow))| {
-            let row = &labels[v * w..(v + 1) * w];
-            let mut raw = vec![false; w];
-            for (d, pair) in raw.iter_mut().zip(row.windows(2)) {
-                *d = pair[0] != pair[1];
-            }
-            dilate_row(&raw, hrow, r, r - 1);
-            if v + 1 < h {
-                let next = &labels[(v + 1) * w..(v + 2) * w];
-                for ((d, a), b) in raw.iter_mut().zip(row).zip(next) {
-                    *d = a != b;
-                }
-                dilate_row(&raw, vrow, r, r);
-            }
-        });
-    let mut out = vec![false; w * h];
-    out.par_chunks_mut(w).enumerate().for_each(|(v, dst)| {
-        for vn in v.saturating_sub(r)..=(v + r).min(h - 1) {
-            for (d, &s) in dst.iter_mut().zip(&hd[vn * w..(vn + 1) * w]) {
-                *d |= s;
-            }
-        }
-        for vn in v.saturating_sub(r)..=(v + r - 1).min(h - 1) {
-            for (d, &s) in dst.iter_mut().zip(&vd[vn * w..(vn + 1) * w]) {
-                *d |= s;
-            }
-        }
-    });
-    out
-}
-
-/// `dst[u]` = OR of `src[u - left ..= u + right]`, clipped to the row.
-fn dilate_row(src: &[bool], dst: &mut [bool], left: usize, right: usize) {
-    let w = src.len();
-    dst.fill(false);
-    // Offset +k: dst[u] |= src[u + k].
-    for k in 0..=right.min(w.saturating_sub(1)) {
-        for (d, &s) in dst[..w - k].iter_mut().zip(&src[k..]) {
-            *d |= s;
-        }
-    }
-    for k in 1..=left.min(w.saturating_sub(1)) {
-        for (d, &s) in dst[k..].iter_mut().zip(&src[..w - k]) {
-            *d |= s;
-        }
-    }
-}
-
-fn check_inputs(
+/// The image sizes of one camera's inputs: the depth image the depth sensor's, the label
+/// image the colour sensor's and consistent.
+pub(crate) fn check_images(
     camera: &RgbdCamera,
-    depth_points_m: &[Vec3],
-    origins: &[PointOrigin],
     depth_raw: &[u16],
     labels: &LabelImage,
 ) -> Result<(), ProjectError> {
     let name = || camera.name.clone();
-    if origins.len() != depth_points_m.len() {
-        return Err(ProjectError::SizeMismatch {
-            camera: name(),
-            what: "origins",
-            got: origins.len(),
-            want: depth_points_m.len(),
-        });
-    }
     let n_depth = camera.depth.num_pixels();
     if depth_raw.len() != n_depth {
         return Err(ProjectError::SizeMismatch {
@@ -475,12 +611,27 @@ fn check_inputs(
             want_h: camera.color.height,
         });
     }
-    labels
-        .validate()
-        .map_err(|cause| ProjectError::LabelImage {
+    labels.validate().map_err(|cause| ProjectError::LabelImage {
+        camera: name(),
+        cause,
+    })
+}
+
+fn check_points(
+    camera: &RgbdCamera,
+    depth_points_m: &[Vec3],
+    origins: &[PointOrigin],
+) -> Result<(), ProjectError> {
+    let name = || camera.name.clone();
+    if origins.len() != depth_points_m.len() {
+        return Err(ProjectError::SizeMismatch {
             camera: name(),
-            cause,
-        })?;
+            what: "origins",
+            got: origins.len(),
+            want: depth_points_m.len(),
+        });
+    }
+    let n_depth = camera.depth.num_pixels();
     if let Some(index) = origins.iter().position(|o| o.pixel as usize >= n_depth) {
         return Err(ProjectError::OriginOutside {
             camera: name(),
@@ -494,6 +645,157 @@ fn check_inputs(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// xorshift64*, seeded: the brute-force comparisons below are deterministic.
+    struct Rng(u64);
+
+    impl Rng {
+        fn below(&mut self, n: u64) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) % n
+        }
+    }
+
+    #[test]
+    fn zbuffer_is_the_nearest_point_within_the_radius() {
+        let mut rng = Rng(0x5EED_0001);
+        // One buffer for both radii: it must come back all zero.
+        let mut keys = Vec::new();
+        for r in [1, 2] {
+            let n = 400;
+            let hits = Hits {
+                u: (0..n)
+                    .map(|i| {
+                        if i % 17 == 0 {
+                            NO_HIT
+                        } else {
+                            10 + rng.below(30) as u32
+                        }
+                    })
+                    .collect(),
+                v: (0..n).map(|_| 5 + rng.below(20) as u32).collect(),
+                z_color_m: (0..n)
+                    .map(|_| 0.5 + rng.below(1000) as f32 / 250.0)
+                    .collect(),
+            };
+            let color = bodyseg_calib::Intrinsics {
+                width: 50,
+                height: 30,
+                fx: 1.0,
+                fy: 1.0,
+                cx: 0.0,
+                cy: 0.0,
+                distortion: [0.0; 5],
+            };
+            let zb = ZBuffer::splat(hits.view(), r, &color, &mut keys);
+            for i in 0..n {
+                let (u, v) = (hits.u[i], hits.v[i]);
+                if u == NO_HIT {
+                    continue;
+                }
+                let want = (0..n)
+                    .filter(|&j| {
+                        hits.u[j] != NO_HIT
+                            && hits.u[j].abs_diff(u) as usize <= r
+                            && hits.v[j].abs_diff(v) as usize <= r
+                    })
+                    .map(|j| hits.z_color_m[j])
+                    .fold(f32::INFINITY, f32::min);
+                assert_eq!(zb.at(u, v), want, "({u}, {v}) r {r}");
+            }
+            drop(zb);
+            assert!(keys.iter().all(|&k| k == 0), "r {r}: buffer not reset");
+        }
+    }
+
+    #[test]
+    fn label_change_tests_match_brute_force() {
+        let mut rng = Rng(0x5EED_0002);
+        let (w, h) = (61, 43);
+        // Blobs of a few labels: uniform blocks, borders, and blocks cut by the edges.
+        let mut image = vec![Label::BACKGROUND; w * h];
+        for _ in 0..12 {
+            let (cu, cv, rad) = (
+                rng.below(w as u64) as usize,
+                rng.below(h as u64) as usize,
+                2 + rng.below(9) as usize,
+            );
+            let l = Label::from_id(rng.below(3) as u8).expect("a class");
+            for v in cv.saturating_sub(rad)..(cv + rad).min(h) {
+                for u in cu.saturating_sub(rad)..(cu + rad).min(w) {
+                    image[v * w + u] = l;
+                }
+            }
+        }
+        let blocks = UniformBlocks::new(&image, w, h);
+        for r in [1, 2, 3, 5] {
+            for v in 0..h {
+                for u in 0..w {
+                    let own = image[v * w + u];
+                    let want = window(v * w + u, w, h, r).any(|n| image[n] != own);
+                    let exact = square_holds_other(&image, w, h, (u, v), r, own);
+                    assert_eq!(exact, want, "({u}, {v}) r {r}");
+                    // The block test never misses a change.
+                    assert!(
+                        blocks.may_hold_other(u, v, r, own) || !want,
+                        "({u}, {v}) r {r}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn edge_map_matches_the_per_pixel_test() {
+        let mut rng = Rng(0x5EED_0003);
+        let (w, h) = (37, 29);
+        let mut camera = RgbdCamera::new(
+            "e",
+            bodyseg_calib::Intrinsics {
+                width: w as u32,
+                height: h as u32,
+                fx: 30.0,
+                fy: 30.0,
+                cx: 18.0,
+                cy: 14.0,
+                distortion: [0.0; 5],
+            },
+            bodyseg_calib::Intrinsics {
+                width: 74,
+                height: 58,
+                fx: 60.0,
+                fy: 60.0,
+                cx: 37.0,
+                cy: 29.0,
+                distortion: [0.0; 5],
+            },
+        );
+        camera.depth_shift_mm = -300.0;
+        let lut = depth_lut(&camera);
+        // Depths from 0 (none) over values ≤ the shift (none) to far, with jumps.
+        let raw: Vec<u16> = (0..w * h)
+            .map(|_| match rng.below(10) {
+                0 => 0,
+                1 => 200,
+                2..=5 => 1000 + rng.below(40) as u16,
+                _ => 1500 + rng.below(400) as u16,
+            })
+            .collect();
+        for r in [1, 2] {
+            let got = edge_map(&raw, &lut, w, h, r, 0.05);
+            for p in 0..w * h {
+                let z = lut[usize::from(raw[p])];
+                let want = !z.is_nan()
+                    && window(p, w, h, r).any(|n| {
+                        let zn = lut[usize::from(raw[n])];
+                        !zn.is_nan() && (zn - z).abs() > 0.05 * z
+                    });
+                assert_eq!(got[p], want, "pixel {p} r {r}");
+            }
+        }
+    }
 
     #[test]
     fn window_is_clipped_and_excludes_the_centre() {

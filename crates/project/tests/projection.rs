@@ -657,3 +657,89 @@ fn project_frame_concatenates_cameras_in_world_frame() {
         .expect_err("one image for two cameras");
     assert!(matches!(err, ProjectError::CameraCount { got: 1, want: 2 }));
 }
+
+/// The fused back-projection + projection of `project_frame` against its definition
+/// (`back_project` into the depth frame, `project_labels`, `world_from_depth` on the f32
+/// depth points), bit for bit, with a stride, depth limits and a negative depth shift
+/// (raw values that give no depth), in both modes.
+#[test]
+fn project_frame_equals_back_project_then_project_labels() {
+    let mut cam = simple_camera();
+    cam.depth_shift_mm = -700.0;
+    cam.world_from_depth = Pose::from_rotation_translation(
+        [[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]],
+        [0.3, -1.2, 2.2],
+    )
+    .expect("a rotation");
+    let f = fixture(cam.clone(), &SIMPLE_SCENE);
+    // Some raw values at and below the shift: no depth.
+    let mut depth_raw = f.depth_raw.clone();
+    for (i, d) in depth_raw.iter_mut().enumerate() {
+        if i % 7 == 0 {
+            *d = (i % 3) as u16 * 350;
+        }
+    }
+    let rig = Rig {
+        cameras: vec![cam.clone()],
+    };
+    let images = [CameraImages {
+        depth_raw: &depth_raw,
+        labels: &f.labels,
+    }];
+    for (stride, depth_min_m, depth_max_m) in
+        [(1, 0.0, f64::INFINITY), (2, 0.5, 1.9), (3, 0.1, 0.9)]
+    {
+        for cfg in [ProjectConfig::naive(), ProjectConfig::default()] {
+            let opts = BackProjectOptions {
+                depth_min_m,
+                depth_max_m,
+                stride,
+                frame: CloudFrame::World,
+            };
+            let got = project_frame(&rig, &images, &opts, &cfg).expect("valid frame");
+            let depth_opts = BackProjectOptions {
+                frame: CloudFrame::Depth,
+                ..opts
+            };
+            let want = back_project(&depth_raw, &cam, 0, &depth_opts).expect("valid");
+            assert!(!want.points_m.is_empty());
+            assert_eq!(got.origins, want.origins, "stride {stride}");
+            let labels = project_labels(
+                &cam,
+                &want.points_m,
+                &want.origins,
+                &depth_raw,
+                &f.labels,
+                &cfg,
+            )
+            .expect("valid inputs");
+            assert_eq!(got.labels, labels, "stride {stride}, {:?}", cfg.mode);
+            for (g, p) in got.positions_m.iter().zip(&want.points_m) {
+                let w = cam
+                    .world_from_depth
+                    .transform_point(p.map(f64::from))
+                    .map(|c| c as f32);
+                assert_eq!(g.map(f32::to_bits), w.map(f32::to_bits));
+            }
+        }
+    }
+    // A depth image of the wrong size: the back-projection's error, as before fusing.
+    let short = [CameraImages {
+        depth_raw: &depth_raw[1..],
+        labels: &f.labels,
+    }];
+    let err = project_frame(
+        &rig,
+        &short,
+        &BackProjectOptions::default(),
+        &ProjectConfig::naive(),
+    )
+    .expect_err("wrong depth size");
+    assert!(
+        matches!(
+            err,
+            ProjectError::Calib(bodyseg_calib::CalibError::DepthSize { .. })
+        ),
+        "{err}"
+    );
+}
