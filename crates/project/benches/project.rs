@@ -5,7 +5,10 @@
 //! 1920×1080 label images made by splatting the scene's truth (box = two body parts,
 //! floor = background) into the colour image. Measures [`FrameProjector::project_frame`]
 //! (back-projection included, world-frame output) in naive and DSA mode on a 2-thread
-//! rayon pool (the budget's machine), and DSA on rayon's default pool.
+//! rayon pool (the budget's machine), and DSA on rayon's default pool; the `_reused`
+//! cases measure [`FrameProjector::project_frame_into`] with the output cloud of the
+//! previous frame reused, as a pipeline worker streaming frames does (no fresh ~12 MB
+//! allocation and page faults per frame).
 //! Elements = depth pixels (3 × 512 × 424).
 
 // criterion_group!/criterion_main! generate undocumented items.
@@ -193,6 +196,23 @@ fn bench(c: &mut Criterion) {
                             .project_frame(black_box(imgs), &opts, cfg)
                             .expect("ok")
                     })
+                });
+            },
+        );
+    }
+    for (name, cfg) in [("naive", &naive), ("dsa", &dsa)] {
+        let mut cloud = bodyseg_core::LabeledCloud::default();
+        group.bench_with_input(
+            BenchmarkId::new(format!("{name}_rayon_2_threads_reused"), &size),
+            &images,
+            |b, imgs| {
+                b.iter(|| {
+                    two.install(|| {
+                        projector
+                            .project_frame_into(black_box(imgs), &opts, cfg, &mut cloud)
+                            .expect("ok");
+                    });
+                    black_box(cloud.len())
                 });
             },
         );

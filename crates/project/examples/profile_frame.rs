@@ -7,7 +7,8 @@
 //! ```
 //!
 //! Arguments: mode (`naive` | `dsa`, default `dsa`), frames (default 1); `THREADS` sets
-//! the rayon pool (default 2), `DUMP=path` writes the last frame's labels, positions and
+//! the rayon pool (default 2), `REUSE=1` reuses the output cloud between frames
+//! ([`FrameProjector::project_frame_into`]), `DUMP=path` writes the last frame's labels, positions and
 //! origins (`path`, `path.pos`, `path.org`) to compare two builds bit for bit.
 
 use std::hint::black_box;
@@ -164,8 +165,14 @@ fn main() {
     // A checksum of the output, so that the work cannot be optimised away.
     let mut sum = 0usize;
     let t = std::time::Instant::now();
+    let reuse = std::env::var("REUSE").is_ok();
+    let mut cloud = bodyseg_core::LabeledCloud::default();
     for _ in 0..n {
-        let cloud = pool.install(|| run_frame(&projector, &images, &opts, &cfg));
+        if reuse {
+            pool.install(|| run_frame_into(&projector, &images, &opts, &cfg, &mut cloud));
+        } else {
+            cloud = pool.install(|| run_frame(&projector, &images, &opts, &cfg));
+        }
         sum += cloud.labels.iter().map(|l| l.id() as usize).sum::<usize>() + cloud.len();
         if let Ok(d) = std::env::var("DUMP") {
             let bytes: Vec<u8> = cloud.labels.iter().map(|l| l.id()).collect();
@@ -189,6 +196,18 @@ fn main() {
         "{mode}: {:.2} ms/frame, checksum {sum}",
         t.elapsed().as_secs_f64() * 1e3 / n as f64
     );
+}
+
+#[inline(never)]
+fn run_frame_into(
+    p: &FrameProjector,
+    images: &[CameraImages<'_>],
+    opts: &BackProjectOptions,
+    cfg: &ProjectConfig,
+    out: &mut bodyseg_core::LabeledCloud,
+) {
+    p.project_frame_into(black_box(images), opts, cfg, out)
+        .expect("ok")
 }
 
 #[inline(never)]

@@ -26,8 +26,9 @@ pub(crate) const POINTS_PER_CHUNK: usize = 8192;
 /// A point behind the colour camera or projecting outside the colour image is `unknown`
 /// in both modes. In `dsa` mode, in this order, from the nearest colour pixel's label:
 /// 1. *occlusion* — every point is splatted into a colour z-buffer (a square of
-///    `splat_radius_px`, keeping the nearest z); a point more than `occlusion_tol_m`
-///    behind the z-buffer at its pixel is `unknown`;
+///    `splat_radius_px`, keeping the nearest z); a point more than
+///    `occlusion_tol_m + occlusion_tol_ratio · z` behind the z-buffer's z at its pixel is
+///    `unknown`;
 /// 2. *depth edge* — a point with a neighbouring depth pixel (square of
 ///    `edge_radius_px`) whose depth differs by more than `edge_jump_ratio · z` is
 ///    `unknown` (neighbours without a measurement are not a jump);
@@ -160,7 +161,11 @@ pub(crate) fn apply_dsa(
             .zip(hits.z_color_m.par_chunks(chunk))
             .for_each(|(((out, hu), hv), hz)| {
                 for (((label, &u), &v), &z) in out.iter_mut().zip(hu).zip(hv).zip(hz) {
-                    if u != NO_HIT && f64::from(z) > f64::from(zb.at(u, v)) + cfg.occlusion_tol_m {
+                    if u != NO_HIT && {
+                        let nearest = f64::from(zb.at(u, v));
+                        f64::from(z)
+                            > nearest + cfg.occlusion_tol_m + cfg.occlusion_tol_ratio * nearest
+                    } {
                         *label = Label::UNKNOWN;
                     }
                 }

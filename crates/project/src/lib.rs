@@ -154,6 +154,36 @@ impl FrameProjector {
         opts: &BackProjectOptions,
         cfg: &ProjectConfig,
     ) -> Result<LabeledCloud, ProjectError> {
+        let mut out = LabeledCloud::default();
+        self.project_frame_into(images, opts, cfg, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`FrameProjector::project_frame`] into `out`, whose allocations are reused: a
+    /// caller that projects frame after frame (one cloud per worker) skips the
+    /// allocation and first-touch page faults of ~12 MB per 3-camera frame, about a
+    /// fifth of the DSA projection's time. On error `out` is left empty.
+    pub fn project_frame_into(
+        &self,
+        images: &[CameraImages<'_>],
+        opts: &BackProjectOptions,
+        cfg: &ProjectConfig,
+        out: &mut LabeledCloud,
+    ) -> Result<(), ProjectError> {
+        let result = self.fill_frame(images, opts, cfg, out);
+        if result.is_err() {
+            *out = LabeledCloud::default();
+        }
+        result
+    }
+
+    fn fill_frame(
+        &self,
+        images: &[CameraImages<'_>],
+        opts: &BackProjectOptions,
+        cfg: &ProjectConfig,
+        out: &mut LabeledCloud,
+    ) -> Result<(), ProjectError> {
         cfg.validate()?;
         opts.validate()?;
         if images.len() != self.cameras.len() {
@@ -228,18 +258,21 @@ impl FrameProjector {
         });
 
         let total: usize = chunks.iter().map(|c| c.len).sum();
-        let mut out = LabeledCloud {
-            positions_m: vec![[0.0; 3]; total],
-            labels: vec![Label::UNKNOWN; total],
-            colors: None,
-            origins: vec![
-                PointOrigin {
-                    camera: 0,
-                    pixel: 0
-                };
-                total
-            ],
-        };
+        // Every entry below `total` is overwritten by pass 2: a reused buffer is only
+        // truncated or grown, never cleared.
+        out.colors = None;
+        out.positions_m.truncate(total);
+        out.positions_m.resize(total, [0.0; 3]);
+        out.labels.truncate(total);
+        out.labels.resize(total, Label::UNKNOWN);
+        out.origins.truncate(total);
+        out.origins.resize(
+            total,
+            PointOrigin {
+                camera: 0,
+                pixel: 0,
+            },
+        );
         // Where the points land, for the DSA checks (naive mode needs only the labels).
         let dsa = cfg.mode == ProjectMode::Dsa;
         let mut fresh = None;
@@ -329,7 +362,7 @@ impl FrameProjector {
                     );
                 });
         }
-        Ok(out)
+        Ok(())
     }
 }
 
