@@ -115,3 +115,68 @@ fn reused_output_cloud_equals_a_fresh_one() {
         assert_eq!(fresh, reused, "frame {index}");
     }
 }
+
+/// With a back-projection stride of 2 the label-boundary vote still has neighbours (the
+/// points of the stride's grid): switching it off changes labels.
+#[test]
+fn label_boundary_vote_works_with_a_stride() {
+    use bodyseg_calib::BackProjectOptions;
+    use bodyseg_core::{Label, LabelImage};
+    use bodyseg_project::{CameraImages, FrameProjector};
+    let synth = Synth::new(preset("handover").expect("preset"), 5).expect("synth");
+    let rig = synth.written_rig();
+    let frame = synth.frame(1);
+    let labels: Vec<LabelImage> = rig
+        .cameras
+        .iter()
+        .zip(&frame.cameras)
+        .map(|(camera, c)| LabelImage {
+            width: camera.color.width,
+            height: camera.color.height,
+            labels: c
+                .parsing
+                .iter()
+                .map(|&l| Label::from_id(l).unwrap_or(Label::UNKNOWN))
+                .collect(),
+            probs: None,
+        })
+        .collect();
+    let images: Vec<CameraImages<'_>> = frame
+        .cameras
+        .iter()
+        .zip(&labels)
+        .map(|(c, labels)| CameraImages {
+            depth_raw: &c.depth_mm,
+            labels,
+        })
+        .collect();
+    let projector = FrameProjector::new(rig).expect("projector");
+    let opts = BackProjectOptions {
+        stride: 2,
+        ..BackProjectOptions::default()
+    };
+    let with = projector
+        .project_frame(&images, &opts, &ProjectConfig::default())
+        .expect("vote on");
+    let without = projector
+        .project_frame(
+            &images,
+            &opts,
+            &ProjectConfig {
+                label_boundary: false,
+                ..ProjectConfig::default()
+            },
+        )
+        .expect("vote off");
+    let changed = with
+        .labels
+        .iter()
+        .zip(&without.labels)
+        .filter(|(a, b)| a != b)
+        .count();
+    eprintln!(
+        "{changed} of {} points changed by the vote at stride 2",
+        with.len()
+    );
+    assert!(changed > 50, "{changed}");
+}

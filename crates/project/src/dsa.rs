@@ -38,8 +38,8 @@ pub(crate) const POINTS_PER_CHUNK: usize = 8192;
 ///    within `boundary_radius_px` takes the label held by strictly more of its labelled,
 ///    depth-consistent (`|Δz| ≤ edge_jump_ratio · z`) 8-neighbours in the depth image
 ///    than any other label; the vote reads the labels after steps 1–3, so it is one
-///    deterministic pass. Only direct neighbours vote: with a back-projection stride > 1
-///    they hold no points and the vote does nothing.
+///    deterministic pass. Here the neighbours are the adjacent depth pixels (points from
+///    every pixel); [`crate::FrameProjector`] uses the neighbours on its stride's grid.
 pub fn project_labels(
     camera: &RgbdCamera,
     depth_points_m: &[Vec3],
@@ -80,6 +80,7 @@ pub fn project_labels(
             depth_raw,
             labels,
             cfg,
+            1,
             &mut Vec::new(),
             &mut out,
         );
@@ -117,7 +118,8 @@ pub(crate) fn depth_lut(camera: &RgbdCamera) -> Box<DepthLut> {
 
 /// Turns the naive labels `out` of one camera's points into the DSA labels (steps 1–4 of
 /// [`project_labels`]); `hits` and `origins` are those points'. `lut` is
-/// [`depth_lut`] of `camera`.
+/// [`depth_lut`] of `camera`; `stride` is the back-projection's (points on every
+/// `stride`-th pixel and row): the vote's neighbours are the points of that grid.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn apply_dsa(
     camera: &RgbdCamera,
@@ -127,6 +129,7 @@ pub(crate) fn apply_dsa(
     depth_raw: &[u16],
     labels: &LabelImage,
     cfg: &ProjectConfig,
+    stride: usize,
     zkeys: &mut Vec<u32>,
     out: &mut [Label],
 ) {
@@ -230,8 +233,7 @@ pub(crate) fn apply_dsa(
                     o.pixel as usize,
                     &by_pixel,
                     (depth_raw, lut),
-                    depth_w,
-                    depth_h,
+                    (depth_w, depth_h, stride),
                     cfg.edge_jump_ratio,
                 ) && best != own_class
                 {
@@ -249,8 +251,7 @@ fn vote(
     pixel: usize,
     by_pixel: &[Label],
     (depth_raw, lut): (&[u16], &DepthLut),
-    w: usize,
-    h: usize,
+    (w, h, step): (usize, usize, usize),
     ratio: f64,
 ) -> Option<Class> {
     let depth_m = |p: usize| lut[usize::from(depth_raw[p])];
@@ -260,7 +261,7 @@ fn vote(
     }
     let tol = ratio * z;
     let mut counts = [0u32; NUM_CLASSES];
-    for n in window(pixel, w, h, 1) {
+    for n in grid_neighbours(pixel, w, h, step) {
         // NaN (no depth) fails the comparison.
         if let Some(c) = by_pixel[n].class()
             && (depth_m(n) - z).abs() <= tol
@@ -389,15 +390,18 @@ fn square_holds_other(
     (v0..=v1).any(|vn| image[vn * w + u0..=vn * w + u1].iter().any(|&l| l != own))
 }
 
-/// The pixels of the square of radius `r` around `pixel` (row-major index in a `w × h`
-/// image), clipped to the image, without `pixel` itself.
-fn window(pixel: usize, w: usize, h: usize, r: usize) -> impl Iterator<Item = usize> {
+/// The 8 neighbours of `pixel` on a grid of spacing `step` (row-major index in a `w × h`
+/// image), clipped to the image.
+fn grid_neighbours(pixel: usize, w: usize, h: usize, step: usize) -> impl Iterator<Item = usize> {
     let (u, v) = (pixel % w, pixel / w);
-    let (u0, u1) = (u.saturating_sub(r), (u + r).min(w - 1));
-    let (v0, v1) = (v.saturating_sub(r), (v + r).min(h - 1));
-    (v0..=v1)
-        .flat_map(move |vn| (u0..=u1).map(move |un| vn * w + un))
-        .filter(move |&p| p != pixel)
+    let offsets = [-1i64, 0, 1];
+    offsets.into_iter().flat_map(move |dv| {
+        offsets.into_iter().filter_map(move |du| {
+            let (un, vn) = (u as i64 + du * step as i64, v as i64 + dv * step as i64);
+            let inside = (du, dv) != (0, 0) && un >= 0 && vn >= 0 && un < w as i64 && vn < h as i64;
+            inside.then(|| vn as usize * w + un as usize)
+        })
+    })
 }
 
 /// Whether `f` holds for one row segment of the square of radius `r` around `pixel`
@@ -651,6 +655,18 @@ fn check_points(
 mod tests {
     use super::*;
 
+    /// The pixels of the square of radius `r` around `pixel` (row-major index in a
+    /// `w × h` image), clipped to the image, without `pixel` itself: the brute-force
+    /// reference of the window tests.
+    fn window(pixel: usize, w: usize, h: usize, r: usize) -> impl Iterator<Item = usize> {
+        let (u, v) = (pixel % w, pixel / w);
+        let (u0, u1) = (u.saturating_sub(r), (u + r).min(w - 1));
+        let (v0, v1) = (v.saturating_sub(r), (v + r).min(h - 1));
+        (v0..=v1)
+            .flat_map(move |vn| (u0..=u1).map(move |un| vn * w + un))
+            .filter(move |&p| p != pixel)
+    }
+
     /// xorshift64*, seeded: the brute-force comparisons below are deterministic.
     struct Rng(u64);
 
@@ -805,14 +821,20 @@ mod tests {
     #[test]
     fn window_is_clipped_and_excludes_the_centre() {
         // 4×3 image; pixel (0, 0) has 3 neighbours, (1, 1) has 8.
-        let mut corner: Vec<usize> = window(0, 4, 3, 1).collect();
+        let mut corner: Vec<usize> = grid_neighbours(0, 4, 3, 1).collect();
         corner.sort_unstable();
         assert_eq!(corner, [1, 4, 5]);
-        let mut inner: Vec<usize> = window(5, 4, 3, 1).collect();
+        let mut inner: Vec<usize> = grid_neighbours(5, 4, 3, 1).collect();
         inner.sort_unstable();
         assert_eq!(inner, [0, 1, 2, 4, 6, 8, 9, 10]);
-        // Radius 2 from the last pixel (3, 2): columns 1..=3, rows 0..=2, minus itself.
-        assert_eq!(window(11, 4, 3, 2).count(), 8);
+        // Step 2 on a 5×5 image from the centre (2, 2): the corners and edge midpoints.
+        let mut coarse: Vec<usize> = grid_neighbours(12, 5, 5, 2).collect();
+        coarse.sort_unstable();
+        assert_eq!(coarse, [0, 2, 4, 10, 14, 20, 22, 24]);
+        // From (1, 1) with step 2 only the points inside the image remain.
+        let mut clipped: Vec<usize> = grid_neighbours(6, 5, 5, 2).collect();
+        clipped.sort_unstable();
+        assert_eq!(clipped, [8, 16, 18]);
         // The same squares as row segments, centre included.
         let rows = |pixel, r| {
             let mut out = Vec::new();

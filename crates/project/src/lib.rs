@@ -357,6 +357,7 @@ impl FrameProjector {
                         images[c].depth_raw,
                         images[c].labels,
                         cfg,
+                        stride,
                         zkeys,
                         labels_out,
                     );
