@@ -13,6 +13,9 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 out="${1:-demo_out}"
 
+echo "==> ONNX Runtime (once)"
+scripts/setup_onnxruntime.sh
+
 echo "==> building (release)"
 cargo build --release --quiet --bin bodyseg
 cargo build --release --quiet -p bodyseg-pipeline --example demo_scene
@@ -30,5 +33,11 @@ echo "==> bodyseg eval"
 # The same report as markdown: --merge of a single report converts it.
 "$bodyseg" eval --quiet --merge "$out/report.json" --format md --out "$out/report.md"
 cat "$out/report.md"
+
+echo
+echo "==> bodyseg parse: 2D body parts of a synthetic frame with the bundled model"
+"$bodyseg" synth --preset handover --frames 1 --seed 1 --no-preview --force --out "$out/rec"
+"$bodyseg" parse --recording "$out/rec" --frame 000000 --out "$out/parsed"
+echo "Label images and previews: $out/parsed/<camera>/parsing{,_preview}/000000.png"
 echo
 echo "Files are in $out/"

@@ -39,6 +39,9 @@ fi
 cargo --version
 rustc --version
 
+step "ONNX Runtime (scripts/setup_onnxruntime.sh; once, into .deps/onnxruntime/)"
+scripts/setup_onnxruntime.sh
+
 step "cargo fmt --all --check"
 cargo fmt --all --check
 
@@ -47,6 +50,13 @@ cargo clippy --workspace --all-targets --all-features -- -D warnings
 
 step "python3 scripts/check_boundaries.py"
 python3 scripts/check_boundaries.py
+
+step "python3 scripts/export_schp_onnx.py --dry-run (when torch, onnx and onnxruntime are installed)"
+if python3 -c "import torch, onnx, onnxruntime" >/dev/null 2>&1; then
+    python3 scripts/export_schp_onnx.py --dry-run 2>&1 | grep -v -i warning
+else
+    echo "skipped: pip install torch onnx onnxruntime to check the SCHP export script"
+fi
 
 step "cargo test --workspace --all-features --release"
 log=$(mktemp)

@@ -56,3 +56,22 @@ fn eval_help() {
         ],
     );
 }
+
+#[test]
+fn parse_help() {
+    help(
+        &["parse", "--help"],
+        &[
+            "--recording",
+            "--frame",
+            "--model",
+            "--recorded",
+            "--threads",
+            "--out",
+            "ORT_DYLIB_PATH",
+            "scripts/setup_onnxruntime.sh",
+            "bodyseg_parser_small.onnx",
+            "Examples:",
+        ],
+    );
+}

@@ -49,13 +49,20 @@ fn handover_recording_loads_and_the_seed_fixes_every_byte() {
     let rig = read_rig_toml(&rec.join("rig.toml")).expect("rig.toml");
     assert_eq!(rig.cameras.len(), 3);
     for camera in &rig.cameras {
-        let depth = read_depth_png(&rec.join(&camera.name).join("depth/000019.png")).expect("depth");
+        let depth =
+            read_depth_png(&rec.join(&camera.name).join("depth/000019.png")).expect("depth");
         assert_eq!((depth.width, depth.height), (512, 424));
         let parsing =
             read_label_png(&rec.join(&camera.name).join("parsing/000019.png")).expect("parsing");
         assert_eq!((parsing.width, parsing.height), (960, 540));
         for kind in ["color", "labels", "depth_labels", "depth_person"] {
-            assert!(rec.join(&camera.name).join(kind).join("000000.png").is_file(), "{kind}");
+            assert!(
+                rec.join(&camera.name)
+                    .join(kind)
+                    .join("000000.png")
+                    .is_file(),
+                "{kind}"
+            );
         }
     }
     let boxes = read_boxes(&rec.join("boxes/000007.json")).expect("boxes");
@@ -66,7 +73,15 @@ fn handover_recording_loads_and_the_seed_fixes_every_byte() {
     // …and the pipeline projects a frame of it.
     let out = bodyseg(
         d,
-        &["project", "--recording", "rec", "--frame", "000003", "--out", "p.ply"],
+        &[
+            "project",
+            "--recording",
+            "rec",
+            "--frame",
+            "000003",
+            "--out",
+            "p.ply",
+        ],
     );
     assert_ok(&out, "project");
     let cloud = read_ply(&d.join("p.ply")).expect("projected cloud");
@@ -79,7 +94,10 @@ fn handover_recording_loads_and_the_seed_fixes_every_byte() {
     assert_ok(&synth("2", "other"), "synth other seed");
     let other = files(&d.join("other"));
     assert_ne!(other["boxes/000000.json"], first["boxes/000000.json"]);
-    assert_ne!(other["cam0/depth/000000.png"], first["cam0/depth/000000.png"]);
+    assert_ne!(
+        other["cam0/depth/000000.png"],
+        first["cam0/depth/000000.png"]
+    );
 }
 
 #[test]
@@ -91,7 +109,10 @@ fn existing_output_is_kept_without_force_and_bad_scenes_name_the_field() {
     let out = bodyseg(d, &["synth", "--frames", "1", "--out", "rec"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("already exists"), "{}", stderr(&out));
-    assert_eq!(std::fs::read_to_string(d.join("rec/keep.txt")).expect("kept"), "mine");
+    assert_eq!(
+        std::fs::read_to_string(d.join("rec/keep.txt")).expect("kept"),
+        "mine"
+    );
 
     for (scene, field) in [
         ("[people]\ncount = 2\nbogus = 1\n", "bogus"),
@@ -99,10 +120,18 @@ fn existing_output_is_kept_without_force_and_bad_scenes_name_the_field() {
         ("[rig]\ncameras = 0\n", "rig.cameras"),
     ] {
         std::fs::write(d.join("bad.toml"), scene).expect("write");
-        let out = bodyseg(d, &["synth", "--scene", "bad.toml", "--frames", "1", "--out", "x"]);
+        let out = bodyseg(
+            d,
+            &[
+                "synth", "--scene", "bad.toml", "--frames", "1", "--out", "x",
+            ],
+        );
         assert!(!out.status.success(), "{scene}");
         let err = stderr(&out);
-        assert!(err.contains(field) && err.contains("bad.toml"), "{scene}: {err}");
+        assert!(
+            err.contains(field) && err.contains("bad.toml"),
+            "{scene}: {err}"
+        );
         assert_eq!(err.lines().count(), 1, "one error line: {err}");
         assert!(!d.join("x").exists(), "no output left behind");
     }

@@ -104,3 +104,17 @@ pub fn files_in(dir: &Path) -> Vec<String> {
 pub fn tempdir() -> tempfile::TempDir {
     tempfile::tempdir().expect("create temp dir")
 }
+
+/// The finished run of `bodyseg ARGS` in `dir` with extra environment variables.
+pub fn bodyseg_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_bodyseg"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("RUST_LOG")
+        .envs(env.iter().copied())
+        .output();
+    match out {
+        Ok(out) => out,
+        Err(e) => panic!("cannot run bodyseg {args:?}: {e}"),
+    }
+}

@@ -3,11 +3,12 @@
 
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
-    DEFAULT_PREDICTION_NAME, EvalOptions, NamedPrediction, PipelineConfig, ProjectMode,
-    ProjectOptions, RefineOptions, RefineOverrides, ReportFormat, RigFormat, RigImportOptions,
-    SceneSource, SynthOptions,
+    DEFAULT_PREDICTION_NAME, EvalOptions, NamedPrediction, ParseOptions, ParseSource,
+    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
+    RigFormat, RigImportOptions, SceneSource, SynthOptions,
 };
 use bodyseg_refine::Steps;
+use bodyseg_synth::ChessboardConfig;
 use clap::{ArgAction, Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
@@ -27,7 +28,9 @@ each command.";
 const MAIN_EXAMPLES: &str = "\
 Examples:
   bodyseg synth --preset handover --frames 20 --seed 1 --out rec
+  bodyseg parse --recording rec --frame 000012 --out parsed
   bodyseg project --recording rec --frame 000012 --out frame.ply
+  bodyseg boxes --cloud frame.ply --out frame_boxes.json
   bodyseg refine --cloud frame.ply --boxes frame_boxes.json --out refined.ply
   bodyseg eval --pred refined.ply --gt truth.ply
   bodyseg rig import --from iai_kinect2 calib/cam0 calib/cam1 --out rig.toml
@@ -73,10 +76,18 @@ pub enum Command {
     /// and simulated parser predictions
     #[command(long_about = SYNTH_LONG_ABOUT, after_help = SYNTH_EXAMPLES)]
     Synth(SynthArgs),
+    /// Label the colour images of one recorded frame with body parts (2D human parsing,
+    /// ONNX model) and write label images and previews
+    #[command(long_about = PARSE_LONG_ABOUT, after_help = PARSE_EXAMPLES)]
+    Parse(ParseArgs),
     /// Label the depth points of one recorded frame with its 2D body-part labels (naive or
     /// DSA-aware projection) and write one world-frame cloud
     #[command(long_about = PROJECT_LONG_ABOUT, after_help = PROJECT_EXAMPLES)]
     Project(ProjectArgs),
+    /// Find the person boxes of a point cloud (PLY or PCD) or a recorded frame: one oriented
+    /// box per person, from body labels or from geometry alone
+    #[command(long_about = BOXES_LONG_ABOUT, after_help = BOXES_EXAMPLES)]
+    Boxes(BoxesArgs),
     /// Repair the body-part labels of a point cloud (clustering refinement: M, R, N steps)
     #[command(long_about = REFINE_LONG_ABOUT, after_help = REFINE_EXAMPLES)]
     Refine(RefineArgs),
@@ -115,7 +126,8 @@ const SYNTH_EXAMPLES: &str = "\
 Examples:
   bodyseg synth --preset handover --frames 20 --seed 1 --out rec
   bodyseg synth --preset robot_cell --frames 50 --set dsa.color_from_depth_rotation_deg=0.5 --out rec_calib_err
-  bodyseg synth --scene my_scene.toml --frames 5 --out rec --force";
+  bodyseg synth --scene my_scene.toml --frames 5 --out rec --force
+  bodyseg synth --chessboard --views 20 --out calib_views";
 
 /// `bodyseg synth`.
 #[derive(Debug, Args)]
@@ -157,6 +169,16 @@ pub struct SynthArgs {
     /// Do not write preview/<frame>.png
     #[arg(long)]
     pub no_preview: bool,
+
+    /// Write chessboard calibration views for the scene's rig instead of people: per
+    /// camera hand-held board views (colour and IR at the same instant) and one view of a
+    /// board lying on the floor, whose frame is the world frame of OUT/rig_true.toml
+    #[arg(long)]
+    pub chessboard: bool,
+
+    /// Hand-held chessboard views per camera (with --chessboard)
+    #[arg(long, default_value_t = 15, requires = "chessboard", value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub views: u32,
 }
 
 impl SynthArgs {
@@ -173,7 +195,109 @@ impl SynthArgs {
             out: self.out.clone(),
             force: self.force,
             previews: !self.no_preview,
+            chessboard: self.chessboard.then(|| ChessboardConfig {
+                views: self.views,
+                ..ChessboardConfig::default()
+            }),
         }
+    }
+}
+
+const PARSE_LONG_ABOUT: &str = "\
+Run 2D human parsing on every camera of one frame: each colour image is mapped into the \
+network's square input (SCHP's affine pre-processing: aspect kept, centred, black padding), \
+all views go through the ONNX model in one batch, and the logits are warped back to the \
+image, where each pixel takes the most probable class (shared/ALGORITHM.md §2).
+
+Model: --model FILE.onnx with its sidecar FILE.json (input_size, channel_order, mean, std, \
+class_names, output_stride, align_corners), or parsing.model of the configuration; default \
+the bundled models/bodyseg_parser_small.onnx (trained on bodyseg synth data by \
+scripts/train_parser.py). SCHP checkpoints convert with scripts/export_schp_onnx.py. \
+--recorded uses the recording's own parsing/ images instead (e.g. synth's simulated \
+predictions), to preview them the same way.
+
+ONNX Runtime is loaded at run time from parsing.runtime_library, else ORT_DYLIB_PATH, else \
+.deps/onnxruntime/libonnxruntime.so, which scripts/setup_onnxruntime.sh fetches once.
+
+Reads, in the recording folder REC (shared/FORMATS.md): REC/rig.toml and for each camera \
+REC/<camera>/color/<FRAME>.png (or .jpg). Writes into OUT: <camera>/parsing/<FRAME>.png \
+(8-bit class ids, the recording layout's parsing/ images, usable by `bodyseg project`), \
+<camera>/parsing_preview/<FRAME>.png (class palette over the dimmed image) and \
+parse.config.resolved.toml. Nothing is written when a view fails.
+
+Configuration: built-in defaults (configs/default.toml, section [parsing]) < --config FILE \
+< --model, --threads.";
+
+const PARSE_EXAMPLES: &str = "\
+Examples:
+  scripts/setup_onnxruntime.sh            # once: the ONNX Runtime library
+  bodyseg synth --preset handover --frames 5 --seed 1 --out rec
+  bodyseg parse --recording rec --frame 000002 --out parsed
+  # An SCHP model exported by scripts/export_schp_onnx.py, 4 threads:
+  bodyseg parse --recording rec --frame 000002 --model schp_ppp.onnx --threads 4 --out parsed
+  # Preview the recording's own (simulated) predictions:
+  bodyseg parse --recording rec --frame 000002 --recorded --out recorded";
+
+/// `bodyseg parse`.
+#[derive(Debug, Args)]
+pub struct ParseArgs {
+    /// Recording folder: rig.toml and per camera <camera>/color/
+    #[arg(long, value_name = "REC")]
+    pub recording: PathBuf,
+
+    /// Frame to parse: the file stem of its images (e.g. 000012 for color/000012.png)
+    #[arg(long, value_name = "STEM")]
+    pub frame: String,
+
+    /// ONNX model (its sidecar: the same path with .json) [default: parsing.model of the
+    /// configuration, else models/bodyseg_parser_small.onnx]
+    #[arg(long, value_name = "FILE.onnx", conflicts_with = "recorded")]
+    pub model: Option<PathBuf>,
+
+    /// Use the recording's parsing/ label images instead of a model
+    #[arg(long)]
+    pub recorded: bool,
+
+    /// ONNX Runtime threads, 0 = one per core [default: parsing.threads, 2]
+    #[arg(long, value_name = "N")]
+    pub threads: Option<u32>,
+
+    /// Configuration file (TOML, section [parsing]); keys left out keep the defaults of
+    /// configs/default.toml
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+
+    /// Output folder (created if missing): <camera>/parsing/<FRAME>.png and
+    /// <camera>/parsing_preview/<FRAME>.png
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+impl ParseArgs {
+    /// The pipeline's options: defaults < --config < --model, --threads, validated.
+    pub fn options(&self) -> Result<ParseOptions> {
+        let mut config = match &self.config {
+            Some(path) => PipelineConfig::load(path)?,
+            None => PipelineConfig::default(),
+        };
+        if let Some(model) = &self.model {
+            config.parsing.model = model.display().to_string();
+        }
+        if let Some(threads) = self.threads {
+            config.parsing.threads = threads;
+        }
+        config.validate()?;
+        Ok(ParseOptions {
+            recording: self.recording.clone(),
+            frame: self.frame.clone(),
+            config,
+            source: if self.recorded {
+                ParseSource::Recorded
+            } else {
+                ParseSource::Model
+            },
+            out: self.out.clone(),
+        })
     }
 }
 
@@ -277,6 +401,123 @@ impl ProjectArgs {
             config: self.config()?,
             out: self.out.clone(),
             ascii: self.ascii,
+            write_resolved_config: true,
+        })
+    }
+}
+
+const BOXES_LONG_ABOUT: &str = "\
+Find one oriented box per person (centre, half extents, yaw about z; from the floor up), \
+the boxes `bodyseg refine` works in (shared/ALGORITHM.md §4).
+
+Modes: `labels` (default: body-labelled points are voxelized and clustered; a cluster with \
+two or more separate heads, or torsos, is split between them, so two people touching hands \
+get two boxes; clusters too small, too low or too wide are dropped), `geometry` (no labels \
+needed: the ground plane is found by RANSAC and removed, the rest clustered and split on \
+head-height maxima with a body column below them, in the spirit of Munaro et al.'s \
+ground-based people detector) or `file` (read REC/boxes/<FRAME>.json, e.g. from an external \
+tracker).
+
+Reads: a cloud (--cloud: PLY as written by `bodyseg project`, or PCL's PCD: ascii, binary \
+or binary_compressed, organised or not, fields x y z [rgb|rgba] [label]; world frame, \
+metres, z up, floor at z = 0 for labels mode), or one frame of a recording (--recording, \
+--frame: projected as `bodyseg project` does). Writes: the boxes (--out, JSON: {\"frame\", \
+\"boxes\": [{\"id\", \"center_m\", \"half_extents_m\", \"yaw_rad\"}]}), beside it the exact \
+configuration used (--out b.json writes b.config.resolved.toml) and, with --preview, a top \
+view of the cloud (class colours) with the boxes drawn. Nothing is written when the \
+command fails.
+
+Configuration: built-in defaults (configs/default.toml, section [boxes]; [backproject] and \
+[project] for a recording) < --config FILE < --mode.";
+
+const BOXES_EXAMPLES: &str = "\
+Examples:
+  # Boxes of a projected frame, from its body labels, with a preview:
+  bodyseg project --recording rec --frame 000012 --out frame.ply
+  bodyseg boxes --cloud frame.ply --out frame_boxes.json --preview frame_top.png
+  # A PCL cloud without labels:
+  bodyseg boxes --cloud scene.pcd --mode geometry --out boxes.json
+  # Project and find boxes in one go; or read the recording's own boxes/000012.json:
+  bodyseg boxes --recording rec --frame 000012 --out frame_boxes.json
+  bodyseg boxes --recording rec --frame 000012 --mode file --out frame_boxes.json";
+
+/// `bodyseg boxes`.
+#[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("input").required(true).args(["cloud", "recording"])))]
+pub struct BoxesArgs {
+    /// Point cloud to find people in: .ply (bodyseg's labelled PLY) or .pcd (PCL)
+    #[arg(long, value_name = "CLOUD.ply|CLOUD.pcd")]
+    pub cloud: Option<PathBuf>,
+
+    /// Recording folder (instead of --cloud): the frame is projected first, or in file
+    /// mode its boxes/<FRAME>.json read
+    #[arg(long, value_name = "REC", requires = "frame")]
+    pub recording: Option<PathBuf>,
+
+    /// Frame of the recording: the file stem of its images (e.g. 000012)
+    #[arg(long, value_name = "STEM", requires = "recording")]
+    pub frame: Option<String>,
+
+    /// Where boxes come from: labels (body labels), geometry (no labels) or file
+    /// (REC/boxes/) [default: boxes.mode of the configuration, labels]
+    #[arg(long, value_enum)]
+    pub mode: Option<BoxesMode>,
+
+    /// Configuration file (TOML, section [boxes]); keys left out keep the defaults of
+    /// configs/default.toml
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+
+    /// Where to write the boxes (JSON); an existing file is replaced only on success
+    #[arg(long, value_name = "OUT.json")]
+    pub out: PathBuf,
+
+    /// Also write a top view of the cloud with the boxes drawn (PNG)
+    #[arg(long, value_name = "TOP.png")]
+    pub preview: Option<PathBuf>,
+}
+
+/// `bodyseg boxes --mode`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BoxesMode {
+    /// Body-labelled points clustered and split on heads
+    Labels,
+    /// Ground plane removed, the rest clustered and split on head-height maxima
+    Geometry,
+    /// Read REC/boxes/<FRAME>.json
+    File,
+}
+
+impl BoxesArgs {
+    /// The resolved configuration: defaults < --config < --mode, validated.
+    pub fn config(&self) -> Result<PipelineConfig> {
+        let mut config = match &self.config {
+            Some(path) => PipelineConfig::load(path)?,
+            None => PipelineConfig::default(),
+        };
+        config.apply_boxes_mode(self.mode.map(|m| match m {
+            BoxesMode::Labels => bodyseg_pipeline::BoxMode::Labels,
+            BoxesMode::Geometry => bodyseg_pipeline::BoxMode::Geometry,
+            BoxesMode::File => bodyseg_pipeline::BoxMode::File,
+        }));
+        Ok(config)
+    }
+
+    /// The pipeline's options for `boxes_file`.
+    pub fn options(&self) -> Result<bodyseg_pipeline::BoxesOptions> {
+        let input = match (&self.cloud, &self.recording, &self.frame) {
+            (Some(cloud), _, _) => bodyseg_pipeline::BoxesInput::Cloud(cloud.clone()),
+            (None, Some(recording), Some(frame)) => bodyseg_pipeline::BoxesInput::Recording {
+                recording: recording.clone(),
+                frame: frame.clone(),
+            },
+            _ => bail!("give --cloud, or --recording and --frame"),
+        };
+        Ok(bodyseg_pipeline::BoxesOptions {
+            input,
+            config: self.config()?,
+            out: self.out.clone(),
+            preview: self.preview.clone(),
             write_resolved_config: true,
         })
     }
@@ -661,6 +902,30 @@ mod tests {
             ])
             .is_err()
         );
+    }
+
+    #[test]
+    fn boxes_takes_a_cloud_or_a_recording_frame() {
+        let parse = |args: &[&str]| {
+            let mut all = vec!["bodyseg", "boxes", "--out", "b.json"];
+            all.extend_from_slice(args);
+            Cli::try_parse_from(all)
+        };
+        let Ok(Cli {
+            command: Command::Boxes(b),
+            ..
+        }) = parse(&["--cloud", "c.pcd", "--mode", "geometry"])
+        else {
+            panic!("parsed as boxes");
+        };
+        let o = b.options().expect("valid");
+        assert_eq!(o.config.boxes.mode, bodyseg_pipeline::BoxMode::Geometry);
+        assert_eq!(o.input, bodyseg_pipeline::BoxesInput::Cloud("c.pcd".into()));
+        assert!(parse(&["--recording", "rec", "--frame", "000001"]).is_ok());
+        // An input is required; --recording needs --frame; not both inputs.
+        assert!(parse(&[]).is_err());
+        assert!(parse(&["--recording", "rec"]).is_err());
+        assert!(parse(&["--cloud", "c.ply", "--recording", "rec", "--frame", "1"]).is_err());
     }
 
     #[test]

@@ -7,9 +7,9 @@
 mod args;
 
 use anyhow::Result;
-use args::{Cli, Command, EvalArgs, ProjectArgs, RefineArgs, RigCommand, SynthArgs};
+use args::{Cli, Command, EvalArgs, ParseArgs, ProjectArgs, RefineArgs, RigCommand, SynthArgs};
 use bodyseg_pipeline::{
-    Stage, describe_rig, eval_files, import_rig, merge_reports, project_file, read_rig,
+    Stage, describe_rig, eval_files, import_rig, merge_reports, parse_file, project_file, read_rig,
     refine_file, render_report, synth_recording, write_text,
 };
 use clap::Parser;
@@ -56,7 +56,9 @@ fn init_logging(verbose: u8) {
 fn run(cli: &Cli) -> Result<()> {
     let stages = match &cli.command {
         Command::Synth(args) => synth(args, cli.quiet)?,
+        Command::Parse(args) => parse(args)?,
         Command::Project(args) => project(args)?,
+        Command::Boxes(args) => boxes(args)?,
         Command::Refine(args) => refine(args)?,
         Command::Eval(args) => eval(args)?,
         Command::Rig(cmd) => rig(cmd)?,
@@ -87,8 +89,18 @@ fn synth(args: &SynthArgs, quiet: bool) -> Result<Vec<Stage>> {
     Ok(summary.stages)
 }
 
+fn parse(args: &ParseArgs) -> Result<Vec<Stage>> {
+    let summary = parse_file(&args.options()?)?;
+    Ok(summary.stages)
+}
+
 fn project(args: &ProjectArgs) -> Result<Vec<Stage>> {
     let summary = project_file(&args.options()?)?;
+    Ok(summary.stages)
+}
+
+fn boxes(args: &args::BoxesArgs) -> Result<Vec<Stage>> {
+    let summary = bodyseg_pipeline::boxes_file(&args.options()?)?;
     Ok(summary.stages)
 }
 

@@ -1,5 +1,5 @@
-//! Per-pixel label maps of a colour image (the output of 2D human parsing, ALGORITHM.md §2,
-//! and the input of label projection, §3).
+//! Colour images (the input of 2D human parsing, ALGORITHM.md §2) and per-pixel label maps
+//! of a colour image (its output, and the input of label projection, §3).
 
 use crate::class::Label;
 
@@ -134,6 +134,49 @@ impl LabelImage {
     }
 }
 
+/// An 8-bit RGB colour image (the input of 2D human parsing, ALGORITHM.md §2), row-major,
+/// 3 bytes per pixel in R, G, B order.
+///
+/// Pixel (u, v) = (column, row); integer coordinates are pixel centres.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RgbImage {
+    /// Width, pixels (the colour sensor's).
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// `width * height * 3` bytes: R, G, B of pixel `v * width + u` at `3 * (v * width + u)`.
+    pub rgb: Vec<u8>,
+}
+
+impl RgbImage {
+    /// An RGB image; errors when `rgb` does not hold `width * height * 3` bytes.
+    pub fn new(width: u32, height: u32, rgb: Vec<u8>) -> Result<RgbImage, ImageError> {
+        let want = width as usize * height as usize * 3;
+        if rgb.len() != want {
+            return Err(ImageError::SizeMismatch {
+                field: "rgb bytes",
+                got: rgb.len(),
+                want,
+            });
+        }
+        Ok(RgbImage { width, height, rgb })
+    }
+
+    /// Number of pixels, `width * height`.
+    pub fn num_pixels(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// The R, G, B bytes of pixel (u, v), `None` outside the image.
+    pub fn pixel(&self, u: u32, v: u32) -> Option<[u8; 3]> {
+        if u >= self.width || v >= self.height {
+            return None;
+        }
+        let i = 3 * (v as usize * self.width as usize + u as usize);
+        self.rgb.get(i..i + 3).and_then(|p| p.try_into().ok())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -153,6 +196,15 @@ mod tests {
         image.probs = Some(vec![0.5; 6]);
         assert_eq!(image.prob(1, 1), Some(0.5));
         assert_eq!(image.validate(), Ok(()));
+    }
+
+    #[test]
+    fn rgb_image_checks_its_length_and_reads_pixels() {
+        let image = RgbImage::new(2, 1, vec![1, 2, 3, 4, 5, 6]).expect("2x1x3 bytes");
+        assert_eq!(image.pixel(1, 0), Some([4, 5, 6]));
+        assert_eq!(image.pixel(2, 0), None);
+        let err = RgbImage::new(2, 2, vec![0; 11]).expect_err("11 ≠ 12");
+        assert!(err.to_string().contains("11 rgb bytes"), "{err}");
     }
 
     #[test]

@@ -19,5 +19,5 @@ pub mod person;
 
 pub use class::{Class, Label, NUM_CLASSES};
 pub use cloud::{CloudError, LabeledCloud, PointOrigin, RefinedCloud};
-pub use image::{ImageError, LabelImage};
+pub use image::{ImageError, LabelImage, RgbImage};
 pub use person::{BoxTest, PersonBox, PersonBoxes};

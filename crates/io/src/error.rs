@@ -147,6 +147,56 @@ pub enum IoError {
         /// The file.
         path: PathBuf,
     },
+    /// A PCD header line could not be understood, or a required header line or field is
+    /// missing.
+    #[error("{}: PCD header line {line}: {reason}", .path.display())]
+    PcdHeader {
+        /// 1-based line number in the file (the line after the header when a line is
+        /// missing).
+        line: usize,
+        /// What is wrong with it.
+        reason: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// The PCD `DATA` line names a storage other than `ascii`, `binary` or
+    /// `binary_compressed`.
+    #[error(
+        "{}: unsupported PCD DATA kind '{kind}' (expected ascii, binary or binary_compressed)",
+        .path.display()
+    )]
+    PcdDataKind {
+        /// The kind as written in the header.
+        kind: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// The PCD header's `WIDTH × HEIGHT` is not its `POINTS`.
+    #[error(
+        "{}: PCD header says WIDTH {width} x HEIGHT {height} = {product} but POINTS {points}",
+        .path.display()
+    )]
+    PcdPointCount {
+        /// `WIDTH`.
+        width: u64,
+        /// `HEIGHT`.
+        height: u64,
+        /// Their product.
+        product: u64,
+        /// `POINTS`.
+        points: u64,
+        /// The file.
+        path: PathBuf,
+    },
+    /// The PCD data is shorter than the header declares (or, compressed, does not
+    /// decompress to the declared size).
+    #[error("{}: truncated PCD data: {reason}", .path.display())]
+    PcdTruncated {
+        /// What was expected and what was found.
+        reason: String,
+        /// The file.
+        path: PathBuf,
+    },
     /// A cloud handed to a writer is inconsistent (array lengths differ, non-finite
     /// coordinate); nothing was written.
     #[error("{}: refusing to write an invalid cloud: {cause}", .path.display())]
@@ -203,6 +253,14 @@ pub enum IoError {
         got: String,
         /// The format it must have (`16-bit millimetres`).
         expected: &'static str,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A colour image cannot be decoded (not a PNG or JPEG, truncated, corrupt).
+    #[error("{}: cannot decode colour image: {cause}", .path.display())]
+    Decode {
+        /// What the image decoder said.
+        cause: String,
         /// The file.
         path: PathBuf,
     },

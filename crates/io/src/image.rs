@@ -1,10 +1,11 @@
 //! Depth and label PNGs of a recording (FORMATS.md, "Recording"):
 //! `<camera>/depth/<stem>.png` (16-bit grayscale, raw depth units, millimetres for Kinect
 //! data, 0 = no measurement) and `<camera>/parsing/<stem>.png` (8-bit grayscale class ids,
-//! 255 = not labelled).
+//! 255 = not labelled). Colour images `<camera>/color/<stem>.png|.jpg` (8-bit RGB) are read
+//! with [`read_rgb_image`].
 
 use crate::{IoError, write_atomic};
-use bodyseg_core::{Label, LabelImage};
+use bodyseg_core::{Label, LabelImage, RgbImage};
 use image::codecs::png::PngEncoder;
 use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
 use std::io::Cursor;
@@ -122,6 +123,34 @@ pub fn read_label_png(path: &Path) -> Result<LabelImage, IoError> {
         cause: e.to_string(),
         path: path.to_path_buf(),
     })
+}
+
+/// Reads a colour image, PNG or JPEG (the format is taken from the file's content, not its
+/// extension), as 8-bit RGB: grayscale is replicated to the three channels, alpha is
+/// dropped, 16-bit samples are scaled to 8 bits.
+///
+/// # Errors
+/// [`IoError::Read`] when the file cannot be read; [`IoError::Decode`] when it is not a
+/// decodable PNG or JPEG (`x.jpg: cannot decode colour image: ...`).
+pub fn read_rgb_image(path: &Path) -> Result<RgbImage, IoError> {
+    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
+        cause,
+        path: path.to_path_buf(),
+    })?;
+    let decode_err = |cause: String| IoError::Decode {
+        cause,
+        path: path.to_path_buf(),
+    };
+    let format = image::guess_format(&bytes).map_err(|e| decode_err(e.to_string()))?;
+    if !matches!(format, ImageFormat::Png | ImageFormat::Jpeg) {
+        return Err(decode_err(format!(
+            "{format:?} images are not supported (PNG or JPEG)"
+        )));
+    }
+    let decoded = image::load(Cursor::new(bytes), format).map_err(|e| decode_err(e.to_string()))?;
+    let rgb = decoded.into_rgb8();
+    let (width, height) = (rgb.width(), rgb.height());
+    RgbImage::new(width, height, rgb.into_raw()).map_err(|e| decode_err(e.to_string()))
 }
 
 /// Encodes `bytes` (native-endian samples) as a grayscale PNG and writes it atomically.
@@ -250,6 +279,51 @@ mod tests {
         let image = LabelImage::new(3, 2, labels).expect("6 labels");
         write_label_png(&path, &image).expect("write");
         assert_eq!(read_label_png(&path).expect("read"), image);
+    }
+
+    #[test]
+    fn rgb_png_round_trips_and_junk_is_a_decode_error() {
+        let dir = tempdir();
+        let path = dir.path().join("c.png");
+        let rgb: Vec<u8> = (0..18u8).map(|i| i.wrapping_mul(37)).collect();
+        write_rgb_png(&path, 3, 2, &rgb).expect("write");
+        let image = read_rgb_image(&path).expect("read");
+        assert_eq!((image.width, image.height), (3, 2));
+        assert_eq!(image.rgb, rgb);
+
+        // A grayscale PNG reads as RGB with equal channels.
+        let gray = dir.path().join("g.png");
+        write_gray8_png(&gray, 2, 1, &[10, 200]).expect("write");
+        let image = read_rgb_image(&gray).expect("read gray");
+        assert_eq!(image.rgb, vec![10, 10, 10, 200, 200, 200]);
+
+        let junk = dir.path().join("junk.jpg");
+        std::fs::write(&junk, b"not an image at all").expect("write junk");
+        let e = read_rgb_image(&junk).expect_err("junk").to_string();
+        assert!(
+            e.starts_with(&format!("{}: cannot decode colour image: ", junk.display())),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn jpeg_decodes_to_rgb() {
+        let dir = tempdir();
+        let path = dir.path().join("c.jpg");
+        let rgb = vec![128u8; 8 * 8 * 3];
+        let mut encoded = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new(&mut encoded)
+            .write_image(&rgb, 8, 8, ExtendedColorType::Rgb8)
+            .expect("encode JPEG");
+        std::fs::write(&path, &encoded).expect("write");
+        let image = read_rgb_image(&path).expect("read JPEG");
+        assert_eq!((image.width, image.height), (8, 8));
+        // JPEG is lossy: a flat grey stays within a few levels.
+        assert!(
+            image.rgb.iter().all(|&b| b.abs_diff(128) <= 2),
+            "{:?}",
+            &image.rgb[..6]
+        );
     }
 
     #[test]

@@ -4,9 +4,11 @@
 //! that cross stage boundaries so any intermediate can be stored and inspected:
 //! [`LabeledCloud`](bodyseg_core::LabeledCloud) ⇄ PLY ([`read_ply`], [`write_ply`]) and
 //! [`PersonBoxes`](bodyseg_core::PersonBoxes) ⇄ JSON ([`read_boxes`], [`write_boxes`]).
+//! PCL's `.pcd` files (ascii, binary, binary_compressed) read into a cloud ([`read_pcd`]).
 //! A recording's images: depth PNGs ⇄ [`DepthImage`] ([`read_depth_png`],
 //! [`write_depth_png`]) and label PNGs ⇄ [`LabelImage`](bodyseg_core::LabelImage)
-//! ([`read_label_png`], [`write_label_png`]).
+//! ([`read_label_png`], [`write_label_png`]); colour PNG/JPEG → [`RgbImage`](bodyseg_core::RgbImage)
+//! ([`read_rgb_image`]). ONNX models are read as bytes ([`read_bytes`]).
 //! Other crates' text files (configurations, reports) go through [`read_text`] and
 //! [`write_bytes_atomic`].
 //! Layouts are those of FORMATS.md. Readers are tolerant (unknown PLY properties and
@@ -37,6 +39,7 @@ mod boxes;
 mod error;
 mod folder;
 mod image;
+mod pcd;
 mod ply;
 mod text;
 
@@ -45,8 +48,9 @@ pub use boxes::{parse_boxes, read_boxes, write_boxes};
 pub use error::IoError;
 pub use folder::{create_folder, discard_folder, publish_folder, require_folder, staging_folder};
 pub use image::{
-    DepthImage, read_depth_png, read_label_png, write_depth_png, write_gray8_png, write_label_png,
-    write_rgb_png,
+    DepthImage, read_depth_png, read_label_png, read_rgb_image, write_depth_png, write_gray8_png,
+    write_label_png, write_rgb_png,
 };
+pub use pcd::{parse_pcd, read_pcd};
 pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};
-pub use text::read_text;
+pub use text::{first_existing_file, read_bytes, read_text};

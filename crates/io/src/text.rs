@@ -1,5 +1,5 @@
-//! Plain UTF-8 text files (configurations, reports): bodyseg-io reads them so that no
-//! other crate touches the file system.
+//! Plain UTF-8 text files (configurations, reports) and opaque binary files (ONNX models):
+//! bodyseg-io reads them so that no other crate touches the file system.
 
 use crate::IoError;
 use std::path::Path;
@@ -28,4 +28,21 @@ pub fn read_text(path: &Path) -> Result<String, IoError> {
             path: path.to_path_buf(),
         }
     })
+}
+
+/// Reads a whole file as bytes (an ONNX model), without interpreting them.
+///
+/// # Errors
+/// [`IoError::Read`] naming the file when it cannot be read.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, IoError> {
+    std::fs::read(path).map_err(|cause| IoError::Read {
+        cause,
+        path: path.to_path_buf(),
+    })
+}
+
+/// The first of `candidates` that is an existing file (following links), in order; `None`
+/// when there is none. Used to find optional files such as the ONNX Runtime library.
+pub fn first_existing_file(candidates: &[std::path::PathBuf]) -> Option<std::path::PathBuf> {
+    candidates.iter().find(|p| p.is_file()).cloned()
 }

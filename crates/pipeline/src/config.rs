@@ -2,13 +2,19 @@
 
 use anyhow::{Context, Result, anyhow, bail};
 use bodyseg_calib::{BackProjectOptions, CloudFrame};
+use bodyseg_parsing::ParsingConfig;
+use bodyseg_people::{BoxMode, BoxesConfig};
 use bodyseg_project::{ProjectConfig, ProjectMode};
 use bodyseg_refine::{RefineConfig, RefineError, Steps};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// Most ONNX Runtime threads `parsing.threads` accepts: far beyond any machine's cores, low
+/// enough to catch a typo before ONNX Runtime tries to start them.
+pub const MAX_PARSING_THREADS: u32 = 1024;
+
 /// The whole configuration, one section per stage (`[backproject]`, `[project]`,
-/// `[refine]`, and later `[people]`, `[parsing]`, ...). It only nests the stages' own configurations: each stage
+/// `[boxes]`, `[refine]`, and later `[parsing]`, ...). It only nests the stages' own configurations: each stage
 /// crate documents its fields, units and defaults.
 ///
 /// Precedence: built-in defaults ([`PipelineConfig::default`], equal to
@@ -22,8 +28,12 @@ pub struct PipelineConfig {
     pub backproject: BackProjectConfig,
     /// The 2D → 3D label projection (`[project]`, bodyseg-project's [`ProjectConfig`]).
     pub project: ProjectConfig,
+    /// The person boxes (`[boxes]`, bodyseg-people's [`BoxesConfig`]).
+    pub boxes: BoxesConfig,
     /// The clustering refinement (`[refine]`).
     pub refine: RefineConfig,
+    /// 2D human parsing (`[parsing]`, bodyseg-parsing's [`ParsingConfig`]).
+    pub parsing: ParsingConfig,
 }
 
 /// Which depth pixels become points (`[backproject]`): the serializable part of
@@ -141,7 +151,14 @@ impl PipelineConfig {
     pub fn validate(&self) -> Result<()> {
         self.backproject.validate()?;
         self.project.validate()?;
+        self.boxes.validate()?;
         self.refine.validate()?;
+        if self.parsing.threads > MAX_PARSING_THREADS {
+            bail!(
+                "parsing.threads must be in 0..={MAX_PARSING_THREADS} (0 = one per core), got {}",
+                self.parsing.threads
+            );
+        }
         Ok(())
     }
 
@@ -149,6 +166,13 @@ impl PipelineConfig {
     pub fn apply_project_mode(&mut self, mode: Option<ProjectMode>) {
         if let Some(mode) = mode {
             self.project.mode = mode;
+        }
+    }
+
+    /// Applies `--mode` over `boxes.mode` (`None` keeps it).
+    pub fn apply_boxes_mode(&mut self, mode: Option<BoxMode>) {
+        if let Some(mode) = mode {
+            self.boxes.mode = mode;
         }
     }
 
@@ -347,6 +371,26 @@ mod tests {
     }
 
     #[test]
+    fn boxes_section_is_read_and_validated_naming_the_field() {
+        let c = parse("[boxes]\nmode = \"geometry\"\nperson_gap_m = 0.2\n").expect("valid");
+        assert_eq!(c.boxes.mode, BoxMode::Geometry);
+        assert_eq!(c.boxes.person_gap_m, 0.2);
+        let e = format!("{:#}", parse("[boxes]\nvoxel_m = 0\n").expect_err("error"));
+        assert_eq!(
+            e,
+            "c.toml: boxes.voxel_m must be a finite number > 0, got 0"
+        );
+        let e = format!("{:#}", parse("[boxes]\ngap = 1\n").expect_err("error"));
+        assert!(
+            e.starts_with("c.toml: line 2: unknown key `boxes.gap`"),
+            "{e}"
+        );
+        let mut c = PipelineConfig::default();
+        c.apply_boxes_mode(Some(BoxMode::File));
+        assert_eq!(c.boxes.mode, BoxMode::File);
+    }
+
+    #[test]
     fn resolved_toml_reads_back_to_the_same_config() {
         let c = PipelineConfig {
             refine: RefineConfig {
@@ -358,6 +402,16 @@ mod tests {
             backproject: BackProjectConfig {
                 depth_max_m: 4.5,
                 stride: 2,
+                ..Default::default()
+            },
+            boxes: BoxesConfig {
+                mode: BoxMode::Geometry,
+                voxel_m: 0.03,
+                ..Default::default()
+            },
+            parsing: bodyseg_parsing::ParsingConfig {
+                model: "m.onnx".into(),
+                threads: 4,
                 ..Default::default()
             },
         };

@@ -5,7 +5,9 @@
 //! order and writes the outputs:
 //!
 //! ```text
+//! parse_file:    recording frame (rig.toml, colour images) → bodyseg_parsing::Segmenter → label PNGs + previews
 //! project_file:  recording frame (rig.toml, depth + parsing PNGs) → bodyseg_project::project_frame → labelled PLY
+//! boxes_file:    cloud PLY/PCD or recording frame → bodyseg_people::find_boxes → boxes JSON (+ preview PNG)
 //! refine_file:   cloud PLY + boxes JSON → bodyseg_refine::refine → refined PLY (+ resolved config)
 //! eval_files:    predicted PLY(s) + ground-truth PLY → bodyseg_eval::match_clouds → Report
 //! merge_reports: report JSON files → Report::merge → Report
@@ -25,9 +27,12 @@
 //!   `configs/default.toml`) < configuration file < command-line flags.
 //! - Units are those of the stages: metres, radians; times are wall-clock.
 
+mod boxes;
+mod boxes_study;
 mod config;
 mod eval;
 mod fs;
+mod parse;
 mod project;
 mod projection_study;
 mod refine;
@@ -35,18 +40,29 @@ mod rig;
 mod stage;
 mod synth;
 
+pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
+pub use boxes::{
+    BoxesInput, BoxesOptions, BoxesSummary, boxes_file, boxes_path, read_cloud, top_view,
+};
+pub use boxes_study::{BoxStats, FrameMatch, MATCH_IOU, box_stats, match_boxes};
 pub use config::{BackProjectConfig, PipelineConfig, RefineOverrides};
 pub use eval::{
     DEFAULT_PREDICTION_NAME, EvalOptions, EvalSummary, NamedPrediction, ReportFormat, eval_files,
     merge_reports, render_report,
 };
 pub use fs::write_text;
+pub use parse::{
+    BUNDLED_MODEL, LOCAL_RUNTIME_LIBRARY, ParseOptions, ParseSource, ParseSummary,
+    RUNTIME_LIBRARY_ENV, color_path, load_segmenter, palette_preview, parse_file, resolve_model,
+    resolve_runtime_library,
+};
 pub use project::{ProjectOptions, ProjectSummary, depth_path, parsing_path, project_file};
-pub use projection_study::{ProjectionStats, projection_stats};
+pub use projection_study::{ProjectionStats, camera_images, parsing_images, projection_stats};
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
 pub use stage::Stage;
 pub use synth::{
-    SceneSource, SynthOptions, SynthSummary, load_scene, synth_recording, write_frame,
+    SceneSource, SynthOptions, SynthSummary, load_scene, synth_chessboard, synth_recording,
+    write_frame,
 };

@@ -7,7 +7,7 @@ use crate::refine::resolved_config_path;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
-use bodyseg_core::LabelImage;
+use bodyseg_core::{LabelImage, LabeledCloud};
 use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
 use bodyseg_project::{CameraImages, ProjectMode};
 use std::path::{Path, PathBuf};
@@ -105,25 +105,16 @@ fn read_camera(rig: &Rig, index: usize, opts: &ProjectOptions) -> Result<CameraF
 }
 
 /// Checks that a frame stem names a file, not a path.
-fn check_frame(frame: &str) -> Result<()> {
+pub(crate) fn check_frame(frame: &str) -> Result<()> {
     if frame.is_empty() || frame == "." || frame == ".." || frame.contains(['/', '\\']) {
         bail!("frame {frame:?}: give the file stem of a frame (e.g. 000012), not a path");
     }
     Ok(())
 }
 
-/// Projects the labels of one frame of a recording onto its depth points
-/// ([`bodyseg_project::project_frame`]) and writes the labelled world-frame cloud (PLY,
-/// FORMATS.md): cameras in rig order, pixels row-major, every back-projected point kept
-/// (those no label reaches are `unknown`).
-///
-/// # Errors
-/// The frame stem is a path; `rig.toml` cannot be read or is invalid; a camera folder of
-/// the rig is missing (the error names the folder); a depth or parsing PNG is missing,
-/// not a PNG, of the wrong pixel format (an 8-bit depth PNG) or of a size other than the
-/// rig's sensor (the error names the file and both sizes); writing fails. Nothing is
-/// written unless every earlier step succeeded.
-pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
+/// The read and project stages of [`project_file`] (also `bodyseg boxes --recording`):
+/// the rig, the labelled cloud and the two stages' records.
+pub(crate) fn read_and_project(opts: &ProjectOptions) -> Result<(Rig, LabeledCloud, Vec<Stage>)> {
     check_frame(&opts.frame)?;
     let cfg = &opts.config;
     let rig_path = opts.recording.join("rig.toml");
@@ -157,12 +148,6 @@ pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
             .with_context(|| format!("{}: frame {}", opts.recording.display(), opts.frame))
     })?;
     let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
-    let mut points_per_camera = vec![0; rig.cameras.len()];
-    for o in &cloud.origins {
-        if let Some(n) = points_per_camera.get_mut(usize::from(o.camera)) {
-            *n += 1;
-        }
-    }
     let mode = cfg.project.mode;
     let mode_name = match mode {
         ProjectMode::Naive => "naive",
@@ -178,6 +163,31 @@ pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
         ),
     ));
 
+    Ok((rig, cloud, stages))
+}
+
+/// Projects the labels of one frame of a recording onto its depth points
+/// ([`bodyseg_project::project_frame`]) and writes the labelled world-frame cloud (PLY,
+/// FORMATS.md): cameras in rig order, pixels row-major, every back-projected point kept
+/// (those no label reaches are `unknown`).
+///
+/// # Errors
+/// The frame stem is a path; `rig.toml` cannot be read or is invalid; a camera folder of
+/// the rig is missing (the error names the folder); a depth or parsing PNG is missing,
+/// not a PNG, of the wrong pixel format (an 8-bit depth PNG) or of a size other than the
+/// rig's sensor (the error names the file and both sizes); writing fails. Nothing is
+/// written unless every earlier step succeeded.
+pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
+    let cfg = &opts.config;
+    let (rig, cloud, mut stages) = read_and_project(opts)?;
+    let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
+    let mut points_per_camera = vec![0; rig.cameras.len()];
+    for o in &cloud.origins {
+        if let Some(n) = points_per_camera.get_mut(usize::from(o.camera)) {
+            *n += 1;
+        }
+    }
+    let mode = cfg.project.mode;
     let ply = PlyWriteOptions {
         format: if opts.ascii {
             PlyFormat::Ascii

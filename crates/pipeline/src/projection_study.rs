@@ -3,9 +3,10 @@
 
 use anyhow::Result;
 use bodyseg_calib::BackProjectOptions;
+use bodyseg_calib::Rig;
 use bodyseg_core::{Label, LabelImage};
 use bodyseg_project::{CameraImages, FrameProjector, ProjectConfig};
-use bodyseg_synth::{NO_SURFACE, Synth};
+use bodyseg_synth::{NO_SURFACE, Synth, SynthFrame};
 
 /// Counts of one projection configuration over some frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -73,30 +74,8 @@ pub fn projection_stats(
     let mut stats = vec![ProjectionStats::default(); configs.len()];
     for &index in frames {
         let frame = synth.frame(index);
-        let label_images: Vec<LabelImage> = rig
-            .cameras
-            .iter()
-            .zip(&frame.cameras)
-            .map(|(camera, images)| LabelImage {
-                width: camera.color.width,
-                height: camera.color.height,
-                labels: images
-                    .parsing
-                    .iter()
-                    .map(|&l| Label::from_id(l).unwrap_or(Label::UNKNOWN))
-                    .collect(),
-                probs: None,
-            })
-            .collect();
-        let images: Vec<CameraImages<'_>> = frame
-            .cameras
-            .iter()
-            .zip(&label_images)
-            .map(|(c, labels)| CameraImages {
-                depth_raw: &c.depth_mm,
-                labels,
-            })
-            .collect();
+        let label_images = parsing_images(rig, &frame);
+        let images = camera_images(&frame, &label_images);
         for (cfg, s) in configs.iter().zip(&mut stats) {
             let cloud = projector.project_frame(&images, &BackProjectOptions::default(), cfg)?;
             for (label, origin) in cloud.labels.iter().zip(&cloud.origins) {
@@ -119,4 +98,36 @@ pub fn projection_stats(
         }
     }
     Ok(stats)
+}
+
+/// The simulated parser's label images of a synthetic frame (its `parsing`), one per
+/// camera of `rig` (the synth's written rig); ids that are not classes become unknown.
+pub fn parsing_images(rig: &Rig, frame: &SynthFrame) -> Vec<LabelImage> {
+    rig.cameras
+        .iter()
+        .zip(&frame.cameras)
+        .map(|(camera, images)| LabelImage {
+            width: camera.color.width,
+            height: camera.color.height,
+            labels: images
+                .parsing
+                .iter()
+                .map(|&l| Label::from_id(l).unwrap_or(Label::UNKNOWN))
+                .collect(),
+            probs: None,
+        })
+        .collect()
+}
+
+/// The projector's input for a synthetic frame: its depth images and `labels`.
+pub fn camera_images<'a>(frame: &'a SynthFrame, labels: &'a [LabelImage]) -> Vec<CameraImages<'a>> {
+    frame
+        .cameras
+        .iter()
+        .zip(labels)
+        .map(|(c, labels)| CameraImages {
+            depth_raw: &c.depth_mm,
+            labels,
+        })
+        .collect()
 }

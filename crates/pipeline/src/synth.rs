@@ -12,7 +12,9 @@ use bodyseg_io::{
     DepthImage, discard_folder, publish_folder, staging_folder, write_boxes, write_depth_png,
     write_gray8_png, write_rgb_png,
 };
-use bodyseg_synth::{SceneConfig, Synth, SynthFrame, preset, preview};
+use bodyseg_synth::{
+    ChessboardConfig, SceneConfig, Synth, SynthFrame, chessboard_set, preset, preview,
+};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -44,6 +46,9 @@ pub struct SynthOptions {
     pub force: bool,
     /// Write `preview/<stem>.png` per frame.
     pub previews: bool,
+    /// Instead of people, write chessboard calibration views for the scene's rig
+    /// ([`synth_chessboard`]).
+    pub chessboard: Option<ChessboardConfig>,
 }
 
 /// What [`synth_recording`] did.
@@ -130,6 +135,9 @@ pub fn synth_recording(
     options: &SynthOptions,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<SynthSummary> {
+    if let Some(board) = &options.chessboard {
+        return synth_chessboard(options, board);
+    }
     let start = Instant::now();
     let scene = load_scene(&options.scene, &options.overrides)?;
     let synth = Synth::new(scene.clone(), options.seed)?;
@@ -206,21 +214,130 @@ pub fn synth_recording(
         ));
         Ok(())
     })();
-    if let Err(e) = result {
-        discard_folder(&staging);
-        return Err(e);
-    }
     let t = Instant::now();
-    publish_folder(&staging, &options.out, options.force)?;
-    stages.push(Stage::new(
-        "write",
-        t.elapsed(),
-        options.out.display().to_string(),
-    ));
+    stages.push(finish_staged(result, &staging, options, t)?);
     Ok(SynthSummary {
         frames: options.frames,
         cameras: synth.true_rig().cameras.len(),
         scene,
         stages,
     })
+}
+
+/// Writes a chessboard calibration set for the rig of `options`' scene into
+/// `options.out` (staged, then moved into place):
+///
+/// ```text
+/// OUT/board.toml               the boards (inner corners, square sizes) and conventions
+/// OUT/rig_true.toml            the true rig; its world frame is the floor board's frame
+/// OUT/<cam>/color/<NNNNNN>.png hand-held board views, colour sensor
+/// OUT/<cam>/ir/<NNNNNN>.png    the same instants, IR (depth) sensor, 8-bit grey
+/// OUT/<cam>/board_poses.json   true depth_from_board of each view
+/// OUT/floor/<cam>/color.png    the floor board seen by every camera at once
+/// OUT/floor/<cam>/ir.png
+/// ```
+pub fn synth_chessboard(options: &SynthOptions, board: &ChessboardConfig) -> Result<SynthSummary> {
+    let start = Instant::now();
+    let scene = load_scene(&options.scene, &options.overrides)?;
+    let set = chessboard_set(&scene.rig, board, options.seed)?;
+    let mut stages = vec![Stage::new(
+        "render",
+        start.elapsed(),
+        format!(
+            "{} hand-held views per camera, {}",
+            board.views,
+            plural(set.rig.cameras.len(), "camera", "cameras")
+        ),
+    )];
+    if options.out.exists() && !options.force {
+        anyhow::bail!(
+            "{}: already exists (use --force to replace it)",
+            options.out.display()
+        );
+    }
+    let t = Instant::now();
+    let staging = staging_folder(&options.out)?;
+    let result = (|| -> Result<()> {
+        write_rig_toml(&set.rig, &staging.join("rig_true.toml"))?;
+        write_text(
+            &staging.join("board.toml"),
+            &format!(
+                "# bodyseg synth --chessboard: the calibration boards of this set (seed {}).\n\
+                 # Object points: inner corner (i, j) at (i*square_m, j*square_m, 0), z = x cross y.\n\
+                 # The floor board's frame is the world frame of rig_true.toml (z up).\n\
+                 inner_corners = [{}, {}]\nsquare_m = {}\nfloor_square_m = {}\n",
+                options.seed,
+                board.inner_corners[0],
+                board.inner_corners[1],
+                board.square_m,
+                board.floor_square_m
+            ),
+        )?;
+        for (c, camera) in set.rig.cameras.iter().enumerate() {
+            let dir = staging.join(&camera.name);
+            for kind in ["color", "ir"] {
+                bodyseg_io::create_folder(&dir.join(kind))?;
+            }
+            let floor = staging.join("floor").join(&camera.name);
+            bodyseg_io::create_folder(&floor)?;
+            let (cw, ch) = (camera.color.width, camera.color.height);
+            let (dw, dh) = (camera.depth.width, camera.depth.height);
+            let mut poses = Vec::new();
+            for (k, view) in set.views.iter().filter(|v| v.camera == c).enumerate() {
+                let stem = format!("{k:06}");
+                write_rgb_png(
+                    &dir.join("color").join(format!("{stem}.png")),
+                    cw,
+                    ch,
+                    &view.images.color,
+                )?;
+                write_gray8_png(
+                    &dir.join("ir").join(format!("{stem}.png")),
+                    dw,
+                    dh,
+                    &view.images.ir,
+                )?;
+                poses.push(format!(
+                    "  {{\"view\": \"{stem}\", \"rotation\": {:?}, \"translation_m\": {:?}}}",
+                    view.depth_from_board.rotation(),
+                    view.depth_from_board.translation_m()
+                ));
+            }
+            write_text(
+                &dir.join("board_poses.json"),
+                &format!("[\n{}\n]\n", poses.join(",\n")),
+            )?;
+            let images = &set.floor[c];
+            write_rgb_png(&floor.join("color.png"), cw, ch, &images.color)?;
+            write_gray8_png(&floor.join("ir.png"), dw, dh, &images.ir)?;
+        }
+        Ok(())
+    })();
+    stages.push(finish_staged(result, &staging, options, t)?);
+    Ok(SynthSummary {
+        frames: board.views as usize,
+        cameras: set.rig.cameras.len(),
+        scene,
+        stages,
+    })
+}
+
+/// Moves a staged output into place when `result` is Ok (else discards it and returns the
+/// error); the stage line of the move, timed from `since`.
+fn finish_staged(
+    result: Result<()>,
+    staging: &Path,
+    options: &SynthOptions,
+    since: Instant,
+) -> Result<Stage> {
+    if let Err(e) = result {
+        discard_folder(staging);
+        return Err(e);
+    }
+    publish_folder(staging, &options.out, options.force)?;
+    Ok(Stage::new(
+        "write",
+        since.elapsed(),
+        options.out.display().to_string(),
+    ))
 }

@@ -3,7 +3,7 @@
 //! the exact per-depth-pixel truth, and more than naive projection does; with a
 //! calibration error it still makes fewer mistakes than naive.
 
-use bodyseg_pipeline::projection_stats;
+use bodyseg_pipeline::{camera_images, parsing_images, projection_stats};
 use bodyseg_project::ProjectConfig;
 use bodyseg_synth::{ParsingErrorsConfig, Synth, preset};
 
@@ -69,8 +69,8 @@ fn with_calibration_error_dsa_still_makes_fewer_mistakes() {
 #[test]
 fn reused_output_cloud_equals_a_fresh_one() {
     use bodyseg_calib::BackProjectOptions;
-    use bodyseg_core::{Label, LabelImage, LabeledCloud};
-    use bodyseg_project::{CameraImages, FrameProjector};
+    use bodyseg_core::LabeledCloud;
+    use bodyseg_project::FrameProjector;
     let synth = synth("robot_cell", false);
     let rig = synth.written_rig();
     let projector = FrameProjector::new(rig).expect("projector");
@@ -81,30 +81,8 @@ fn reused_output_cloud_equals_a_fresh_one() {
         (3, ProjectConfig::default()),
     ] {
         let frame = synth.frame(index);
-        let labels: Vec<LabelImage> = rig
-            .cameras
-            .iter()
-            .zip(&frame.cameras)
-            .map(|(camera, c)| LabelImage {
-                width: camera.color.width,
-                height: camera.color.height,
-                labels: c
-                    .parsing
-                    .iter()
-                    .map(|&l| Label::from_id(l).unwrap_or(Label::UNKNOWN))
-                    .collect(),
-                probs: None,
-            })
-            .collect();
-        let images: Vec<CameraImages<'_>> = frame
-            .cameras
-            .iter()
-            .zip(&labels)
-            .map(|(c, labels)| CameraImages {
-                depth_raw: &c.depth_mm,
-                labels,
-            })
-            .collect();
+        let labels = parsing_images(rig, &frame);
+        let images = camera_images(&frame, &labels);
         let opts = BackProjectOptions::default();
         let fresh = projector
             .project_frame(&images, &opts, &cfg)
@@ -121,35 +99,12 @@ fn reused_output_cloud_equals_a_fresh_one() {
 #[test]
 fn label_boundary_vote_works_with_a_stride() {
     use bodyseg_calib::BackProjectOptions;
-    use bodyseg_core::{Label, LabelImage};
-    use bodyseg_project::{CameraImages, FrameProjector};
+    use bodyseg_project::FrameProjector;
     let synth = Synth::new(preset("handover").expect("preset"), 5).expect("synth");
     let rig = synth.written_rig();
     let frame = synth.frame(1);
-    let labels: Vec<LabelImage> = rig
-        .cameras
-        .iter()
-        .zip(&frame.cameras)
-        .map(|(camera, c)| LabelImage {
-            width: camera.color.width,
-            height: camera.color.height,
-            labels: c
-                .parsing
-                .iter()
-                .map(|&l| Label::from_id(l).unwrap_or(Label::UNKNOWN))
-                .collect(),
-            probs: None,
-        })
-        .collect();
-    let images: Vec<CameraImages<'_>> = frame
-        .cameras
-        .iter()
-        .zip(&labels)
-        .map(|(c, labels)| CameraImages {
-            depth_raw: &c.depth_mm,
-            labels,
-        })
-        .collect();
+    let labels = parsing_images(rig, &frame);
+    let images = camera_images(&frame, &labels);
     let projector = FrameProjector::new(rig).expect("projector");
     let opts = BackProjectOptions {
         stride: 2,

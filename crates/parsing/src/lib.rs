@@ -1,0 +1,39 @@
+//! bodyseg-parsing: 2D human parsing (ALGORITHM.md §2).
+//!
+//! Place in the pipeline: the first stage. Colour images of one frame
+//! ([`RgbImage`](bodyseg_core::RgbImage), one per camera) → one
+//! [`LabelImage`](bodyseg_core::LabelImage) per view (class per pixel with the
+//! probability of that class), the input of label projection (bodyseg-project).
+//!
+//! - [`Segmenter`]: the trait every parser implements.
+//! - [`OnnxSegmenter`]: SCHP-compatible networks in ONNX, run by ONNX Runtime, which is
+//!   loaded at run time from a shared library ([`load_runtime`]); the model's sidecar JSON
+//!   is a [`ModelSpec`]. Pre- and post-processing are SCHP's ([`transform`]).
+//! - [`RecordedSegmenter`]: label images computed earlier (a recording's `parsing/`).
+//!
+//! This crate does no file I/O: model bytes, sidecar text and images come from the
+//! caller (bodyseg-pipeline reads them with bodyseg-io). `ort` and `ndarray` types do not
+//! appear in its API.
+//!
+//! # Conventions
+//! - Pixels: (u, v) = (column, row), integer coordinates are pixel centres, arrays are
+//!   row-major (`v * width + u`). The network input is a square of side S (the sidecar's
+//!   `input_size`) with the same convention.
+//! - Classes: the 7 of ALGORITHM.md §0 in id order; a model's output channel `c` is the
+//!   logit of class id `c`.
+//! - Colour: [`RgbImage`](bodyseg_core::RgbImage) bytes are R, G, B; the sidecar's
+//!   `channel_order`, `mean` and `std` (on pixels / 255) say what the network wants.
+//! - Probabilities are softmax values in `[0, 1]`.
+
+mod config;
+mod error;
+mod onnx;
+mod segmenter;
+mod spec;
+pub mod transform;
+
+pub use config::ParsingConfig;
+pub use error::ParsingError;
+pub use onnx::{OnnxOptions, OnnxSegmenter, load_runtime};
+pub use segmenter::{LabelSource, ParsedView, RecordedSegmenter, Segmenter, ViewInput};
+pub use spec::{ChannelOrder, MAX_INPUT_SIZE, ModelSpec, sidecar_path};

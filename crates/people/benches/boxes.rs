@@ -1,0 +1,79 @@
+//! Guards issue 6's budget: labels-mode box finding takes ≤ 5 ms per frame of three
+//! Kinect v2 cameras with two people (the handover preset: every depth pixel of the three
+//! cameras back-projected, ≈ 0.5 M points, labelled with the per-pixel truth). Geometry
+//! mode is measured beside it.
+//!
+//! `cargo bench -p bodyseg-people --bench boxes`
+
+#![allow(missing_docs)] // criterion_group! generates undocumented items.
+
+use bodyseg_calib::{BackProjectOptions, CloudFrame, DepthBackProjector};
+use bodyseg_core::{Label, LabeledCloud, PointOrigin};
+use bodyseg_people::{BoxMode, BoxesConfig, find_boxes};
+use bodyseg_synth::{Synth, preset};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use std::hint::black_box;
+
+/// Frame `index` of the handover preset (seed 7): every depth pixel of the three cameras
+/// back-projected into the world frame, labelled with the frame's per-depth-pixel truth
+/// (this crate may not use the projection; the point count is the projected cloud's).
+fn handover_cloud(index: usize) -> LabeledCloud {
+    let synth = Synth::new(preset("handover").expect("preset"), 7).expect("synth");
+    let frame = synth.frame(index);
+    let opts = BackProjectOptions {
+        frame: CloudFrame::World,
+        ..BackProjectOptions::default()
+    };
+    let mut cloud = LabeledCloud::default();
+    for (c, (camera, images)) in synth
+        .written_rig()
+        .cameras
+        .iter()
+        .zip(&frame.cameras)
+        .enumerate()
+    {
+        let points = DepthBackProjector::new(camera, c as u8)
+            .expect("camera")
+            .back_project(&images.depth_mm, &opts)
+            .expect("back-projection");
+        for (p, o) in points.points_m.iter().zip(&points.origins) {
+            cloud.positions_m.push(*p);
+            cloud.labels.push(
+                Label::from_id(images.depth_labels[o.pixel as usize]).unwrap_or(Label::UNKNOWN),
+            );
+            cloud.origins.push(PointOrigin {
+                camera: c as u8,
+                pixel: o.pixel,
+            });
+        }
+    }
+    cloud
+}
+
+fn bench(c: &mut Criterion) {
+    let cloud = handover_cloud(10);
+    let mut group = c.benchmark_group("find_boxes");
+    group.throughput(Throughput::Elements(cloud.len() as u64));
+    for mode in [BoxMode::Labels, BoxMode::Geometry] {
+        let cfg = BoxesConfig {
+            mode,
+            ..BoxesConfig::default()
+        };
+        let found = find_boxes(&cloud, &cfg).expect("boxes");
+        eprintln!(
+            "{}: {} points, {} boxes",
+            mode.name(),
+            cloud.len(),
+            found.boxes.len()
+        );
+        group.bench_with_input(
+            BenchmarkId::new(mode.name(), cloud.len()),
+            &cloud,
+            |b, cloud| b.iter(|| find_boxes(black_box(cloud), &cfg)),
+        );
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

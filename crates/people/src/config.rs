@@ -1,0 +1,237 @@
+//! [`BoxesConfig`]: every knob of the box finder, with units and defaults.
+
+use serde::{Deserialize, Serialize};
+
+/// Errors of the box finder.
+#[derive(Debug, thiserror::Error)]
+pub enum PeopleError {
+    /// A configuration field is out of range.
+    #[error("boxes.{field} {problem}")]
+    InvalidConfig {
+        /// The field's name.
+        field: &'static str,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// The input cloud is inconsistent (NaN coordinate, arrays of different lengths).
+    /// The cause is in the message, not in `source()`, so an error chain prints it once.
+    #[error("input cloud: {0}")]
+    InvalidCloud(bodyseg_core::CloudError),
+    /// `mode = "file"` was asked of the finder: file boxes are read, not found.
+    #[error("boxes.mode = \"file\": boxes are read from boxes/<frame>.json, not found in a cloud")]
+    FileMode,
+}
+
+impl From<bodyseg_core::CloudError> for PeopleError {
+    fn from(e: bodyseg_core::CloudError) -> Self {
+        PeopleError::InvalidCloud(e)
+    }
+}
+
+/// Where the boxes come from (ALGORITHM.md §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxMode {
+    /// Body-labelled points clustered and split on heads (default).
+    #[default]
+    Labels,
+    /// No labels: ground plane removed, the rest clustered and split on head-height maxima
+    /// (Munaro et al.'s ground-based people detector, without its image classifier).
+    Geometry,
+    /// Read per frame from `boxes/<stem>.json` (the pipeline does this, not this crate).
+    File,
+}
+
+impl BoxMode {
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            BoxMode::Labels => "labels",
+            BoxMode::Geometry => "geometry",
+            BoxMode::File => "file",
+        }
+    }
+}
+
+/// The box finder's configuration (`[boxes]` in the pipeline's TOML). Lengths in metres,
+/// heights above the floor (labels mode: z = 0; geometry mode: the fitted ground plane).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BoxesConfig {
+    /// Where boxes come from: `labels`, `geometry` or `file`. Default `labels`.
+    pub mode: BoxMode,
+    /// Edge of the voxels points are averaged into before clustering, metres: 5 cm keeps
+    /// a forearm (≈ 8 cm thick) connected and a frame of three Kinect v2 cameras under
+    /// 5 ms (the bench). Must be > 0. Default 0.05.
+    pub voxel_m: f32,
+    /// A voxel with fewer points is ignored: flying pixels (depth samples strewn between
+    /// a person and the background, a few per voxel) rather than a surface (a 5 cm voxel
+    /// of a surface at 4 m holds ≈ 15 points per Kinect v2 camera). Lower it for sparse
+    /// clouds (a back-projection stride > 1, a downsampled file). Must be >= 1. Default 4.
+    pub min_voxel_points: u32,
+    /// Two voxels closer than this belong to the same person, metres: above the holes a
+    /// parser leaves between parts, below the gap between people standing apart. Must be
+    /// > `voxel_m`. Default 0.12.
+    pub person_gap_m: f32,
+    /// A person has at least this many voxels (0.1 m² of surface at 5 cm); smaller
+    /// clusters are parser noise. Must be >= 1. Default 40.
+    pub min_voxels: usize,
+    /// A person's top is at least this high above the floor, metres (a crouching adult
+    /// is ≈ 1.1 m). Must be > 0. Default 0.9.
+    pub min_height_m: f32,
+    /// A person's top is at most this high, metres. Must be > `min_height_m`.
+    /// Default 2.3.
+    pub max_height_m: f32,
+    /// A person's lowest voxel is at most this high, metres: people stand on the floor
+    /// (a reaching arm or a hand-held object does not). Must be >= 0. Default 0.45.
+    pub max_bottom_m: f32,
+    /// A person is at most this wide (longer horizontal side of the box without margin),
+    /// metres: two spread arms. Must be > 0. Default 1.6.
+    pub max_width_m: f32,
+    /// Two heads (or torsos) whose centres are closer than this horizontally are one,
+    /// metres: below the head distance of two people passing an object (≈ 0.6 m), above
+    /// a head-to-hand distance when hands are on the hips. Must be > 0. Default 0.4.
+    pub head_separation_m: f32,
+    /// Labels mode: a head holds at least this many voxels (half a head's surface,
+    /// ≈ 0.06 m², is ≈ 25 voxels at 5 cm); smaller head-labelled patches are parser noise.
+    /// Must be >= 1. Default 4.
+    pub min_head_voxels: usize,
+    /// Added on every side of a cluster's horizontal extent and above its top, metres
+    /// (bodyseg-synth's true boxes use 0.05). Must be >= 0. Default 0.05.
+    pub box_margin_m: f32,
+    /// A point within this height of the floor is floor, metres: geometry mode removes
+    /// it with the ground plane; labels mode ignores body-labelled ones (a parser's feet
+    /// bleed onto the floor). Kinect v2 depth noise at 4 m is ≈ 1.5 cm. Must be > 0.
+    /// Default 0.05.
+    pub ground_tol_m: f32,
+    /// Geometry mode: the ground plane's normal is within this angle of +z, degrees
+    /// (clouds are z up). In (0, 90). Default 15.
+    pub max_ground_tilt_deg: f32,
+    /// Geometry mode: RANSAC iterations of the ground-plane fit (fixed seed:
+    /// deterministic). Must be >= 1. Default 200.
+    pub ransac_iterations: usize,
+    /// Geometry mode: 90% of the voxels within 0.2 m below a head's top (and closer than
+    /// `head_separation_m`) lie within this horizontal distance of the top, metres: a
+    /// head is ≈ 0.1 m in radius (voxel centroids add up to half a voxel), the sloping
+    /// links below a robot arm's joint reach farther. Tops higher than 1.5 m get 0.05 m
+    /// more (only people reach there in a workcell: hair, a tilted head). Must be > 0.
+    /// Default 0.15.
+    pub max_head_radius_m: f32,
+    /// Geometry mode: a person's points lie within this horizontal distance of their head,
+    /// metres (a hand pointing sideways ≈ 0.85 m): what touches them farther out (a robot
+    /// arm, a table) is cut off. Must be > 0. Default 0.9.
+    pub max_reach_m: f32,
+    /// Geometry mode: horizontal radius of the column below a head that must hold the
+    /// person's body, metres (neck, torso and at least one leg lie within ≈ 0.2 m of the
+    /// head's vertical, even when leaning or walking). Must be > 0. Default 0.2.
+    pub column_radius_m: f32,
+    /// Geometry mode: fraction of the 10 cm height slices between the floor and the
+    /// head that must hold a voxel within `column_radius_m` of the head: a person is a
+    /// continuous column; a robot arm's elbow or a raised hand is not. In [0, 1].
+    /// Default 0.7.
+    pub min_column_fill: f32,
+}
+
+impl Default for BoxesConfig {
+    fn default() -> Self {
+        BoxesConfig {
+            mode: BoxMode::Labels,
+            voxel_m: 0.05,
+            min_voxel_points: 4,
+            person_gap_m: 0.12,
+            min_voxels: 40,
+            min_height_m: 0.9,
+            max_height_m: 2.3,
+            max_bottom_m: 0.45,
+            max_width_m: 1.6,
+            head_separation_m: 0.4,
+            min_head_voxels: 4,
+            box_margin_m: 0.05,
+            ground_tol_m: 0.05,
+            max_ground_tilt_deg: 15.0,
+            ransac_iterations: 200,
+            max_head_radius_m: 0.15,
+            max_reach_m: 0.9,
+            column_radius_m: 0.2,
+            min_column_fill: 0.7,
+        }
+    }
+}
+
+impl BoxesConfig {
+    /// Checks every field's range; the error names the field (`boxes.voxel_m must be a
+    /// finite number > 0, got 0`).
+    ///
+    /// # Errors
+    /// [`PeopleError::InvalidConfig`] for the first field out of range.
+    pub fn validate(&self) -> Result<(), PeopleError> {
+        fn bad(field: &'static str, problem: String) -> Result<(), PeopleError> {
+            Err(PeopleError::InvalidConfig { field, problem })
+        }
+        let positive = [
+            ("voxel_m", self.voxel_m),
+            ("person_gap_m", self.person_gap_m),
+            ("min_height_m", self.min_height_m),
+            ("max_width_m", self.max_width_m),
+            ("head_separation_m", self.head_separation_m),
+            ("ground_tol_m", self.ground_tol_m),
+            ("column_radius_m", self.column_radius_m),
+            ("max_reach_m", self.max_reach_m),
+            ("max_head_radius_m", self.max_head_radius_m),
+        ];
+        for (field, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(field, format!("must be a finite number > 0, got {v}"));
+            }
+        }
+        for (field, v) in [
+            ("box_margin_m", self.box_margin_m),
+            ("max_bottom_m", self.max_bottom_m),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(field, format!("must be a finite number >= 0, got {v}"));
+            }
+        }
+        if self.person_gap_m <= self.voxel_m {
+            return bad(
+                "person_gap_m",
+                format!(
+                    "must be > boxes.voxel_m ({}), got {}",
+                    self.voxel_m, self.person_gap_m
+                ),
+            );
+        }
+        if !(self.max_height_m.is_finite() && self.max_height_m > self.min_height_m) {
+            return bad(
+                "max_height_m",
+                format!(
+                    "must be a finite number > boxes.min_height_m ({}), got {}",
+                    self.min_height_m, self.max_height_m
+                ),
+            );
+        }
+        if !(self.max_ground_tilt_deg > 0.0 && self.max_ground_tilt_deg < 90.0) {
+            return bad(
+                "max_ground_tilt_deg",
+                format!("must be in (0, 90), got {}", self.max_ground_tilt_deg),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.min_column_fill) {
+            return bad(
+                "min_column_fill",
+                format!("must be in [0, 1], got {}", self.min_column_fill),
+            );
+        }
+        for (field, v) in [
+            ("min_voxels", self.min_voxels),
+            ("min_head_voxels", self.min_head_voxels),
+            ("ransac_iterations", self.ransac_iterations),
+            ("min_voxel_points", self.min_voxel_points as usize),
+        ] {
+            if v == 0 {
+                return bad(field, "must be >= 1, got 0".into());
+            }
+        }
+        Ok(())
+    }
+}

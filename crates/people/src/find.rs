@@ -1,0 +1,551 @@
+//! The two box finders: labels mode and geometry mode (ALGORITHM.md §4).
+
+use crate::config::{BoxMode, BoxesConfig, PeopleError};
+use crate::fit::{fit_box, principal_yaw};
+use crate::voxel::{Graph, Voxels, voxelize};
+use bodyseg_core::math::Vec3;
+use bodyseg_core::{Class, LabeledCloud, PersonBox, PersonBoxes};
+use rustc_hash::FxHashMap;
+
+/// Finds the person boxes of `cloud` (world frame, z up) as `cfg.mode` says; ids are
+/// 0, 1, ... in order of each person's first voxel (deterministic).
+///
+/// # Errors
+/// [`PeopleError::InvalidConfig`] when `cfg` is out of range, [`PeopleError::InvalidCloud`]
+/// when the cloud is inconsistent, [`PeopleError::FileMode`] for `mode = "file"`.
+pub fn find_boxes(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Result<PersonBoxes, PeopleError> {
+    cfg.validate()?;
+    cloud.validate()?;
+    let boxes = match cfg.mode {
+        BoxMode::Labels => labels_mode(cloud, cfg),
+        BoxMode::Geometry => geometry_mode(&cloud.positions_m, cfg),
+        BoxMode::File => return Err(PeopleError::FileMode),
+    };
+    Ok(PersonBoxes {
+        frame: String::new(),
+        boxes,
+    })
+}
+
+/// Ground plane `n·p + d = 0`, `n` unit with `n.z > 0`: height of `p` is `n·p + d`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Plane {
+    n: Vec3,
+    d: f32,
+}
+
+impl Plane {
+    /// The floor of bodyseg's world frame, z = 0.
+    const FLOOR: Plane = Plane {
+        n: [0.0, 0.0, 1.0],
+        d: 0.0,
+    };
+
+    fn height(&self, p: Vec3) -> f32 {
+        self.n[0] * p[0] + self.n[1] * p[1] + self.n[2] * p[2] + self.d
+    }
+
+    /// z of the plane at (x, y).
+    fn z_at(&self, x: f32, y: f32) -> f32 {
+        -(self.n[0] * x + self.n[1] * y + self.d) / self.n[2]
+    }
+}
+
+/// Index of each voxel's points (compressed rows).
+struct VoxelPoints {
+    start: Vec<u32>,
+    points: Vec<u32>,
+}
+
+impl VoxelPoints {
+    fn new(v: &Voxels) -> VoxelPoints {
+        let n = v.centers.len();
+        let mut start = vec![0u32; n + 1];
+        for &k in &v.point_voxel {
+            start[k as usize + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut points = vec![0u32; v.points.len()];
+        for (&p, &k) in v.points.iter().zip(&v.point_voxel) {
+            points[fill[k as usize] as usize] = p;
+            fill[k as usize] += 1;
+        }
+        VoxelPoints { start, points }
+    }
+
+    fn of(&self, voxel: u32) -> &[u32] {
+        &self.points[self.start[voxel as usize] as usize..self.start[voxel as usize + 1] as usize]
+    }
+}
+
+/// Checks one person candidate (its voxels) against the size limits and fits its box
+/// around its raw points.
+fn person_box(
+    id: u32,
+    group: &[u32],
+    centers: &[Vec3],
+    index: &VoxelPoints,
+    positions: &[Vec3],
+    ground: Plane,
+    cfg: &BoxesConfig,
+) -> Option<PersonBox> {
+    if group.len() < cfg.min_voxels {
+        return None;
+    }
+    let (mut lo_h, mut hi_h) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &v in group {
+        let h = ground.height(centers[v as usize]);
+        lo_h = lo_h.min(h);
+        hi_h = hi_h.max(h);
+    }
+    if hi_h < cfg.min_height_m || hi_h > cfg.max_height_m || lo_h > cfg.max_bottom_m {
+        tracing::trace!(
+            voxels = group.len(),
+            lo_h,
+            hi_h,
+            "candidate dropped: height"
+        );
+        return None;
+    }
+    let voxel_xy: Vec<[f32; 2]> = group
+        .iter()
+        .map(|&v| [centers[v as usize][0], centers[v as usize][1]])
+        .collect();
+    let yaw = principal_yaw(&voxel_xy);
+    let mut xy = Vec::new();
+    let mut top = f32::NEG_INFINITY;
+    for &v in group {
+        for &p in index.of(v) {
+            let p = positions[p as usize];
+            xy.push([p[0], p[1]]);
+            top = top.max(p[2]);
+        }
+    }
+    let unmargined = fit_box(id, &xy, yaw, 0.0, 1.0, 0.0);
+    let width = 2.0 * unmargined.half_extents_m[0].max(unmargined.half_extents_m[1]);
+    if width > cfg.max_width_m {
+        tracing::trace!(voxels = group.len(), width, "candidate dropped: width");
+        return None;
+    }
+    let c = unmargined.center_m;
+    Some(fit_box(
+        id,
+        &xy,
+        yaw,
+        ground.z_at(c[0], c[1]),
+        top,
+        cfg.box_margin_m,
+    ))
+}
+
+/// Groups of `class` voxels inside `members` that look like separate body parts of
+/// different people: connected patches of at least `min_voxels`, patches whose
+/// horizontal centres are closer than `separation_m` merged.
+fn part_seeds(
+    graph: &Graph,
+    v: &Voxels,
+    members: &[u32],
+    class: Class,
+    min_voxels: usize,
+    separation_m: f32,
+) -> Vec<Vec<u32>> {
+    let mut keep = vec![false; v.centers.len()];
+    let mut any = false;
+    for &i in members {
+        if v.labels[i as usize] == class.id() {
+            keep[i as usize] = true;
+            any = true;
+        }
+    }
+    if !any {
+        return Vec::new();
+    }
+    let mut patches: Vec<Vec<u32>> = graph
+        .components(&v.centers, &keep)
+        .into_iter()
+        .filter(|c| c.len() >= min_voxels)
+        .collect();
+    let centre = |p: &[u32]| {
+        let mut s = [0.0f32; 2];
+        for &i in p {
+            s[0] += v.centers[i as usize][0];
+            s[1] += v.centers[i as usize][1];
+        }
+        [s[0] / p.len() as f32, s[1] / p.len() as f32]
+    };
+    // Merge close patches until none are closer than the separation (few patches).
+    loop {
+        let centres: Vec<[f32; 2]> = patches.iter().map(|p| centre(p)).collect();
+        let mut pair = None;
+        'outer: for a in 0..patches.len() {
+            for b in a + 1..patches.len() {
+                let d = (centres[a][0] - centres[b][0]).hypot(centres[a][1] - centres[b][1]);
+                if d < separation_m {
+                    pair = Some((a, b));
+                    break 'outer;
+                }
+            }
+        }
+        let Some((a, b)) = pair else { break };
+        let moved = patches.swap_remove(b);
+        patches[a].extend(moved);
+    }
+    patches
+}
+
+/// Labels mode: body-labelled points → voxels → clusters → split on heads (or torsos)
+/// → size filters → boxes on the floor z = 0.
+fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
+    let body = cloud
+        .positions_m
+        .iter()
+        .zip(&cloud.labels)
+        .enumerate()
+        .filter_map(|(i, (&p, l))| {
+            let c = l.class()?;
+            // Floor points near the feet that the parser labelled as feet are not a person.
+            (c.is_body() && p[2] > cfg.ground_tol_m).then_some((i, p, c.id()))
+        });
+    let v = voxelize(body, cfg.voxel_m);
+    let graph = Graph::new(&v.centers, cfg.person_gap_m);
+    let index = VoxelPoints::new(&v);
+    let mut boxes = Vec::new();
+    let dense: Vec<bool> = v
+        .counts
+        .iter()
+        .map(|&c| c >= cfg.min_voxel_points)
+        .collect();
+    for cluster in graph.components(&v.centers, &dense) {
+        if cluster.len() < cfg.min_voxels {
+            continue;
+        }
+        let mut seeds = part_seeds(
+            &graph,
+            &v,
+            &cluster,
+            Class::Head,
+            cfg.min_head_voxels,
+            cfg.head_separation_m,
+        );
+        if seeds.len() < 2 {
+            seeds = part_seeds(
+                &graph,
+                &v,
+                &cluster,
+                Class::Torso,
+                2 * cfg.min_head_voxels,
+                cfg.head_separation_m,
+            );
+        }
+        let groups = if seeds.len() >= 2 {
+            let owner = graph.split(&v.centers, &cluster, &seeds);
+            let mut groups = vec![Vec::new(); seeds.len()];
+            for (&i, &g) in cluster.iter().zip(&owner) {
+                groups[g].push(i);
+            }
+            groups.sort_by_key(|g| g.first().copied());
+            groups
+        } else {
+            vec![cluster]
+        };
+        for group in groups {
+            let id = boxes.len() as u32;
+            if let Some(b) = person_box(
+                id,
+                &group,
+                &v.centers,
+                &index,
+                &cloud.positions_m,
+                Plane::FLOOR,
+                cfg,
+            ) {
+                boxes.push(b);
+            }
+        }
+    }
+    tracing::debug!(boxes = boxes.len(), voxels = v.centers.len(), "labels mode");
+    boxes
+}
+
+/// splitmix64: a small deterministic generator for RANSAC.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn below(&mut self, n: usize) -> usize {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z % n as u64) as usize
+    }
+}
+
+/// RANSAC ground plane among `centers`: the near-horizontal plane (normal within
+/// `max_ground_tilt_deg` of +z) with the most points within `ground_tol_m`; `None` when
+/// no sample gives such a plane.
+pub(crate) fn fit_ground(centers: &[Vec3], cfg: &BoxesConfig) -> Option<Plane> {
+    if centers.len() < 3 {
+        return None;
+    }
+    let min_nz = cfg.max_ground_tilt_deg.to_radians().cos();
+    let mut rng = SplitMix(0x6A09_E667_F3BC_C908);
+    let mut best: Option<(usize, Plane)> = None;
+    // Score on a strided subset: the count only ranks planes.
+    let stride = (centers.len() / 4000).max(1);
+    for _ in 0..cfg.ransac_iterations {
+        let [a, b, c] = [0; 3].map(|_| centers[rng.below(centers.len())]);
+        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let mut n = [
+            u[1] * w[2] - u[2] * w[1],
+            u[2] * w[0] - u[0] * w[2],
+            u[0] * w[1] - u[1] * w[0],
+        ];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if len.is_nan() || len <= 1e-9 {
+            continue;
+        }
+        if n[2] < 0.0 {
+            n = n.map(|x| -x);
+        }
+        n = n.map(|x| x / len);
+        if n[2] < min_nz {
+            continue;
+        }
+        let plane = Plane {
+            n,
+            d: -(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]),
+        };
+        let count = centers
+            .iter()
+            .step_by(stride)
+            .filter(|&&p| plane.height(p).abs() <= cfg.ground_tol_m)
+            .count();
+        // The floor has the most points; a table top or a box lid far fewer.
+        let better = best.is_none_or(|(bc, _)| count > bc);
+        if better {
+            best = Some((count, plane));
+        }
+    }
+    best.map(|(_, p)| p)
+}
+
+/// Geometry mode: voxels → RANSAC ground plane removed → clusters → heads (height
+/// maxima with a continuous column below) → split between heads → size filters → boxes
+/// on the ground plane. Labels are not used.
+fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
+    let all = voxelize(
+        positions.iter().enumerate().map(|(i, &p)| (i, p, 0)),
+        cfg.voxel_m,
+    );
+    let ground = fit_ground(&all.centers, cfg).unwrap_or_else(|| {
+        // No near-horizontal plane: take the lowest percentile of z as the floor.
+        let mut z: Vec<f32> = all.centers.iter().map(|p| p[2]).collect();
+        z.sort_by(f32::total_cmp);
+        let floor = z.get(z.len() / 100).copied().unwrap_or(0.0);
+        tracing::debug!(
+            floor,
+            "no ground plane found; floor at the 1st percentile of z"
+        );
+        Plane {
+            n: [0.0, 0.0, 1.0],
+            d: -floor,
+        }
+    });
+    let heights: Vec<f32> = all.centers.iter().map(|&p| ground.height(p)).collect();
+    let keep: Vec<bool> = heights
+        .iter()
+        .zip(&all.counts)
+        .map(|(&h, &n)| {
+            h > cfg.ground_tol_m
+                && h < cfg.max_height_m + cfg.person_gap_m
+                && n >= cfg.min_voxel_points
+        })
+        .collect();
+    let graph = Graph::new(&all.centers, cfg.person_gap_m);
+    let index = VoxelPoints::new(&all);
+    let mut boxes = Vec::new();
+    for cluster in graph.components(&all.centers, &keep) {
+        if cluster.len() < cfg.min_voxels {
+            continue;
+        }
+        let heads = find_heads(&cluster, &all.centers, &heights, cfg);
+        if heads.is_empty() {
+            continue;
+        }
+        let mut groups = if heads.len() >= 2 {
+            // Seed each person with its head: voxels near the top of its column.
+            let seeds: Vec<Vec<u32>> = heads
+                .iter()
+                .map(|&h| {
+                    let top = all.centers[h as usize];
+                    cluster
+                        .iter()
+                        .copied()
+                        .filter(|&j| {
+                            let p = all.centers[j as usize];
+                            (p[0] - top[0]).hypot(p[1] - top[1]) <= HEAD_RADIUS_M
+                                && heights[j as usize] >= heights[h as usize] - HEAD_HEIGHT_M
+                        })
+                        .collect()
+                })
+                .collect();
+            let owner = graph.split(&all.centers, &cluster, &seeds);
+            let mut groups = vec![Vec::new(); heads.len()];
+            for (&i, &g) in cluster.iter().zip(&owner) {
+                groups[g].push(i);
+            }
+            groups.sort_by_key(|g| g.first().copied());
+            groups
+        } else {
+            vec![cluster.clone()]
+        };
+        // Whatever touches a person beyond arm's reach (a robot arm, a shelf) is not them.
+        for group in &mut groups {
+            let Some(&head) = group.iter().find(|&&i| heads.contains(&i)) else {
+                continue;
+            };
+            let top = all.centers[head as usize];
+            let legs_below = LEG_HEIGHT_FRACTION * heights[head as usize];
+            group.retain(|&j| {
+                let p = all.centers[j as usize];
+                let d = (p[0] - top[0]).hypot(p[1] - top[1]);
+                // Below the hips only the legs: a table top beside a person is not them.
+                d <= cfg.max_reach_m && (heights[j as usize] >= legs_below || d <= LEG_RADIUS_M)
+            });
+        }
+        for group in groups {
+            let id = boxes.len() as u32;
+            if let Some(b) = person_box(id, &group, &all.centers, &index, positions, ground, cfg) {
+                boxes.push(b);
+            }
+        }
+    }
+    tracing::debug!(
+        boxes = boxes.len(),
+        voxels = all.centers.len(),
+        "geometry mode"
+    );
+    boxes
+}
+
+/// Horizontal radius of a head around its top, metres (a head is ≈ 0.2 m wide).
+const HEAD_RADIUS_M: f32 = 0.12;
+/// Height of a head below its top, metres (crown to chin ≈ 0.22 m; the shoulders start
+/// lower).
+const HEAD_HEIGHT_M: f32 = 0.2;
+/// Below this fraction of a person's height only their legs are theirs (hips are at
+/// ≈ 0.53 of the height; a hand resting lower is cut, a table top beside them too).
+const LEG_HEIGHT_FRACTION: f32 = 0.5;
+/// Horizontal radius around the head's vertical that holds the legs, metres (a stride
+/// or a crouch puts a foot ≈ 0.35 m from it).
+const LEG_RADIUS_M: f32 = 0.4;
+/// Tops at least this high are taken to be people's when judging head compactness,
+/// metres: a workcell robot arm on its base (≈ 1.4 m in bodyseg-synth) stays below.
+const TALL_TOP_M: f32 = 1.5;
+/// Extra head radius allowed to such tall tops, metres (hair, a tilted head).
+const TALL_HEAD_SLACK_M: f32 = 0.05;
+/// Cell of the top-view height map heads are searched in, metres.
+const HEIGHT_MAP_CELL_M: f32 = 0.08;
+/// Height of the slices of the column test, metres.
+const COLUMN_SLICE_M: f32 = 0.1;
+
+/// The heads of one cluster (geometry mode): cells of the top-view height map that are
+/// the highest within `head_separation_m`, at least `min_height_m` high, with a column of
+/// points below them (`column_radius_m`, `min_column_fill`) reaching down to
+/// `max_bottom_m`. Returns one voxel per head (its top), highest first.
+fn find_heads(cluster: &[u32], centers: &[Vec3], heights: &[f32], cfg: &BoxesConfig) -> Vec<u32> {
+    let inv = 1.0 / HEIGHT_MAP_CELL_M;
+    let cell = |p: Vec3| [(p[0] * inv).floor() as i32, (p[1] * inv).floor() as i32];
+    let mut map: FxHashMap<[i32; 2], u32> = FxHashMap::default();
+    let higher = |a: u32, b: u32| {
+        let (ha, hb) = (heights[a as usize], heights[b as usize]);
+        ha > hb || (ha == hb && a < b)
+    };
+    for &i in cluster {
+        let e = map.entry(cell(centers[i as usize])).or_insert(i);
+        if higher(i, *e) {
+            *e = i;
+        }
+    }
+    let mut tops: Vec<([i32; 2], u32)> = map
+        .iter()
+        .filter(|(_, v)| heights[**v as usize] >= cfg.min_height_m)
+        .map(|(&c, &v)| (c, v))
+        .collect();
+    tops.sort_by(|a, b| {
+        heights[b.1 as usize]
+            .total_cmp(&heights[a.1 as usize])
+            .then(a.1.cmp(&b.1))
+    });
+    let r = (cfg.head_separation_m * inv).ceil() as i32;
+    let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let mut heads = Vec::new();
+    for (c, v) in tops {
+        let p = centers[v as usize];
+        let mut is_max = true;
+        'scan: for dx in -r..=r {
+            for dy in -r..=r {
+                if let Some(&o) = map.get(&[c[0] + dx, c[1] + dy])
+                    && o != v
+                    && higher(o, v)
+                    && xy_dist(centers[o as usize], p) < cfg.head_separation_m
+                {
+                    is_max = false;
+                    break 'scan;
+                }
+            }
+        }
+        if !is_max {
+            continue;
+        }
+        let h = heights[v as usize];
+        // Head test: a head is a compact top. A robot arm's or a shelf's top continues
+        // sideways (cylinders sloping down from a joint).
+        let mut near_top: Vec<f32> = cluster
+            .iter()
+            .filter(|&&j| heights[j as usize] >= h - HEAD_HEIGHT_M)
+            .map(|&j| xy_dist(centers[j as usize], p))
+            .filter(|&d| d < cfg.head_separation_m)
+            .collect();
+        near_top.sort_by(f32::total_cmp);
+        // The 90th percentile: a hand raised to the face or a stray voxel does not count.
+        let spread = near_top
+            .get(near_top.len() * 9 / 10)
+            .copied()
+            .unwrap_or(0.0);
+        let limit = if h >= TALL_TOP_M {
+            cfg.max_head_radius_m + TALL_HEAD_SLACK_M
+        } else {
+            cfg.max_head_radius_m
+        };
+        if spread > limit {
+            tracing::trace!(h, spread, "head candidate dropped: not compact");
+            continue;
+        }
+        // Column test: the slices between the ground and the head holding a voxel.
+        let slices = ((h - cfg.ground_tol_m) / COLUMN_SLICE_M).ceil().max(1.0) as usize;
+        let mut filled = vec![false; slices];
+        let mut lowest = f32::INFINITY;
+        for &j in cluster {
+            if xy_dist(centers[j as usize], p) <= cfg.column_radius_m {
+                let hj = heights[j as usize];
+                lowest = lowest.min(hj);
+                let s = ((hj - cfg.ground_tol_m) / COLUMN_SLICE_M).floor().max(0.0) as usize;
+                if let Some(f) = filled.get_mut(s) {
+                    *f = true;
+                }
+            }
+        }
+        let fill = filled.iter().filter(|&&f| f).count() as f32 / slices as f32;
+        tracing::trace!(h, fill, lowest, "head candidate");
+        if fill >= cfg.min_column_fill && lowest <= cfg.max_bottom_m {
+            heads.push(v);
+        }
+    }
+    heads
+}

@@ -1,0 +1,47 @@
+//! bodyseg-people: person boxes, finding each person in the fused cloud.
+//!
+//! Place in the pipeline: `LabeledCloud → PersonBoxes` (ALGORITHM.md §4), between the
+//! label projection (bodyseg-project) and the refinement (bodyseg-refine), which works
+//! inside each box. [`find_boxes`] runs one of two finders, chosen by
+//! [`BoxesConfig::mode`]:
+//! - **labels** (default): points with a body label (1–6), except those on the floor (a
+//!   parser's feet bleed onto it), are averaged into voxels (`voxel_m`; voxels with
+//!   fewer than `min_voxel_points` points are dropped) and clustered (Euclidean, gap `person_gap_m`); a cluster holding two or
+//!   more separate heads (or, failing that, torsos) is split between them along the voxel
+//!   graph (multi-source Dijkstra), so two people touching hands get two boxes; clusters
+//!   too small, too low, too tall, floating or too wide are dropped.
+//! - **geometry** (no labels): a RANSAC ground plane (Fischler & Bolles 1981) is removed
+//!   with sparse voxels (flying pixels), the rest clustered; heads are maxima of the
+//!   top-view height map at least `head_separation_m` apart that are compact (a head, not
+//!   a robot arm's joint) and have a continuous column of points below them down to the
+//!   ground, in the spirit of the ground-based people detector of Munaro et al. (ICRA
+//!   2012, "Tracking people within groups with RGB-D data", without its HOG classifier);
+//!   a cluster is split between its heads, each person keeps what lies within arm's reach
+//!   of the head (below the hips: within a leg's reach), and the same size filters apply.
+//!
+//! The `file` mode (boxes read from `boxes/<stem>.json`) is the pipeline's: it reads files.
+//!
+//! A box is the person's points' horizontal extent along their principal horizontal axis
+//! (its yaw) plus `box_margin_m` on each side, from the floor up to the top plus
+//! `box_margin_m` — the shape of bodyseg-synth's true boxes. [`box_iou`] scores a box
+//! against another exactly.
+//!
+//! # Conventions
+//! - Input clouds are in a z-up frame in metres (bodyseg's world frame). Labels mode takes
+//!   the floor at z = 0; geometry mode fits the ground plane (any height, tilted up to
+//!   `max_ground_tilt_deg`).
+//! - Boxes: world frame, metres, yaw about +z in radians (bodyseg-core's [`PersonBox`]).
+//! - Deterministic: the same cloud gives the same boxes (fixed RANSAC seed; ids in order
+//!   of each person's first voxel, voxels in order of their first point).
+
+mod config;
+mod find;
+mod fit;
+mod voxel;
+
+pub use config::{BoxMode, BoxesConfig, PeopleError};
+pub use find::find_boxes;
+pub use fit::box_iou;
+
+#[doc(no_inline)]
+pub use bodyseg_core::{PersonBox, PersonBoxes};

@@ -1,0 +1,115 @@
+//! Box finding on synthetic frames: the depth images of the three presets back-projected
+//! into the world frame with the exact per-depth-pixel labels, scored against the true
+//! boxes with the exact oriented IoU. (The pipeline's `boxes_on_synth` test does the same
+//! with the simulated parser's predicted labels, through the projection.)
+
+use bodyseg_calib::{BackProjectOptions, CloudFrame, DepthBackProjector};
+use bodyseg_core::{Label, LabeledCloud, PointOrigin};
+use bodyseg_people::{BoxMode, BoxesConfig, PeopleError, box_iou, find_boxes};
+use bodyseg_synth::{Synth, SynthFrame, preset};
+
+fn cloud(synth: &Synth, frame: &SynthFrame) -> LabeledCloud {
+    let opts = BackProjectOptions {
+        frame: CloudFrame::World,
+        ..BackProjectOptions::default()
+    };
+    let mut cloud = LabeledCloud::default();
+    for (c, (camera, images)) in synth
+        .written_rig()
+        .cameras
+        .iter()
+        .zip(&frame.cameras)
+        .enumerate()
+    {
+        let points = DepthBackProjector::new(camera, c as u8)
+            .expect("camera")
+            .back_project(&images.depth_mm, &opts)
+            .expect("back-projection");
+        for (p, o) in points.points_m.iter().zip(&points.origins) {
+            cloud.positions_m.push(*p);
+            cloud.labels.push(
+                Label::from_id(images.depth_labels[o.pixel as usize]).unwrap_or(Label::UNKNOWN),
+            );
+            cloud.origins.push(PointOrigin {
+                camera: c as u8,
+                pixel: o.pixel,
+            });
+        }
+    }
+    cloud
+}
+
+#[test]
+fn every_person_gets_one_box_in_both_modes() {
+    for name in ["single", "handover", "robot_cell"] {
+        let synth = Synth::new(preset(name).expect("preset"), 21).expect("synth");
+        for index in [0, 9] {
+            let frame = synth.frame(index);
+            let cloud = cloud(&synth, &frame);
+            for mode in [BoxMode::Labels, BoxMode::Geometry] {
+                let cfg = BoxesConfig {
+                    mode,
+                    ..BoxesConfig::default()
+                };
+                let found = find_boxes(&cloud, &cfg).expect("boxes");
+                let truth = &frame.boxes.boxes;
+                assert_eq!(
+                    found.boxes.len(),
+                    truth.len(),
+                    "{name} frame {index} {}: {found:?}",
+                    mode.name()
+                );
+                for t in truth {
+                    let hits = found.boxes.iter().filter(|f| box_iou(t, f) >= 0.5).count();
+                    assert_eq!(
+                        hits,
+                        1,
+                        "{name} frame {index} {}: {t:?} vs {found:?}",
+                        mode.name()
+                    );
+                }
+                // Deterministic: the same cloud gives the same boxes.
+                assert_eq!(find_boxes(&cloud, &cfg).expect("boxes"), found);
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_config_and_file_mode_are_errors() {
+    let cloud = LabeledCloud::default();
+    let cfg = BoxesConfig {
+        voxel_m: -1.0,
+        ..BoxesConfig::default()
+    };
+    let e = find_boxes(&cloud, &cfg).expect_err("invalid");
+    assert_eq!(
+        e.to_string(),
+        "boxes.voxel_m must be a finite number > 0, got -1"
+    );
+    let cfg = BoxesConfig {
+        mode: BoxMode::File,
+        ..BoxesConfig::default()
+    };
+    assert!(matches!(
+        find_boxes(&cloud, &cfg),
+        Err(PeopleError::FileMode)
+    ));
+    // An empty cloud has no people.
+    assert!(
+        find_boxes(&cloud, &BoxesConfig::default())
+            .expect("empty")
+            .boxes
+            .is_empty()
+    );
+    let geometry = BoxesConfig {
+        mode: BoxMode::Geometry,
+        ..BoxesConfig::default()
+    };
+    assert!(
+        find_boxes(&cloud, &geometry)
+            .expect("empty")
+            .boxes
+            .is_empty()
+    );
+}

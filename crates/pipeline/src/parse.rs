@@ -1,0 +1,348 @@
+//! `bodyseg parse`: one frame of a recording (rig.toml, colour images) → 2D body-part
+//! label images (class ids) and palette previews, per camera.
+
+use crate::config::PipelineConfig;
+use crate::fs::write_text;
+use crate::project::check_frame;
+use crate::stage::{Stage, plural, timed};
+use anyhow::{Context, Result, bail};
+use bodyseg_core::{Class, LabelImage, RgbImage};
+use bodyseg_parsing::{
+    ModelSpec, OnnxSegmenter, ParsedView, RecordedSegmenter, Segmenter, ViewInput, sidecar_path,
+};
+use std::path::{Path, PathBuf};
+
+/// The bundled model, relative to the project root (its sidecar: the same with `.json`).
+pub const BUNDLED_MODEL: &str = "models/bodyseg_parser_small.onnx";
+
+/// Where `scripts/setup_onnxruntime.sh` puts the ONNX Runtime library, relative to the
+/// project root.
+pub const LOCAL_RUNTIME_LIBRARY: &str = ".deps/onnxruntime/libonnxruntime.so";
+
+/// Environment variable naming the ONNX Runtime library (ort's convention).
+pub const RUNTIME_LIBRARY_ENV: &str = "ORT_DYLIB_PATH";
+
+/// Which segmenter [`parse_file`] runs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ParseSource {
+    /// An ONNX model (`parsing.model` of the configuration, or the bundled one).
+    Model,
+    /// The recording's own `parsing/` label images (synthetic predictions, or a parser
+    /// run elsewhere), through [`RecordedSegmenter`].
+    Recorded,
+}
+
+/// What [`parse_file`] reads, writes and how.
+#[derive(Clone, Debug)]
+pub struct ParseOptions {
+    /// The recording folder: `rig.toml` and per camera `<camera>/color/<frame>.png` (or
+    /// `.jpg`, `.jpeg`).
+    pub recording: PathBuf,
+    /// The frame's file stem (`000012`).
+    pub frame: String,
+    /// The resolved configuration; its `[parsing]` section is used.
+    pub config: PipelineConfig,
+    /// Which segmenter runs.
+    pub source: ParseSource,
+    /// Output folder: `<camera>/parsing/<frame>.png` (8-bit class ids) and
+    /// `<camera>/parsing_preview/<frame>.png` (palette over the dimmed image) per camera,
+    /// and `parse.config.resolved.toml`. Created if missing; existing files of the same
+    /// names are replaced.
+    pub out: PathBuf,
+}
+
+/// What [`parse_file`] did.
+#[derive(Clone, Debug)]
+pub struct ParseSummary {
+    /// Camera names, rig order.
+    pub cameras: Vec<String>,
+    /// Pixels labelled as a body part (not background), per camera.
+    pub body_pixels: Vec<usize>,
+    /// The model file that ran (`None` for recorded labels).
+    pub model: Option<PathBuf>,
+    /// Files written: label images, then previews, then the resolved configuration.
+    pub written: Vec<PathBuf>,
+    /// Per stage (read, parse, write): time and a one-line summary.
+    pub stages: Vec<Stage>,
+}
+
+/// The colour image of `camera` for `frame`: `REC/<camera>/color/<frame>.png`, `.jpg` or
+/// `.jpeg`, the first that exists (`.png` when none does, for the error message).
+pub fn color_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
+    let folder = recording.join(camera).join("color");
+    let candidates: Vec<PathBuf> = ["png", "jpg", "jpeg"]
+        .iter()
+        .map(|ext| folder.join(format!("{frame}.{ext}")))
+        .collect();
+    bodyseg_io::first_existing_file(&candidates)
+        .unwrap_or_else(|| folder.join(format!("{frame}.png")))
+}
+
+/// Candidate locations of a project-relative file: beside the executable and its parent
+/// folders (a `target/release/bodyseg` of a checkout), the current folder, and the
+/// checkout this binary was built from.
+fn project_candidates(relative: &str) -> Vec<PathBuf> {
+    let mut roots: Vec<PathBuf> = Vec::new();
+    if let Ok(exe) = std::env::current_exe() {
+        roots.extend(exe.ancestors().skip(1).take(4).map(Path::to_path_buf));
+    }
+    if let Ok(cwd) = std::env::current_dir() {
+        roots.push(cwd);
+    }
+    roots.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."));
+    roots.into_iter().map(|r| r.join(relative)).collect()
+}
+
+/// The ONNX Runtime library: `parsing.runtime_library`, else `ORT_DYLIB_PATH`, else the
+/// project-local copy of `scripts/setup_onnxruntime.sh`.
+///
+/// # Errors
+/// None of them is set or exists; the message says how to get the library.
+pub fn resolve_runtime_library(config: &PipelineConfig) -> Result<PathBuf> {
+    if !config.parsing.runtime_library.is_empty() {
+        return Ok(PathBuf::from(&config.parsing.runtime_library));
+    }
+    if let Some(path) = std::env::var_os(RUNTIME_LIBRARY_ENV).filter(|p| !p.is_empty()) {
+        return Ok(PathBuf::from(path));
+    }
+    bodyseg_io::first_existing_file(&project_candidates(LOCAL_RUNTIME_LIBRARY)).with_context(|| {
+        format!(
+            "ONNX Runtime library not found: run scripts/setup_onnxruntime.sh (it writes \
+                 {LOCAL_RUNTIME_LIBRARY}), or set {RUNTIME_LIBRARY_ENV} or \
+                 parsing.runtime_library to a libonnxruntime.so"
+        )
+    })
+}
+
+/// The model file: `parsing.model`, else the bundled model.
+///
+/// # Errors
+/// The bundled model is not found (neither beside the executable, in the current folder,
+/// nor in the checkout the binary was built from).
+pub fn resolve_model(config: &PipelineConfig) -> Result<PathBuf> {
+    if !config.parsing.model.is_empty() {
+        return Ok(PathBuf::from(&config.parsing.model));
+    }
+    bodyseg_io::first_existing_file(&project_candidates(BUNDLED_MODEL))
+        .with_context(|| format!("bundled model {BUNDLED_MODEL} not found: pass --model FILE.onnx"))
+}
+
+/// Loads an ONNX model and its sidecar (`model.json`) into an [`OnnxSegmenter`].
+///
+/// # Errors
+/// The model or sidecar cannot be read, the sidecar is invalid, the runtime library is
+/// missing, or the model does not follow the contract; each names the file.
+pub fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
+    let sidecar = sidecar_path(model);
+    let text = bodyseg_io::read_text(&sidecar)
+        .context("model sidecar (the model's .json: input_size, channel_order, mean, std, ...)")?;
+    let spec = ModelSpec::from_json(&text, &sidecar)?;
+    let library = resolve_runtime_library(config)?;
+    let bytes = bodyseg_io::read_bytes(model).context("parsing model")?;
+    let segmenter = OnnxSegmenter::new(
+        &library,
+        &bytes,
+        model,
+        spec,
+        &config.parsing.onnx_options(),
+    )?;
+    Ok(segmenter)
+}
+
+/// A palette preview: body pixels in their class colour, background as the dimmed image.
+pub fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> {
+    let mut out = Vec::with_capacity(labels.num_pixels() * 3);
+    for (i, label) in labels.labels.iter().enumerate() {
+        match label.class().filter(|c| *c != Class::Background) {
+            Some(class) => out.extend(class.color()),
+            None => {
+                let px = image.rgb.get(3 * i..3 * i + 3).unwrap_or(&[0, 0, 0]);
+                out.extend(px.iter().map(|&v| v / 3));
+            }
+        }
+    }
+    out
+}
+
+/// Runs 2D parsing on every camera of one frame and writes the label images and
+/// previews (see [`ParseOptions::out`]).
+///
+/// # Errors
+/// The frame stem is a path; `rig.toml` cannot be read; a colour image is missing, does
+/// not decode or has another size than the rig's colour sensor; the model, its sidecar or
+/// the ONNX Runtime library is missing or invalid; writing fails. Each names the file.
+/// Nothing is written unless every view was parsed.
+pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
+    check_frame(&opts.frame)?;
+    let cfg = &opts.config;
+    let rig_path = opts.recording.join("rig.toml");
+    let ((cameras, images), read) = timed(|| -> Result<_> {
+        let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
+        let mut images = Vec::with_capacity(rig.cameras.len());
+        for camera in &rig.cameras {
+            let name = &camera.name;
+            let path = color_path(&opts.recording, name, &opts.frame);
+            let image =
+                bodyseg_io::read_rgb_image(&path).with_context(|| format!("camera {name}"))?;
+            let (want_w, want_h) = (camera.color.width, camera.color.height);
+            if (image.width, image.height) != (want_w, want_h) {
+                bail!(
+                    "camera {name}: {}: colour image is {}x{}, rig.toml says {want_w}x{want_h}",
+                    path.display(),
+                    image.width,
+                    image.height
+                );
+            }
+            images.push(image);
+        }
+        let names: Vec<String> = rig.cameras.iter().map(|c| c.name.clone()).collect();
+        Ok((names, images))
+    })?;
+    let mut stages = vec![Stage::new(
+        "read",
+        read,
+        format!(
+            "{}, frame {}",
+            plural(cameras.len(), "colour image", "colour images"),
+            opts.frame
+        ),
+    )];
+
+    let model = match opts.source {
+        ParseSource::Model => Some(resolve_model(cfg)?),
+        ParseSource::Recorded => None,
+    };
+    let (parsed, took) = timed(|| -> Result<Vec<ParsedView>> {
+        let mut segmenter: Box<dyn Segmenter> = match &model {
+            Some(path) => Box::new(load_segmenter(cfg, path)?),
+            None => {
+                let recording = opts.recording.clone();
+                Box::new(RecordedSegmenter::new(Box::new(move |camera, frame| {
+                    let path = crate::project::parsing_path(&recording, camera, frame);
+                    bodyseg_io::read_label_png(&path).map_err(|e| e.to_string())
+                })))
+            }
+        };
+        let views: Vec<ViewInput<'_>> = cameras
+            .iter()
+            .zip(&images)
+            .map(|(camera, image)| ViewInput {
+                camera,
+                frame: &opts.frame,
+                image: Some(image),
+            })
+            .collect();
+        segmenter
+            .segment(&views)
+            .with_context(|| format!("{}: frame {}", opts.recording.display(), opts.frame))
+    })?;
+    let body_pixels: Vec<usize> = parsed
+        .iter()
+        .map(|p| {
+            p.labels
+                .labels
+                .iter()
+                .filter(|l| l.class().is_some_and(|c| c != Class::Background))
+                .count()
+        })
+        .collect();
+    let per_view_ms = took.as_secs_f64() * 1e3 / cameras.len().max(1) as f64;
+    let what = match &model {
+        Some(path) => format!(
+            "model {}, {per_view_ms:.0} ms per view incl. loading the model",
+            path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned()
+            )
+        ),
+        None => "recorded parsing/ labels".to_string(),
+    };
+    stages.push(Stage::new(
+        "parse",
+        took,
+        format!(
+            "{} ({what}), {} body pixels",
+            plural(parsed.len(), "view", "views"),
+            body_pixels.iter().sum::<usize>()
+        ),
+    ));
+
+    let (written, took) = timed(|| -> Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        for ((camera, image), view) in cameras.iter().zip(&images).zip(&parsed) {
+            let folder = opts.out.join(camera);
+            let labels_path = folder.join("parsing").join(format!("{}.png", opts.frame));
+            let preview_path = folder
+                .join("parsing_preview")
+                .join(format!("{}.png", opts.frame));
+            for p in [&labels_path, &preview_path] {
+                if let Some(parent) = p.parent() {
+                    bodyseg_io::create_folder(parent).context("output folder (--out)")?;
+                }
+            }
+            bodyseg_io::write_label_png(&labels_path, &view.labels)
+                .with_context(|| format!("camera {camera}: label image"))?;
+            let (w, h) = (view.labels.width, view.labels.height);
+            bodyseg_io::write_rgb_png(&preview_path, w, h, &palette_preview(image, &view.labels))
+                .with_context(|| format!("camera {camera}: preview"))?;
+            written.push(labels_path);
+            written.push(preview_path);
+        }
+        let mut resolved = cfg.clone();
+        if let Some(path) = &model {
+            resolved.parsing.model = path.display().to_string();
+        }
+        let config_path = opts.out.join("parse.config.resolved.toml");
+        write_text(&config_path, &resolved.resolved_toml()?).context("resolved configuration")?;
+        written.push(config_path);
+        Ok(written)
+    })?;
+    stages.push(Stage::new(
+        "write",
+        took,
+        format!(
+            "{} in {}",
+            plural(written.len(), "file", "files"),
+            opts.out.display()
+        ),
+    ));
+    Ok(ParseSummary {
+        cameras,
+        body_pixels,
+        model,
+        written,
+        stages,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bodyseg_core::Label;
+
+    #[test]
+    fn preview_paints_body_parts_and_dims_background() {
+        let image = RgbImage::new(2, 1, vec![90, 60, 30, 90, 60, 30]).expect("2x1");
+        let labels = LabelImage::new(2, 1, vec![Label::BACKGROUND, Label::from(Class::Head)])
+            .expect("2 labels");
+        assert_eq!(
+            palette_preview(&image, &labels),
+            vec![30, 20, 10, 128, 0, 0]
+        );
+    }
+
+    #[test]
+    fn explicit_paths_win() {
+        let mut cfg = PipelineConfig::default();
+        cfg.parsing.runtime_library = "/x/libonnxruntime.so".into();
+        cfg.parsing.model = "m.onnx".into();
+        assert_eq!(
+            resolve_runtime_library(&cfg).expect("configured"),
+            Path::new("/x/libonnxruntime.so")
+        );
+        assert_eq!(
+            resolve_model(&cfg).expect("configured"),
+            Path::new("m.onnx")
+        );
+    }
+}

@@ -1,0 +1,76 @@
+//! Issue 6's floor on synthetic recordings: in ≥ 98% of frames every true person is
+//! matched by exactly one box with 3D IoU ≥ 0.5 (exact oriented-box IoU) and there is no
+//! extra box — per preset and per mode (labels with the simulated parser's predicted
+//! labels, DSA projection; geometry, labels unused). The quick test scores 4 frames per
+//! preset (all must be good); the `#[ignore]`d one the report's 50 (2 seeds × 25 frames,
+//! 4 apart; `cargo test --release -p bodyseg-pipeline --test boxes_on_synth -- --ignored`).
+//! Frames are spread by `BODYSEG_BOXES_SEED` (default 100) for the quick test.
+
+use bodyseg_people::{BoxMode, BoxesConfig};
+use bodyseg_pipeline::{BoxStats, box_stats};
+use bodyseg_synth::{Synth, preset};
+
+fn configs() -> [BoxesConfig; 2] {
+    [
+        BoxesConfig::default(),
+        BoxesConfig {
+            mode: BoxMode::Geometry,
+            ..BoxesConfig::default()
+        },
+    ]
+}
+
+/// Scores `frames` of each seed, per preset and mode, and asserts ≥ 98% good frames.
+fn check(seeds: &[u64], frames: &[usize]) {
+    for name in ["single", "handover", "robot_cell"] {
+        let mut totals = vec![BoxStats::default(); 2];
+        for &seed in seeds {
+            let synth = Synth::new(preset(name).expect("preset"), seed).expect("synth");
+            let stats = box_stats(&synth, frames, &configs()).expect("boxes");
+            for (t, s) in totals.iter_mut().zip(stats) {
+                t.frames += s.frames;
+                t.good_frames += s.good_frames;
+                t.people += s.people;
+                t.matched += s.matched;
+                t.found += s.found;
+                t.iou_sum += s.iou_sum;
+                t.bad_frames
+                    .extend(s.bad_frames.iter().map(|f| f + seed as usize * 10_000));
+            }
+        }
+        for (cfg, s) in configs().iter().zip(&totals) {
+            eprintln!(
+                "{name} {}: {}/{} good frames, mean IoU {:.3}, bad (seed*10000+frame) {:?}",
+                cfg.mode.name(),
+                s.good_frames,
+                s.frames,
+                s.mean_iou(),
+                s.bad_frames
+            );
+            assert!(
+                s.good_fraction() >= 0.98,
+                "{name} {}: {}/{} good frames (bad: {:?}; seeds {seeds:?})",
+                cfg.mode.name(),
+                s.good_frames,
+                s.frames,
+                s.bad_frames
+            );
+        }
+    }
+}
+
+#[test]
+fn boxes_match_the_truth_on_a_few_frames_of_each_preset() {
+    let seed = std::env::var("BODYSEG_BOXES_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(100);
+    check(&[seed], &[0, 12, 24, 36]);
+}
+
+#[test]
+#[ignore = "slow (300 frames rendered and projected): run in release"]
+fn boxes_match_the_truth_on_50_frames_of_each_preset() {
+    let frames: Vec<usize> = (0..25).map(|i| i * 4).collect();
+    check(&[100, 101], &frames);
+}
