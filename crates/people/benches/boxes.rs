@@ -7,8 +7,7 @@
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
-use bodyseg_calib::{BackProjectOptions, CloudFrame, DepthBackProjector};
-use bodyseg_core::{Label, LabeledCloud, PointOrigin};
+use bodyseg_core::LabeledCloud;
 use bodyseg_people::{BoxMode, BoxesConfig, find_boxes};
 use bodyseg_synth::{Synth, preset};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -19,35 +18,7 @@ use std::hint::black_box;
 /// (this crate may not use the projection; the point count is the projected cloud's).
 fn handover_cloud(index: usize) -> LabeledCloud {
     let synth = Synth::new(preset("handover").expect("preset"), 7).expect("synth");
-    let frame = synth.frame(index);
-    let opts = BackProjectOptions {
-        frame: CloudFrame::World,
-        ..BackProjectOptions::default()
-    };
-    let mut cloud = LabeledCloud::default();
-    for (c, (camera, images)) in synth
-        .written_rig()
-        .cameras
-        .iter()
-        .zip(&frame.cameras)
-        .enumerate()
-    {
-        let points = DepthBackProjector::new(camera, c as u8)
-            .expect("camera")
-            .back_project(&images.depth_mm, &opts)
-            .expect("back-projection");
-        for (p, o) in points.points_m.iter().zip(&points.origins) {
-            cloud.positions_m.push(*p);
-            cloud.labels.push(
-                Label::from_id(images.depth_labels[o.pixel as usize]).unwrap_or(Label::UNKNOWN),
-            );
-            cloud.origins.push(PointOrigin {
-                camera: c as u8,
-                pixel: o.pixel,
-            });
-        }
-    }
-    cloud
+    synth.truth_cloud(&synth.frame(index)).expect("truth cloud")
 }
 
 fn bench(c: &mut Criterion) {

@@ -3,40 +3,12 @@
 //! boxes with the exact oriented IoU. (The pipeline's `boxes_on_synth` test does the same
 //! with the simulated parser's predicted labels, through the projection.)
 
-use bodyseg_calib::{BackProjectOptions, CloudFrame, DepthBackProjector};
-use bodyseg_core::{Label, LabeledCloud, PointOrigin};
+use bodyseg_core::LabeledCloud;
 use bodyseg_people::{BoxMode, BoxesConfig, PeopleError, box_iou, find_boxes};
 use bodyseg_synth::{Synth, SynthFrame, preset};
 
 fn cloud(synth: &Synth, frame: &SynthFrame) -> LabeledCloud {
-    let opts = BackProjectOptions {
-        frame: CloudFrame::World,
-        ..BackProjectOptions::default()
-    };
-    let mut cloud = LabeledCloud::default();
-    for (c, (camera, images)) in synth
-        .written_rig()
-        .cameras
-        .iter()
-        .zip(&frame.cameras)
-        .enumerate()
-    {
-        let points = DepthBackProjector::new(camera, c as u8)
-            .expect("camera")
-            .back_project(&images.depth_mm, &opts)
-            .expect("back-projection");
-        for (p, o) in points.points_m.iter().zip(&points.origins) {
-            cloud.positions_m.push(*p);
-            cloud.labels.push(
-                Label::from_id(images.depth_labels[o.pixel as usize]).unwrap_or(Label::UNKNOWN),
-            );
-            cloud.origins.push(PointOrigin {
-                camera: c as u8,
-                pixel: o.pixel,
-            });
-        }
-    }
-    cloud
+    synth.truth_cloud(frame).expect("truth cloud")
 }
 
 #[test]

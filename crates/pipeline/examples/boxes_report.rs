@@ -30,19 +30,9 @@ fn main() -> anyhow::Result<()> {
             let synth = Synth::new(preset(name)?, 100 + seed)?;
             for (t, s) in totals
                 .iter_mut()
-                .zip(box_stats(&synth, &indices, &configs)?)
+                .zip(&box_stats(&synth, &indices, &configs)?)
             {
-                t.frames += s.frames;
-                t.good_frames += s.good_frames;
-                t.people += s.people;
-                t.matched += s.matched;
-                t.found += s.found;
-                t.iou_sum += s.iou_sum;
-                t.bad_frames.extend(
-                    s.bad_frames
-                        .iter()
-                        .map(|&f| (100 + seed as usize) * 10_000 + f),
-                );
+                t.absorb(s, (100 + seed as usize) * 10_000);
             }
         }
         for (cfg, s) in configs.iter().zip(&totals) {

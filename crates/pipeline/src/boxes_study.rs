@@ -84,6 +84,19 @@ impl BoxStats {
         self.good_frames as f64 / self.frames.max(1) as f64
     }
 
+    /// Adds `other`'s counts; its bad frame indices are shifted by `frame_offset` (to tell
+    /// sequences apart, e.g. `seed * 10_000`).
+    pub fn absorb(&mut self, other: &BoxStats, frame_offset: usize) {
+        self.frames += other.frames;
+        self.good_frames += other.good_frames;
+        self.people += other.people;
+        self.matched += other.matched;
+        self.found += other.found;
+        self.iou_sum += other.iou_sum;
+        self.bad_frames
+            .extend(other.bad_frames.iter().map(|f| f + frame_offset));
+    }
+
     /// Mean best IoU per true person.
     pub fn mean_iou(&self) -> f64 {
         self.iou_sum / self.people.max(1) as f64

@@ -27,15 +27,8 @@ fn check(seeds: &[u64], frames: &[usize]) {
         for &seed in seeds {
             let synth = Synth::new(preset(name).expect("preset"), seed).expect("synth");
             let stats = box_stats(&synth, frames, &configs()).expect("boxes");
-            for (t, s) in totals.iter_mut().zip(stats) {
-                t.frames += s.frames;
-                t.good_frames += s.good_frames;
-                t.people += s.people;
-                t.matched += s.matched;
-                t.found += s.found;
-                t.iou_sum += s.iou_sum;
-                t.bad_frames
-                    .extend(s.bad_frames.iter().map(|f| f + seed as usize * 10_000));
+            for (t, s) in totals.iter_mut().zip(&stats) {
+                t.absorb(s, seed as usize * 10_000);
             }
         }
         for (cfg, s) in configs().iter().zip(&totals) {

@@ -145,6 +145,12 @@ pub fn chessboard_set(
     config.validate()?;
     let rig = true_rig(rig_config)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xC4E5_5B0A_0000_0001);
+    // Each sensor's undistorted rays, once: every view of the sensor reuses them.
+    let tables: Vec<[RayTable; 2]> = rig
+        .cameras
+        .iter()
+        .map(|camera| [RayTable::new(&camera.color), RayTable::new(&camera.depth)])
+        .collect();
     let mut views = Vec::new();
     for (c, camera) in rig.cameras.iter().enumerate() {
         for v in 0..config.views {
@@ -155,28 +161,14 @@ pub fn chessboard_set(
                 &camera.color,
                 &camera.color_from_depth,
             )?;
-            let color_from_board = camera.color_from_depth.compose(&depth_from_board);
-            let noise_seed = hash(seed, c as u64, u64::from(v), 0xB0A2D);
-            let images = SensorImages {
-                color: render(
-                    &camera.color,
-                    &color_from_board,
-                    config.square_m,
-                    config.inner_corners,
-                    config.noise_levels,
-                    noise_seed,
-                    Channel::Rgb,
-                ),
-                ir: render(
-                    &camera.depth,
-                    &depth_from_board,
-                    config.square_m,
-                    config.inner_corners,
-                    config.noise_levels,
-                    noise_seed ^ 1,
-                    Channel::Ir,
-                ),
-            };
+            let images = board_images(
+                camera,
+                &tables[c],
+                &depth_from_board,
+                config.square_m,
+                config,
+                hash(seed, c as u64, u64::from(v), 0xB0A2D),
+            );
             views.push(ChessboardView {
                 camera: c,
                 depth_from_board,
@@ -190,29 +182,14 @@ pub fn chessboard_set(
         .enumerate()
         .map(|(c, camera)| {
             // World = floor board frame.
-            let depth_from_board = camera.world_from_depth.inverse();
-            let color_from_board = camera.color_from_depth.compose(&depth_from_board);
-            let noise_seed = hash(seed, c as u64, 0xF100, 0xB0A2D);
-            SensorImages {
-                color: render(
-                    &camera.color,
-                    &color_from_board,
-                    config.floor_square_m,
-                    config.inner_corners,
-                    config.noise_levels,
-                    noise_seed,
-                    Channel::Rgb,
-                ),
-                ir: render(
-                    &camera.depth,
-                    &depth_from_board,
-                    config.floor_square_m,
-                    config.inner_corners,
-                    config.noise_levels,
-                    noise_seed ^ 1,
-                    Channel::Ir,
-                ),
-            }
+            board_images(
+                camera,
+                &tables[c],
+                &camera.world_from_depth.inverse(),
+                config.floor_square_m,
+                config,
+                hash(seed, c as u64, 0xF100, 0xB0A2D),
+            )
         })
         .collect();
     Ok(ChessboardSet { rig, views, floor })
@@ -313,37 +290,83 @@ fn mat_vec(a: M3, v: [f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// Both sensors' images of the board at `depth_from_board` (squares of `square_m`).
+fn board_images(
+    camera: &bodyseg_calib::RgbdCamera,
+    tables: &[RayTable; 2],
+    depth_from_board: &Pose,
+    square_m: f64,
+    config: &ChessboardConfig,
+    noise_seed: u64,
+) -> SensorImages {
+    let color_from_board = camera.color_from_depth.compose(depth_from_board);
+    let board = (square_m, config.inner_corners, config.noise_levels);
+    SensorImages {
+        color: render(
+            &tables[0],
+            &color_from_board,
+            board,
+            noise_seed,
+            Channel::Rgb,
+        ),
+        ir: render(
+            &tables[1],
+            depth_from_board,
+            board,
+            noise_seed ^ 1,
+            Channel::Ir,
+        ),
+    }
+}
+
+/// Undistorted normalised rays of a sensor's pixel centres, row-major; NaN where the
+/// undistortion fails.
+struct RayTable {
+    width: usize,
+    height: usize,
+    rays: Vec<[f64; 2]>,
+}
+
+impl RayTable {
+    fn new(intrinsics: &Intrinsics) -> Self {
+        let (w, h) = (intrinsics.width as usize, intrinsics.height as usize);
+        let rays = (0..h)
+            .into_par_iter()
+            .flat_map_iter(|v| {
+                (0..w).map(move |u| {
+                    intrinsics
+                        .unproject(u as f64, v as f64)
+                        .map_or([f64::NAN; 2], |r| [r[0], r[1]])
+                })
+            })
+            .collect();
+        RayTable {
+            width: w,
+            height: h,
+            rays,
+        }
+    }
+}
+
 #[derive(Clone, Copy, PartialEq)]
 enum Channel {
     Rgb,
     Ir,
 }
 
-/// Renders the board at `sensor_from_board` into an image of `intrinsics`: RGB8 or grey.
+/// Renders the board (square side, inner corners, noise levels) at `sensor_from_board`
+/// into an image of the sensor of `table`: RGB8 or grey. Sub-pixel rays are interpolated
+/// bilinearly between the table's pixel-centre rays (the undistortion is smooth: its
+/// error over one pixel is far below the 0.01 px a corner detector resolves).
 fn render(
-    intrinsics: &Intrinsics,
+    table: &RayTable,
     sensor_from_board: &Pose,
-    square_m: f64,
-    inner: [u32; 2],
-    noise_levels: f64,
+    (square_m, inner, noise_levels): (f64, [u32; 2], f64),
     noise_seed: u64,
     channel: Channel,
 ) -> Vec<u8> {
     const SUB: usize = 4;
-    let (w, h) = (intrinsics.width as usize, intrinsics.height as usize);
-    // Undistorted rays of pixel centres; sub-pixel rays are interpolated bilinearly
-    // between them (the undistortion is smooth: its error over one pixel is far below
-    // the 0.01 px a corner detector resolves).
-    let rays: Vec<[f64; 2]> = (0..h)
-        .into_par_iter()
-        .flat_map_iter(|v| {
-            (0..w).map(move |u| {
-                intrinsics
-                    .unproject(u as f64, v as f64)
-                    .map_or([f64::NAN; 2], |r| [r[0], r[1]])
-            })
-        })
-        .collect();
+    let (w, h, rays) = (table.width, table.height, &table.rays);
     // Plane of the board in the sensor frame: points p with n·(p − o) = 0.
     let board_from_sensor = sensor_from_board.inverse();
     let r = board_from_sensor.rotation();
@@ -395,7 +418,7 @@ fn render(
                     for sx in 0..SUB {
                         let fu = u as f64 + (sx as f64 + 0.5) / SUB as f64 - 0.5;
                         let fv = v as f64 + (sy as f64 + 0.5) / SUB as f64 - 0.5;
-                        match interpolate(&rays, w, h, fu, fv).and_then(|[x, y]| sample(x, y)) {
+                        match interpolate(rays, w, h, fu, fv).and_then(|[x, y]| sample(x, y)) {
                             Some(value) => acc += value,
                             None => background += 1,
                         }

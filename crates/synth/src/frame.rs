@@ -15,8 +15,8 @@ use crate::render::{World, camera_frame};
 use crate::rig::{true_rig, written_rig};
 use crate::scene::StaticScene;
 use crate::shade::{encode, sensor_noise, shade};
-use bodyseg_calib::{Intrinsics, Pose, Rig};
-use bodyseg_core::{PersonBox, PersonBoxes};
+use bodyseg_calib::{BackProjectOptions, CloudFrame, DepthBackProjector, Intrinsics, Pose, Rig};
+use bodyseg_core::{Label, LabeledCloud, PersonBox, PersonBoxes};
 use rayon::prelude::*;
 
 /// Label written where a depth pixel's ray hits nothing (no surface, no truth).
@@ -333,6 +333,34 @@ impl Synth {
                 boxes: self.true_boxes(t),
             },
         }
+    }
+
+    /// The exact labelled cloud of `frame`: every valid depth pixel of every camera
+    /// back-projected into the world frame with the true rig and labelled with the class
+    /// of the surface its ray hit (cameras in rig order, pixels row-major, origins kept),
+    /// the cloud a perfect parser and projection would give.
+    pub fn truth_cloud(&self, frame: &SynthFrame) -> Result<LabeledCloud, SynthError> {
+        let opts = BackProjectOptions {
+            frame: CloudFrame::World,
+            ..BackProjectOptions::default()
+        };
+        let calib = |e: bodyseg_calib::CalibError| SynthError::Invalid {
+            field: "rig".into(),
+            reason: e.to_string(),
+        };
+        let mut cloud = LabeledCloud::default();
+        for (c, (camera, images)) in self.true_rig.cameras.iter().zip(&frame.cameras).enumerate() {
+            let points = DepthBackProjector::new(camera, c as u8)
+                .map_err(calib)?
+                .back_project(&images.depth_mm, &opts)
+                .map_err(calib)?;
+            cloud.labels.extend(points.origins.iter().map(|o| {
+                Label::from_id(images.depth_labels[o.pixel as usize]).unwrap_or(Label::UNKNOWN)
+            }));
+            cloud.positions_m.extend(points.points_m);
+            cloud.origins.extend(points.origins);
+        }
+        Ok(cloud)
     }
 
     /// The true box of every person at `t_s`: the exact extent of its primitives along

@@ -2,7 +2,9 @@
 //! moves over the frames. Everything here is class background (`Owner::Scene`).
 
 use crate::config::StaticSceneConfig;
-use crate::geometry::{Material, Owner, Primitive, Shape, Texture, V3, frame_from_axis, rotate_z};
+use crate::geometry::{
+    Material, Owner, Primitive, Shape, Texture, V3, add, frame_from_axis, rotate_z, scale,
+};
 use crate::people::FloorObstacle;
 use crate::render::Room;
 use rand::{Rng, SeedableRng};
@@ -214,9 +216,9 @@ impl RobotArm {
         let dir1 = normalize2(forward, shoulder);
         let dir2 = normalize2(forward, shoulder - elbow);
         let shoulder_p = [base_top[0], base_top[1], base_top[2] + 0.12];
-        let elbow_p = add(shoulder_p, scaled(dir1, 0.55));
-        let wrist_p = add(elbow_p, scaled(dir2, 0.5));
-        let tool_p = add(wrist_p, scaled(dir2, 0.12));
+        let elbow_p = add(shoulder_p, scale(dir1, 0.55));
+        let wrist_p = add(elbow_p, scale(dir2, 0.5));
+        let tool_p = add(wrist_p, scale(dir2, 0.12));
         prims.push(Primitive {
             shape: Shape::Cylinder {
                 a: base_top,
@@ -273,14 +275,6 @@ impl RobotArm {
 fn normalize2(forward: V3, elevation: f32) -> V3 {
     let (s, c) = elevation.sin_cos();
     [forward[0] * c, forward[1] * c, s]
-}
-
-fn add(a: V3, b: V3) -> V3 {
-    crate::geometry::add(a, b)
-}
-
-fn scaled(a: V3, s: f32) -> V3 {
-    crate::geometry::scale(a, s)
 }
 
 #[cfg(test)]
