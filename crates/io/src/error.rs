@@ -288,6 +288,15 @@ pub enum IoError {
         /// The destination file.
         path: PathBuf,
     },
+    /// A MATLAB MAT file is not one bodyseg can read (not Level 5, truncated, corrupt),
+    /// lacks the variable asked for, or the variable is not a real 2-D numeric matrix.
+    #[error("{}: MAT file: {reason}", .path.display())]
+    Mat {
+        /// What is wrong.
+        reason: String,
+        /// The file.
+        path: PathBuf,
+    },
     /// A folder the caller needs does not exist (or is not a folder).
     #[error("{}: {what} folder is missing", .path.display())]
     MissingFolder {

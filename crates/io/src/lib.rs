@@ -8,7 +8,9 @@
 //! A recording's images: depth PNGs ⇄ [`DepthImage`] ([`read_depth_png`],
 //! [`write_depth_png`]) and label PNGs ⇄ [`LabelImage`](bodyseg_core::LabelImage)
 //! ([`read_label_png`], [`write_label_png`]); colour PNG/JPEG → [`RgbImage`](bodyseg_core::RgbImage)
-//! ([`read_rgb_image`]). ONNX models are read as bytes ([`read_bytes`]).
+//! ([`read_rgb_image`]). ONNX models are read as bytes ([`read_bytes`]). 2-D numeric
+//! matrices of MATLAB MAT v5 files (plain or compressed; datasets' depth maps) read as
+//! [`MatMatrix`] ([`read_mat_matrix`], [`read_mat_variable_names`]).
 //! Other crates' text files (configurations, reports) go through [`read_text`] and
 //! [`write_bytes_atomic`].
 //! Layouts are those of FORMATS.md. Readers are tolerant (unknown PLY properties and
@@ -39,6 +41,8 @@ mod boxes;
 mod error;
 mod folder;
 mod image;
+mod listing;
+mod mat;
 mod pcd;
 mod ply;
 mod text;
@@ -51,6 +55,8 @@ pub use image::{
     DepthImage, read_depth_png, read_label_png, read_rgb_image, write_depth_png, write_gray8_png,
     write_label_png, write_rgb_png,
 };
+pub use listing::{FolderEntry, list_folder};
+pub use mat::{MatMatrix, read_mat_matrix, read_mat_variable_names};
 pub use pcd::{parse_pcd, read_pcd};
 pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};
 pub use text::{first_existing_file, read_bytes, read_text};

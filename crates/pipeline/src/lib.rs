@@ -39,6 +39,7 @@ mod refine;
 mod rig;
 mod stage;
 mod synth;
+mod threedpeople;
 
 pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
@@ -65,4 +66,8 @@ pub use stage::Stage;
 pub use synth::{
     SceneSource, SynthOptions, SynthSummary, load_scene, synth_chessboard, synth_recording,
     write_frame,
+};
+pub use threedpeople::{
+    MAX_PALETTE_TOLERANCE, THREEDPEOPLE_PALETTE, ThreeDPeopleCamera, ThreeDPeopleView,
+    list_3dpeople_views, read_3dpeople_view,
 };
