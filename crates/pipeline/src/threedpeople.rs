@@ -502,8 +502,10 @@ mod tests {
     fn validate_names_the_field() {
         let mut bad = ThreeDPeopleCamera::default();
         bad.intrinsics.fx = 0.0;
-        let mut tolerant = ThreeDPeopleCamera::default();
-        tolerant.palette_tolerance = MAX_PALETTE_TOLERANCE + 1;
+        let tolerant = ThreeDPeopleCamera {
+            palette_tolerance: MAX_PALETTE_TOLERANCE + 1,
+            ..ThreeDPeopleCamera::default()
+        };
         for (camera, field) in [(bad, "fx"), (tolerant, "palette_tolerance")] {
             let message = camera.validate().map_err(|e| e.to_string());
             assert!(
