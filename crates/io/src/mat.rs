@@ -91,7 +91,7 @@ pub fn read_mat_matrix(path: &Path, name: &str) -> Result<MatMatrix, IoError> {
     })
 }
 
-/// `'a', 'b'` or `3 variables: 'a', 'b', … ` for error messages.
+/// `no variables` or `3 variables: 'a', 'b', 'c'` (the first few, then `…`) for error messages.
 fn list_names(names: &[String]) -> String {
     if names.is_empty() {
         return "no variables".to_string();

@@ -26,6 +26,9 @@
 //!   [`ThreeDPeopleCamera::depth_is_ray_distance`]). A value ≤ 0, +∞, or ≥
 //!   [`ThreeDPeopleCamera::max_depth_m`] (default 100 m; Blender writes 1e10 for empty
 //!   pixels) is no measurement; NaN and −∞ are errors.
+//!   Unverified: the notebook's skeleton plot has a standing person's joints at
+//!   z ≈ 10–17, which reads as decimetres; if `depth.mat` shares that unit, set
+//!   `depth_scale_m = 0.1`.
 //! - **Palette** ([`THREEDPEOPLE_PALETTE`]): background (153, 153, 153) and 14 parts,
 //!   as used by public code that trains on 3DPeople's `segmentation_body` (no official
 //!   table was found). Hands go to lower arms, feet to lower legs. Part edges hold
