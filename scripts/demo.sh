@@ -1,43 +1,47 @@
 #!/usr/bin/env bash
-# A two-minute look at bodyseg: builds the release binary, writes a synthetic scene (two
-# people, 100k points each, with the label errors of 2D parsing + projection), refines it
-# and prints the paper-style table of the input vs the refined labels against the truth.
+# The main job on the embedded default, in a few minutes: installs what is missing (ONNX
+# Runtime from PyPI), builds the release binary, renders a synthetic recording (two people
+# handing over an object, three Kinect v2 cameras, exact ground truth) and runs the whole
+# pipeline on it with the bundled 2D parsing model: parse -> DSA projection -> person boxes
+# -> clustering refinement -> evaluation. Prints the paper-style table (Reference, M, N,
+# M-N, M-R-N against the ground truth) and the path of the Figure-5-style picture.
 #
-#   scripts/demo.sh [OUT_DIR]        (default: demo_out/ in the repository)
+#   scripts/demo.sh [OUT_DIR] [FRAMES]      (default: demo_out/ in the repository, 24 frames)
 #
-# Files in OUT_DIR: in.ply, gt.ply, boxes.json (the scene), refined.ply (+ its resolved
-# configuration), report.md and report.json. Open the PLY files in any point-cloud viewer
-# (MeshLab, CloudCompare): colours are the class palette.
+# Files in OUT_DIR: rec/ (the recording), run/ (clouds/ refined PLY per frame, boxes/,
+# labels/ per camera, figures/, report.md, report.json, config.resolved.toml, run.json).
+# Open the PLY files in any point-cloud viewer (MeshLab, CloudCompare): colours are the
+# class palette. Running the demo again reuses the recording's finished frames.
 set -euo pipefail
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 out="${1:-demo_out}"
+frames="${2:-24}"
+
+if ! command -v cargo >/dev/null; then
+    echo "error: cargo not found: install Rust (https://rustup.rs), then run $0 again" >&2
+    exit 1
+fi
 
 echo "==> ONNX Runtime (once)"
 scripts/setup_onnxruntime.sh
 
 echo "==> building (release)"
 cargo build --release --quiet --bin bodyseg
-cargo build --release --quiet -p bodyseg-pipeline --example demo_scene
 bodyseg=target/release/bodyseg
 
-echo "==> writing the synthetic scene"
-target/release/examples/demo_scene --out "$out" --points 100000 --people 2 --seed 1
+mkdir -p "$out"
+if [ ! -f "$out/rec/rig.toml" ] || [ "$(ls "$out/rec/cam0/depth" | wc -l)" -ne "$frames" ]; then
+    echo "==> bodyseg synth: $frames frames of the handover scene"
+    "$bodyseg" synth --preset handover --frames "$frames" --seed 1 --force --out "$out/rec"
+fi
 
-echo "==> bodyseg refine"
-"$bodyseg" refine --cloud "$out/in.ply" --boxes "$out/boxes.json" --out "$out/refined.ply"
-
-echo "==> bodyseg eval"
-"$bodyseg" eval --quiet --pred "Reference=$out/in.ply" --pred "M-R-N=$out/refined.ply" \
-    --gt "$out/gt.ply" --format json --out "$out/report.json"
-# The same report as markdown: --merge of a single report converts it.
-"$bodyseg" eval --quiet --merge "$out/report.json" --format md --out "$out/report.md"
-cat "$out/report.md"
+echo "==> bodyseg run: bundled model, DSA projection, boxes, refinement, evaluation"
+"$bodyseg" run --recording "$out/rec" --parser model --out "$out/run" | tee "$out/table.md"
 
 echo
-echo "==> bodyseg parse: 2D body parts of a synthetic frame with the bundled model"
-"$bodyseg" synth --preset handover --frames 1 --seed 1 --no-preview --force --out "$out/rec"
-"$bodyseg" parse --recording "$out/rec" --frame 000000 --out "$out/parsed"
-echo "Label images and previews: $out/parsed/<camera>/parsing{,_preview}/000000.png"
-echo
-echo "Files are in $out/"
+echo "The table: $out/run/report.md (also $out/run/report.json)"
+echo "Refined clouds: $out/run/clouds/<frame>.ply; labels drawn back into the cameras: $out/run/labels/"
+for f in "$out"/run/figures/*.png; do
+    echo "Figure (input, clusters, M, N, M-N, M-R-N, truth): $f"
+done

@@ -5,6 +5,7 @@ use bodyseg_io::{PlyWriteOptions, write_boxes, write_ply};
 use bodyseg_testkit::{SyntheticPerson, human_cloud};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::sync::OnceLock;
 
 /// Seed of the synthetic person of the happy-path tests.
 pub const SEED: u64 = 20240;
@@ -116,5 +117,64 @@ pub fn bodyseg_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
     match out {
         Ok(out) => out,
         Err(e) => panic!("cannot run bodyseg {args:?}: {e}"),
+    }
+}
+
+/// Frames of the shared recording.
+pub const FRAMES: usize = 8;
+
+/// The shared recording (made once per test binary): 8 frames of two people handing
+/// over an object, 3 Kinect v2 cameras, with ground truth and simulated predictions.
+pub fn recording() -> &'static Path {
+    static REC: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    let (_, rec) = REC.get_or_init(|| {
+        let dir = tempdir();
+        let out = bodyseg(
+            dir.path(),
+            &[
+                "synth",
+                "--preset",
+                "handover",
+                "--frames",
+                &FRAMES.to_string(),
+                "--seed",
+                "5",
+                "--no-preview",
+                "--out",
+                "rec",
+            ],
+        );
+        assert_ok(&out, "bodyseg synth");
+        let rec = dir.path().join("rec");
+        (dir, rec)
+    });
+    rec
+}
+
+/// Every file under `dir`, relative, sorted.
+pub fn tree(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("list") {
+            let p = e.expect("entry").path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).expect("inside");
+                out.push(rel.to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Copies a folder tree.
+pub fn copy_tree(from: &Path, to: &Path) {
+    for rel in tree(from) {
+        let dst = to.join(&rel);
+        std::fs::create_dir_all(dst.parent().expect("parent")).expect("mkdir");
+        std::fs::copy(from.join(&rel), dst).expect("copy");
     }
 }

@@ -6,10 +6,12 @@ mod common;
 
 mod cli_bad_input;
 mod cli_boxes;
+mod cli_convert;
 mod cli_eval;
 mod cli_help;
 mod cli_parse;
 mod cli_project;
 mod cli_refine;
 mod cli_rig;
+mod cli_run;
 mod cli_synth;

@@ -2,7 +2,8 @@
 //! bodyseg-pipeline, prints per-stage summaries and errors.
 //!
 //! Exit status: 0 on success, 1 on any error (printed as one `error: ...` line on
-//! stderr), 2 for a command line clap rejects.
+//! stderr), 2 for a command line clap rejects, 3 when a batch command (run, convert)
+//! skipped frames that failed (each printed as an `error: frame ...` line).
 
 mod args;
 
@@ -28,7 +29,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     init_logging(cli.verbose);
     match run(&cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(Outcome::Done) => ExitCode::SUCCESS,
+        Ok(Outcome::SomeFramesFailed) => ExitCode::from(3),
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
@@ -53,7 +55,16 @@ fn init_logging(verbose: u8) {
         .try_init();
 }
 
-fn run(cli: &Cli) -> Result<()> {
+/// How a command that did its job ended.
+enum Outcome {
+    /// Everything was written.
+    Done,
+    /// A batch command skipped frames that failed (exit status 3).
+    SomeFramesFailed,
+}
+
+fn run(cli: &Cli) -> Result<Outcome> {
+    let mut outcome = Outcome::Done;
     let stages = match &cli.command {
         Command::Synth(args) => synth(args, cli.quiet)?,
         Command::Parse(args) => parse(args)?,
@@ -62,13 +73,90 @@ fn run(cli: &Cli) -> Result<()> {
         Command::Refine(args) => refine(args)?,
         Command::Eval(args) => eval(args)?,
         Command::Rig(cmd) => rig(cmd)?,
+        Command::Run(args) => {
+            let (stages, failed) = run_recording_command(args, cli.quiet)?;
+            if failed {
+                outcome = Outcome::SomeFramesFailed;
+            }
+            stages
+        }
+        Command::Convert(args) => {
+            let (stages, failed) = convert(args, cli.quiet)?;
+            if failed {
+                outcome = Outcome::SomeFramesFailed;
+            }
+            stages
+        }
     };
     if !cli.quiet {
         for s in stages {
-            eprintln!("{s}");
+            // One write per line: stdout (the table) may be interleaved with it.
+            let _ = std::io::stderr().write_all(format!("{s}\n").as_bytes());
         }
     }
-    Ok(())
+    Ok(outcome)
+}
+
+/// A progress bar on stderr (frames, frames per second, time left) when stderr is a
+/// terminal and not --quiet; hidden otherwise.
+fn progress_bar(quiet: bool, what: &str) -> indicatif::ProgressBar {
+    if quiet || !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(0);
+    let style = indicatif::ProgressStyle::with_template(&format!(
+        "{what} {{bar:30}} {{pos}}/{{len}} frames  {{per_sec}}  eta {{eta}}  {{msg}}"
+    ))
+    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar
+}
+
+/// Updates `bar` from the batch's progress.
+fn show_progress(bar: &indicatif::ProgressBar, p: bodyseg_pipeline::BatchProgress) {
+    bar.set_length(p.total as u64);
+    bar.set_position(p.finished as u64);
+    if p.failed > 0 || p.skipped > 0 {
+        bar.set_message(format!("{} skipped, {} failed", p.skipped, p.failed));
+    }
+}
+
+/// Prints the failed frames, one line each, on stderr.
+fn print_failures(failed: &[bodyseg_pipeline::FrameFailure]) {
+    for f in failed {
+        eprintln!("error: frame {}: {}", f.frame, f.error);
+    }
+    if !failed.is_empty() {
+        let n = failed.len();
+        eprintln!(
+            "error: {n} frame{} failed (skipped; the others were written)",
+            if n == 1 { "" } else { "s" }
+        );
+    }
+}
+
+fn run_recording_command(args: &args::RunArgs, quiet: bool) -> Result<(Vec<Stage>, bool)> {
+    let options = args.options()?;
+    let bar = progress_bar(quiet, "run");
+    let summary = bodyseg_pipeline::run_recording(&options, &|p| show_progress(&bar, p))?;
+    bar.finish_and_clear();
+    if let Some(report) = &summary.report {
+        print_stdout(&report.to_markdown())?;
+    }
+    for f in &summary.figures {
+        print_stdout(&format!("figure: {}\n", f.display()))?;
+    }
+    print_failures(&summary.outcome.failed);
+    Ok((summary.stages, !summary.outcome.failed.is_empty()))
+}
+
+fn convert(args: &args::ConvertArgs, quiet: bool) -> Result<(Vec<Stage>, bool)> {
+    let options = args.options()?;
+    let bar = progress_bar(quiet, "convert");
+    let summary = bodyseg_pipeline::convert_dataset(&options, &|p| show_progress(&bar, p))?;
+    bar.finish_and_clear();
+    print_failures(&summary.outcome.failed);
+    Ok((summary.stages, !summary.outcome.failed.is_empty()))
 }
 
 fn synth(args: &SynthArgs, quiet: bool) -> Result<Vec<Stage>> {

@@ -33,6 +33,14 @@ pub enum EvalError {
         /// Length of its `origins`.
         origins: usize,
     },
+    /// Two labellings of the same points differ in length.
+    #[error("prediction has {pred} labels, ground truth {gt}: they must label the same points")]
+    AlignedLengths {
+        /// Labels in the prediction.
+        pred: usize,
+        /// Labels in the ground truth.
+        gt: usize,
+    },
     /// Two points of one cloud come from the same camera pixel, so matching is ambiguous.
     #[error(
         "{cloud} cloud: origin (camera {camera}, pixel {pixel}) appears twice, at points {first} and {second}"

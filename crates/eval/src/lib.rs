@@ -41,6 +41,6 @@ mod report;
 
 pub use confusion::ConfusionMatrix;
 pub use error::{CloudRole, EvalError};
-pub use matching::{MatchStats, PointCounts, match_clouds};
+pub use matching::{MatchStats, PointCounts, match_clouds, score_aligned};
 pub use metrics::{ClassMetrics, Metrics};
 pub use report::{Configuration, REPORT_VERSION, Report};

@@ -152,6 +152,34 @@ pub fn match_clouds(pred: &LabeledCloud, gt: &LabeledCloud) -> Result<MatchStats
     Ok(stats)
 }
 
+/// [`match_clouds`] for two labellings of the same points (the pipeline scores each
+/// configuration against a ground truth built on the projected cloud itself): point `i`
+/// of `pred` is point `i` of `gt`, so no origin look-up is needed. Counts as
+/// [`match_clouds`] does on two clouds with equal origins.
+///
+/// # Errors
+/// [`EvalError::AlignedLengths`] when the two label lists differ in length.
+pub fn score_aligned(pred: &[Label], gt: &[Label]) -> Result<MatchStats, EvalError> {
+    if pred.len() != gt.len() {
+        return Err(EvalError::AlignedLengths {
+            pred: pred.len(),
+            gt: gt.len(),
+        });
+    }
+    let mut stats = MatchStats::default();
+    for (&p, &g) in pred.iter().zip(gt) {
+        let Some(gt_class) = g.class() else {
+            stats.counts.gt_unknown += 1;
+            continue;
+        };
+        if p.is_unknown() {
+            stats.counts.pred_unknown += 1;
+        }
+        stats.confusion.add(gt_class, predicted_class(p));
+    }
+    Ok(stats)
+}
+
 /// The class a predicted label is scored as: unknown is background (see [`match_clouds`]).
 fn predicted_class(label: Label) -> Class {
     label.class().unwrap_or(Class::Background)

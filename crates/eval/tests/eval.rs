@@ -3,6 +3,7 @@
 use bodyseg_core::{Class, Label, LabeledCloud, PointOrigin};
 use bodyseg_eval::{
     CloudRole, ConfusionMatrix, EvalError, MatchStats, Metrics, PointCounts, Report, match_clouds,
+    score_aligned,
 };
 
 /// Seed of the randomised tests; override with `BODYSEG_TEST_SEED=<u64>` to reproduce.
@@ -164,6 +165,33 @@ fn match_clouds_is_independent_of_order_and_agrees_with_brute_force() {
             "seed {seed} trial {trial}"
         );
     }
+}
+
+#[test]
+fn score_aligned_equals_match_clouds_on_the_same_points() {
+    let seed = seed();
+    let mut rng = Rng(seed ^ 0xa11);
+    for trial in 0..20 {
+        let n = 50 + rng.below(300) as u32;
+        let gt: Vec<(PointOrigin, Label)> = (0..n).map(|p| (origin(0, p), rng.label())).collect();
+        let pred: Vec<(PointOrigin, Label)> = gt
+            .iter()
+            .map(|&(o, g)| (o, if rng.below(3) == 0 { rng.label() } else { g }))
+            .collect();
+        let want = match_clouds(&cloud(&pred), &cloud(&gt)).expect("no duplicates");
+        let p: Vec<Label> = pred.iter().map(|x| x.1).collect();
+        let g: Vec<Label> = gt.iter().map(|x| x.1).collect();
+        assert_eq!(
+            score_aligned(&p, &g).expect("same length"),
+            want,
+            "seed {seed} trial {trial}"
+        );
+    }
+    let e = score_aligned(&[Label::UNKNOWN], &[]).expect_err("lengths differ");
+    assert!(
+        matches!(e, EvalError::AlignedLengths { pred: 1, gt: 0 }),
+        "{e}"
+    );
 }
 
 #[test]

@@ -27,20 +27,28 @@
 //!   `configs/default.toml`) < configuration file < command-line flags.
 //! - Units are those of the stages: metres, radians; times are wall-clock.
 
+mod batch;
 mod boxes;
 mod boxes_study;
 mod config;
+mod convert;
 mod eval;
+mod figure;
 mod fs;
 mod parse;
 mod project;
 mod projection_study;
 mod refine;
 mod rig;
+mod run;
 mod stage;
 mod synth;
 mod threedpeople;
 
+pub use batch::{
+    BatchFrame, BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameWriter, InputFile,
+    OutputFile, Shard, complete_record, record_path, run_batch,
+};
 pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{
@@ -48,10 +56,14 @@ pub use boxes::{
 };
 pub use boxes_study::{BoxStats, FrameMatch, MATCH_IOU, box_stats, match_boxes};
 pub use config::{BackProjectConfig, PipelineConfig, RefineOverrides};
+pub use convert::{
+    ConvertFormat, ConvertOptions, ConvertSummary, convert_dataset, list_recordings,
+};
 pub use eval::{
     DEFAULT_PREDICTION_NAME, EvalOptions, EvalSummary, NamedPrediction, ReportFormat, eval_files,
     merge_reports, render_report,
 };
+pub use figure::{FigurePanel, LabelView, PanelView, figure_image, panel_view};
 pub use fs::write_text;
 pub use parse::{
     BUNDLED_MODEL, LOCAL_RUNTIME_LIBRARY, ParseOptions, ParseSource, ParseSummary,
@@ -62,6 +74,10 @@ pub use project::{ProjectOptions, ProjectSummary, depth_path, parsing_path, proj
 pub use projection_study::{ProjectionStats, camera_images, parsing_images, projection_stats};
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
+pub use run::{
+    ABLATION, FigureChoice, FrameInputs, FrameProcessor, ParserChoice, RunOptions, RunSummary,
+    list_frames, run_recording,
+};
 pub use stage::Stage;
 pub use synth::{
     SceneSource, SynthOptions, SynthSummary, load_scene, synth_chessboard, synth_recording,

@@ -69,14 +69,51 @@ impl PersonRefinement {
     }
 }
 
-/// Refines one person's points (Algorithm 1's loop body). `steps` must not be
-/// `Reference`, which does no per-person work; it is treated as `none`.
-pub fn refine_person(
+/// What the refinement computes for one person whatever the steps: DBSCAN's clusters,
+/// their features and graph, and the best body tree. The steps ([`apply_steps`]) only
+/// relabel clusters and noise, so the paper's five configurations share one of these.
+#[derive(Clone, Debug)]
+pub struct PersonStructure {
+    /// DBSCAN's result on the person's points.
+    pub clustering: Clustering,
+    /// Per cluster features.
+    pub features: Vec<ClusterFeatures>,
+    /// The cluster graph.
+    pub graph: Graph,
+    /// The best body tree.
+    pub tree: BodyTree,
+}
+
+/// Clusters one person's points and finds the body tree (Algorithm 1's first half).
+pub fn analyse_person(
     positions_m: &[Vec3],
     labels: &[Label],
     cfg: &RefineConfig,
+) -> PersonStructure {
+    let clustering = dbscan(positions_m, labels, &cfg.dbscan_params());
+    let features = cluster_features(positions_m, &clustering);
+    let graph = build_graph(&features, cfg.inside_tolerance);
+    let tree = match cfg.tree {
+        TreeMode::Paper => best_tree_paper(&features, &graph),
+    };
+    PersonStructure {
+        clustering,
+        features,
+        graph,
+        tree,
+    }
+}
+
+/// Runs `steps` on a person's [`PersonStructure`] (Algorithm 1's second half). `Reference`
+/// is treated as no step (it does no per-person work; see [`refine`]).
+pub fn apply_steps(
+    structure: PersonStructure,
+    positions_m: &[Vec3],
+    labels: &[Label],
+    steps: Steps,
+    cfg: &RefineConfig,
 ) -> PersonRefinement {
-    let (merge, remove, noise) = match cfg.steps {
+    let (merge, remove, noise) = match steps {
         Steps::Reference => (false, false, false),
         Steps::Run {
             merge,
@@ -84,12 +121,12 @@ pub fn refine_person(
             noise,
         } => (merge, remove, noise),
     };
-    let clustering = dbscan(positions_m, labels, &cfg.dbscan_params());
-    let features = cluster_features(positions_m, &clustering);
-    let graph = build_graph(&features, cfg.inside_tolerance);
-    let tree = match cfg.tree {
-        TreeMode::Paper => best_tree_paper(&features, &graph),
-    };
+    let PersonStructure {
+        clustering,
+        features,
+        graph,
+        tree,
+    } = structure;
     let initial: Vec<Label> = features.iter().map(|f| f.label).collect();
     let labels_after_merge = if merge {
         merge_nodes(
@@ -135,6 +172,17 @@ pub fn refine_person(
     }
 }
 
+/// Refines one person's points (Algorithm 1's loop body) with `cfg.steps`, which must
+/// not be `Reference` (it does no per-person work; it is treated as no step).
+pub fn refine_person(
+    positions_m: &[Vec3],
+    labels: &[Label],
+    cfg: &RefineConfig,
+) -> PersonRefinement {
+    let structure = analyse_person(positions_m, labels, cfg);
+    apply_steps(structure, positions_m, labels, cfg.steps, cfg)
+}
+
 /// Runs the refinement on a whole cloud: every person box independently (in parallel),
 /// then the fuse (§5.7). `Steps::Reference` returns the cloud untouched.
 ///
@@ -144,46 +192,128 @@ pub fn refine(
     boxes: &[PersonBox],
     cfg: &RefineConfig,
 ) -> Result<RefinedCloud, RefineError> {
+    let mut out = refine_variants(cloud, boxes, cfg, &[cfg.steps])?;
+    // One configuration asked, one returned.
+    let labels = out.labels.swap_remove(0);
+    Ok(RefinedCloud {
+        cloud: cloud.with_labels(labels),
+        clusters: if cfg.steps == Steps::Reference {
+            vec![None; cloud.len()]
+        } else {
+            out.clusters
+        },
+    })
+}
+
+/// The refinement of one cloud under several step configurations ([`refine_variants`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RefinedVariants {
+    /// Per configuration, in the order asked: the refined label of every point (the
+    /// cloud's order).
+    pub labels: Vec<Vec<Label>>,
+    /// Per point, `(person index, cluster id)` as in [`RefinedCloud::clusters`]: the same
+    /// for every configuration (they share the clustering); all `None` when only
+    /// `Reference` was asked.
+    pub clusters: Vec<Option<(u32, u32)>>,
+}
+
+/// [`refine`] once per entry of `steps` (e.g. [`Steps::PAPER`], the paper's ablation), in
+/// that order, with `cfg`'s other settings, returning labels only (no copy of the
+/// points). Each person is clustered once ([`analyse_person`]) and every configuration
+/// derived from that clustering, so the five configurations cost little more than one;
+/// each label list equals what [`refine`] gives with `cfg.steps` set to that entry.
+pub fn refine_variants(
+    cloud: &LabeledCloud,
+    boxes: &[PersonBox],
+    cfg: &RefineConfig,
+    steps: &[Steps],
+) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
     cloud.validate()?;
     if let Some(reason) = boxes.iter().find_map(PersonBox::invalid_reason) {
         return Err(RefineError::InvalidBox { reason });
     }
-    if cfg.steps == Steps::Reference {
-        return Ok(RefinedCloud {
-            cloud: cloud.clone(),
-            clusters: vec![None; cloud.len()],
-        });
-    }
-    let people: Vec<(Vec<u32>, PersonRefinement)> = boxes
-        .par_iter()
-        .map(|b| {
-            let test = b.test();
-            let idx: Vec<u32> = (0..cloud.len() as u32)
-                .filter(|&i| test.contains(cloud.positions_m[i as usize]))
-                .collect();
-            // A box holding the whole cloud (a cloud cropped to one person) needs no copy.
-            let r = if idx.len() == cloud.len() {
-                refine_person(&cloud.positions_m, &cloud.labels, cfg)
-            } else {
-                let pos: Vec<Vec3> = idx.iter().map(|&i| cloud.positions_m[i as usize]).collect();
-                let lab: Vec<Label> = idx.iter().map(|&i| cloud.labels[i as usize]).collect();
-                refine_person(&pos, &lab, cfg)
-            };
-            tracing::debug!(
-                person = b.id,
-                points = idx.len(),
-                clusters = r.features.len(),
-                noise = r.clustering.num_noise(),
-                tree_valid = r.tree.is_valid(),
-                merged = r.merged(),
-                removed = r.removed(),
-                "refined person"
-            );
-            (idx, r)
-        })
+    let runs: Vec<Steps> = steps
+        .iter()
+        .copied()
+        .filter(|s| *s != Steps::Reference)
         .collect();
-    Ok(fuse(cloud, boxes, &people, cfg.keep_outside_boxes))
+    // Per person: its point indices and one refinement per entry of `runs`.
+    let people: Vec<(Vec<u32>, Vec<PersonRefinement>)> = if runs.is_empty() {
+        Vec::new()
+    } else {
+        boxes
+            .par_iter()
+            .map(|b| {
+                let test = b.test();
+                let idx: Vec<u32> = (0..cloud.len() as u32)
+                    .filter(|&i| test.contains(cloud.positions_m[i as usize]))
+                    .collect();
+                // A box holding the whole cloud (a cloud cropped to one person) needs no
+                // copy.
+                let copied;
+                let (pos, lab): (&[Vec3], &[Label]) = if idx.len() == cloud.len() {
+                    (&cloud.positions_m, &cloud.labels)
+                } else {
+                    copied = (
+                        idx.iter()
+                            .map(|&i| cloud.positions_m[i as usize])
+                            .collect::<Vec<Vec3>>(),
+                        idx.iter()
+                            .map(|&i| cloud.labels[i as usize])
+                            .collect::<Vec<Label>>(),
+                    );
+                    (&copied.0, &copied.1)
+                };
+                let structure = analyse_person(pos, lab, cfg);
+                let refinements: Vec<PersonRefinement> = runs
+                    .iter()
+                    .map(|&s| apply_steps(structure.clone(), pos, lab, s, cfg))
+                    .collect();
+                if let Some(r) = refinements.last() {
+                    tracing::debug!(
+                        person = b.id,
+                        points = idx.len(),
+                        clusters = r.features.len(),
+                        noise = r.clustering.num_noise(),
+                        tree_valid = r.tree.is_valid(),
+                        merged = r.merged(),
+                        removed = r.removed(),
+                        "refined person"
+                    );
+                }
+                (idx, refinements)
+            })
+            .collect()
+    };
+    let mut run_index = 0;
+    let mut out = RefinedVariants {
+        labels: Vec::with_capacity(steps.len()),
+        clusters: Vec::new(),
+    };
+    for s in steps {
+        if *s == Steps::Reference {
+            out.labels.push(cloud.labels.clone());
+            continue;
+        }
+        let per_person: Vec<(&[u32], &PersonRefinement)> = people
+            .iter()
+            .map(|(idx, rs)| (idx.as_slice(), &rs[run_index]))
+            .collect();
+        // The clusters are the same for every configuration: collect them once.
+        let first = run_index == 0;
+        let (labels, clusters) =
+            fuse_labels(cloud, boxes, &per_person, cfg.keep_outside_boxes, first);
+        out.labels.push(labels);
+        if first {
+            out.clusters = clusters;
+        }
+        run_index += 1;
+    }
+    if out.clusters.is_empty() {
+        out.clusters = vec![None; cloud.len()];
+    }
+    Ok(out)
 }
 
 /// Fuse (§5.7): a point inside exactly one box takes that person's label; inside several,
@@ -197,11 +327,33 @@ pub fn fuse(
     people: &[(Vec<u32>, PersonRefinement)],
     keep_outside_boxes: bool,
 ) -> RefinedCloud {
+    let refs: Vec<(&[u32], &PersonRefinement)> =
+        people.iter().map(|(idx, r)| (idx.as_slice(), r)).collect();
+    let (labels, clusters) = fuse_labels(cloud, boxes, &refs, keep_outside_boxes, true);
+    RefinedCloud {
+        cloud: cloud.with_labels(labels),
+        clusters,
+    }
+}
+
+/// [`fuse`] on borrowed people: the labels, and the clusters when `with_clusters` (else
+/// an empty list).
+fn fuse_labels(
+    cloud: &LabeledCloud,
+    boxes: &[PersonBox],
+    people: &[(&[u32], &PersonRefinement)],
+    keep_outside_boxes: bool,
+    with_clusters: bool,
+) -> (Vec<Label>, Vec<Option<(u32, u32)>>) {
     let n = cloud.len();
     // Per point: the labels given by the people whose box holds it, as (person, label).
     let mut first: Vec<Option<(u32, Label)>> = vec![None; n];
     let mut disagree = vec![false; n];
-    let mut clusters = vec![None; n];
+    let mut clusters = if with_clusters {
+        vec![None; n]
+    } else {
+        Vec::new()
+    };
     for (p, (idx, r)) in people.iter().enumerate() {
         for (k, &i) in idx.iter().enumerate() {
             let i = i as usize;
@@ -209,6 +361,9 @@ pub fn fuse(
             match first[i] {
                 None => {
                     first[i] = Some((p as u32, l));
+                    if !with_clusters {
+                        continue;
+                    }
                     clusters[i] = r
                         .clustering
                         .cluster_of
@@ -235,10 +390,7 @@ pub fn fuse(
             }
         })
         .collect();
-    RefinedCloud {
-        cloud: cloud.with_labels(labels),
-        clusters,
-    }
+    (labels, clusters)
 }
 
 /// The label that the person whose box centre is nearest (horizontally) gave point `i`.
@@ -246,7 +398,7 @@ fn nearest_box_label(
     p: Vec3,
     i: u32,
     boxes: &[PersonBox],
-    people: &[(Vec<u32>, PersonRefinement)],
+    people: &[(&[u32], &PersonRefinement)],
 ) -> Label {
     let mut best: Option<(f32, Label)> = None;
     for (b, (idx, r)) in boxes.iter().zip(people) {

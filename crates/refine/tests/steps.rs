@@ -412,3 +412,31 @@ fn bad_config_and_bad_cloud_are_errors_naming_the_problem() {
     };
     assert!(refine(&p.cloud, &[flat], &RefineConfig::default()).is_err());
 }
+
+#[test]
+fn refine_variants_equal_one_refine_per_configuration() {
+    let p = bodyseg_testkit::human_cloud(20_000, 5);
+    // Two boxes (the person split in two halves) so the fuse sees several people.
+    let mut left = p.person_box.clone();
+    left.half_extents_m[0] *= 0.6;
+    left.center_m[0] -= 0.4 * p.person_box.half_extents_m[0];
+    let boxes = [p.person_box.clone(), left];
+    let base = RefineConfig::default();
+    let variants =
+        bodyseg_refine::refine_variants(&p.cloud, &boxes, &base, &Steps::PAPER).expect("valid");
+    assert_eq!(variants.labels.len(), Steps::PAPER.len());
+    let mut distinct = std::collections::HashSet::new();
+    for (steps, got) in Steps::PAPER.iter().zip(&variants.labels) {
+        let cfg = RefineConfig {
+            steps: *steps,
+            ..base.clone()
+        };
+        let want = refine(&p.cloud, &boxes, &cfg).expect("valid");
+        assert_eq!(*got, want.cloud.labels, "{steps}");
+        if *steps != Steps::Reference {
+            assert_eq!(variants.clusters, want.clusters, "{steps}");
+        }
+        distinct.insert(got.clone());
+    }
+    assert!(distinct.len() >= 4, "the configurations differ");
+}

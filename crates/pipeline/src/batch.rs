@@ -1,0 +1,595 @@
+//! The resumable, sharded frame loop under `bodyseg run` and `bodyseg convert`.
+//!
+//! A batch is a sorted list of frames (jobs). Each process takes its shard of the list
+//! (`--shard K/N`: every frame whose position modulo N is K), skips the frames an
+//! earlier run finished, and processes the rest in parallel (rayon), each frame on its
+//! own: one frame's data in memory per worker, whatever the recording's length.
+//!
+//! Completeness: every output file is written atomically (temporary + rename), and a
+//! frame's record `OUT/frames/<frame>.json` is written last, listing the outputs with
+//! their sizes and the hash of the configuration that made them. A frame is complete
+//! when its record reads back, carries the same configuration hash, every listed output
+//! exists with the listed size and every input file it read has the size and modification
+//! time it had; anything else (no record: killed midway; another configuration; a file
+//! deleted since; a recording generated again) is done again. A frame that fails is reported and
+//! skipped, and the files it wrote in that attempt are removed, so no partial frame is
+//! left behind.
+
+use crate::stage::Stage;
+use anyhow::{Context, Result, bail};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+/// Folder of the per-frame records, inside the output folder.
+pub const RECORDS_FOLDER: &str = "frames";
+
+/// The part of a batch one process does: frames whose position in the sorted list, modulo
+/// `count`, equals `index` (0-based). `0/1` is the whole batch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, `0..count`.
+    pub index: u32,
+    /// Number of shards.
+    pub count: u32,
+}
+
+impl Shard {
+    /// The whole batch.
+    pub const ALL: Shard = Shard { index: 0, count: 1 };
+
+    /// Whether the frame at `position` of the sorted list is this shard's.
+    pub fn holds(self, position: usize) -> bool {
+        position % self.count as usize == self.index as usize
+    }
+
+    /// How many of `len` frames are this shard's.
+    pub fn share(self, len: usize) -> usize {
+        (0..len).filter(|&i| self.holds(i)).count()
+    }
+
+    /// Suffix of this shard's report files: empty for the whole batch, else
+    /// `.shard-K-of-N`.
+    pub fn suffix(self) -> String {
+        if self.count == 1 {
+            String::new()
+        } else {
+            format!(".shard-{}-of-{}", self.index, self.count)
+        }
+    }
+}
+
+impl Default for Shard {
+    fn default() -> Self {
+        Shard::ALL
+    }
+}
+
+impl fmt::Display for Shard {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+impl FromStr for Shard {
+    type Err = String;
+
+    /// `K/N` with `0 <= K < N` (a Slurm array task id and the array size).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let bad = || format!("shard must be K/N with 0 <= K < N (e.g. 3/8), got {s:?}");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let index: u32 = k.trim().parse().map_err(|_| bad())?;
+        let count: u32 = n.trim().parse().map_err(|_| bad())?;
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// One file a frame wrote: its path relative to the output folder and its size.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OutputFile {
+    /// Path relative to the output folder, `/`-separated.
+    pub path: String,
+    /// Size in bytes.
+    pub bytes: u64,
+}
+
+/// One file a frame read: its path, size and modification time (nanoseconds since the
+/// Unix epoch; 0 where the file system has none).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct InputFile {
+    /// The path as given to the reader.
+    pub path: String,
+    /// Size in bytes.
+    pub bytes: u64,
+    /// Modification time, nanoseconds since the Unix epoch.
+    pub modified_ns: u128,
+}
+
+impl InputFile {
+    /// The fingerprint of `path` now; `None` when it cannot be inspected.
+    pub fn of(path: &Path) -> Option<InputFile> {
+        let m = std::fs::metadata(path).ok()?;
+        let modified_ns = m
+            .modified()
+            .ok()
+            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+            .map_or(0, |d| d.as_nanos());
+        Some(InputFile {
+            path: path.display().to_string(),
+            bytes: m.len(),
+            modified_ns,
+        })
+    }
+}
+
+/// What a finished frame left: `OUT/frames/<frame>.json`. Holds no times, so that an
+/// interrupted and resumed batch writes the same records as an uninterrupted one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameRecord {
+    /// The frame's id (`000012`; `<recording>/000012` in a batch of recordings).
+    pub frame: String,
+    /// Hash of everything that decides the outputs (configuration, options); a record
+    /// with another hash is out of date.
+    pub config_hash: String,
+    /// Points of the frame's cloud.
+    pub points: usize,
+    /// Points the projection left unknown.
+    pub unknown: usize,
+    /// Person boxes.
+    pub people: usize,
+    /// The files written, in writing order.
+    pub outputs: Vec<OutputFile>,
+    /// The files read, with size and modification time: a frame whose inputs changed
+    /// since (a recording generated again) is done again.
+    #[serde(default)]
+    pub inputs: Vec<InputFile>,
+    /// The frame's evaluation (a bodyseg-eval report in its JSON form) when the input has
+    /// ground truth.
+    pub scores: Option<serde_json::Value>,
+}
+
+/// A frame that failed: its id and the error, one line.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FrameFailure {
+    /// The frame's id.
+    pub frame: String,
+    /// What went wrong, naming the file.
+    pub error: String,
+}
+
+/// Progress of a batch, handed to the caller's callback after each frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BatchProgress {
+    /// Frames of this shard finished so far (processed, skipped or failed).
+    pub finished: usize,
+    /// Frames of this shard.
+    pub total: usize,
+    /// Of `finished`, those that failed.
+    pub failed: usize,
+    /// Of `finished`, those skipped as already complete.
+    pub skipped: usize,
+}
+
+/// What a batch did.
+#[derive(Debug)]
+pub struct BatchOutcome {
+    /// Records of this shard's complete frames (processed now or skipped), in list order.
+    pub records: Vec<FrameRecord>,
+    /// Frames processed now.
+    pub processed: usize,
+    /// Frames skipped as complete.
+    pub skipped: usize,
+    /// Frames that failed, in list order.
+    pub failed: Vec<FrameFailure>,
+    /// Per stage, the time summed over the processed frames (worker time, not wall time),
+    /// in the order stages first appeared.
+    pub stage_totals: Vec<(&'static str, Duration)>,
+    /// Wall-clock time of the frame loop.
+    pub elapsed: Duration,
+}
+
+impl BatchOutcome {
+    /// Frames processed per second of the loop's wall-clock time.
+    pub fn frames_per_second(&self) -> f64 {
+        self.processed as f64 / self.elapsed.as_secs_f64().max(1e-9)
+    }
+
+    /// One summary line per stage (total over the processed frames, and per frame), then
+    /// the loop's: frames processed (per second), skipped, failed.
+    pub fn stage_lines(&self) -> Vec<Stage> {
+        let mut stages: Vec<Stage> = self
+            .stage_totals
+            .iter()
+            .map(|(name, total)| {
+                let per = total.as_secs_f64() * 1e3 / self.processed.max(1) as f64;
+                Stage::new(
+                    name,
+                    *total,
+                    format!("{per:.1} ms per frame (summed over workers)"),
+                )
+            })
+            .collect();
+        stages.push(Stage::new(
+            "frames",
+            self.elapsed,
+            format!(
+                "{} processed ({:.1} frames/s), {} skipped as complete, {} failed",
+                self.processed,
+                self.frames_per_second(),
+                self.skipped,
+                self.failed.len()
+            ),
+        ));
+        stages
+    }
+}
+
+/// Writes a frame's files into the output folder, remembering each one: the record lists
+/// them, and a failed frame's are removed.
+#[derive(Debug)]
+pub struct FrameWriter {
+    out: PathBuf,
+    written: Vec<OutputFile>,
+}
+
+impl FrameWriter {
+    /// A writer into the output folder `out` (the batch makes one per frame; benches and
+    /// tests may too).
+    pub fn new(out: &Path) -> FrameWriter {
+        FrameWriter {
+            out: out.to_path_buf(),
+            written: Vec::new(),
+        }
+    }
+
+    /// Writes the file `relative` (inside the output folder; parent folders created) with
+    /// `write`, which must write it atomically (bodyseg-io's writers do), and records it.
+    ///
+    /// # Errors
+    /// The folder cannot be created, `write` fails, or the file cannot be inspected.
+    pub fn write(
+        &mut self,
+        relative: &str,
+        write: impl FnOnce(&Path) -> Result<()>,
+    ) -> Result<PathBuf> {
+        let path = self.out.join(relative);
+        if let Some(parent) = path.parent() {
+            bodyseg_io::create_folder(parent)?;
+        }
+        write(&path)?;
+        let bytes = std::fs::metadata(&path)
+            .with_context(|| format!("{}: cannot read back its size", path.display()))?
+            .len();
+        self.written.push(OutputFile {
+            path: relative.to_string(),
+            bytes,
+        });
+        Ok(path)
+    }
+
+    /// The files written so far.
+    pub fn outputs(&self) -> &[OutputFile] {
+        &self.written
+    }
+
+    /// Removes every file written (a failed frame leaves nothing).
+    fn remove_all(&self) {
+        for f in &self.written {
+            let _ = std::fs::remove_file(self.out.join(&f.path));
+        }
+    }
+}
+
+/// Where the record of `frame` goes.
+pub fn record_path(out: &Path, frame: &str) -> PathBuf {
+    out.join(RECORDS_FOLDER).join(format!("{frame}.json"))
+}
+
+/// The record of `frame` if the frame is complete under `config_hash` (see the module
+/// documentation), else `None`.
+pub fn complete_record(out: &Path, frame: &str, config_hash: &str) -> Option<FrameRecord> {
+    let text = std::fs::read_to_string(record_path(out, frame)).ok()?;
+    let record: FrameRecord = serde_json::from_str(&text).ok()?;
+    if record.frame != frame || record.config_hash != config_hash {
+        return None;
+    }
+    let intact = record.outputs.iter().all(|f| {
+        std::fs::metadata(out.join(&f.path)).is_ok_and(|m| m.is_file() && m.len() == f.bytes)
+    });
+    let inputs_unchanged = record
+        .inputs
+        .iter()
+        .all(|f| InputFile::of(Path::new(&f.path)).as_ref() == Some(f));
+    (intact && inputs_unchanged).then_some(record)
+}
+
+/// Hash of a text (FNV-1a, 64 bits) as 16 hex digits: stable across runs and machines,
+/// unlike std's `DefaultHasher`.
+pub fn text_hash(text: &str) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+/// Removes the temporary files (`.bodyseg-*.tmp`) a killed run left in `out` and its
+/// sub-folders. Only for a whole batch: with shards, another process may be writing.
+pub fn remove_stale_temporaries(out: &Path) {
+    let mut stack = vec![out.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let path = e.path();
+            let name = e.file_name().to_string_lossy().into_owned();
+            match e.file_type() {
+                Ok(t) if t.is_dir() => stack.push(path),
+                Ok(t) if t.is_file() && name.starts_with(".bodyseg-") && name.ends_with(".tmp") => {
+                    let _ = std::fs::remove_file(&path);
+                }
+                _ => {}
+            }
+        }
+    }
+}
+
+/// What [`run_batch`] calls per frame: the frame, a writer for its files, its stage
+/// records; returns its record.
+pub type FrameFn<'a, J> =
+    dyn Fn(BatchFrame<'_, J>, &mut FrameWriter, &mut Vec<Stage>) -> Result<FrameRecord> + Sync + 'a;
+
+/// The frame a batch hands its `process` function.
+#[derive(Debug)]
+pub struct BatchFrame<'a, J> {
+    /// The frame's id.
+    pub id: &'a str,
+    /// The caller's job description.
+    pub job: &'a J,
+}
+
+/// Runs `process` on this shard's frames of `jobs` (`(id, job)`, sorted by id, ids
+/// unique) that are not complete yet (all of them with `redo`), in parallel. `process`
+/// writes its files through the [`FrameWriter`], pushes its stages, and returns the
+/// record (the batch fills in `outputs`, then writes the record).
+///
+/// # Errors
+/// Only for the batch as a whole: ids not unique. A frame's error is a [`FrameFailure`].
+pub fn run_batch<J: Sync>(
+    jobs: &[(String, J)],
+    out: &Path,
+    shard: Shard,
+    config_hash: &str,
+    redo: bool,
+    progress: &(dyn Fn(BatchProgress) + Sync),
+    process: &FrameFn<'_, J>,
+) -> Result<BatchOutcome> {
+    for w in jobs.windows(2) {
+        if w[0].0 == w[1].0 {
+            bail!("frame {} is listed twice", w[0].0);
+        }
+    }
+    let mine: Vec<&(String, J)> = jobs
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| shard.holds(*i))
+        .map(|(_, j)| j)
+        .collect();
+    let total = mine.len();
+    let finished = AtomicUsize::new(0);
+    let failed_count = AtomicUsize::new(0);
+    let skipped_count = AtomicUsize::new(0);
+    let totals: Mutex<Vec<(&'static str, Duration)>> = Mutex::new(Vec::new());
+    let start = Instant::now();
+
+    enum Done {
+        Processed(FrameRecord),
+        Skipped(FrameRecord),
+        Failed(FrameFailure),
+    }
+    let results: Vec<Done> =
+        mine.par_iter()
+            .with_max_len(1)
+            .map(|(id, job)| {
+                let done = if let Some(r) = (!redo)
+                    .then(|| complete_record(out, id, config_hash))
+                    .flatten()
+                {
+                    skipped_count.fetch_add(1, Ordering::Relaxed);
+                    Done::Skipped(r)
+                } else {
+                    let mut writer = FrameWriter::new(out);
+                    let mut stages = Vec::new();
+                    let result = process(BatchFrame { id, job }, &mut writer, &mut stages)
+                        .and_then(|mut record| {
+                            record.frame = id.clone();
+                            record.config_hash = config_hash.to_string();
+                            record.outputs = writer.outputs().to_vec();
+                            let json = serde_json::to_string_pretty(&record)?;
+                            let path = record_path(out, id);
+                            if let Some(parent) = path.parent() {
+                                bodyseg_io::create_folder(parent)?;
+                            }
+                            bodyseg_io::write_bytes_atomic(&path, json.as_bytes())?;
+                            Ok(record)
+                        });
+                    match result {
+                        Ok(record) => {
+                            if let Ok(mut t) = totals.lock() {
+                                for s in &stages {
+                                    match t.iter_mut().find(|(n, _)| *n == s.name) {
+                                        Some((_, d)) => *d += s.elapsed,
+                                        None => t.push((s.name, s.elapsed)),
+                                    }
+                                }
+                            }
+                            Done::Processed(record)
+                        }
+                        Err(e) => {
+                            writer.remove_all();
+                            let _ = std::fs::remove_file(record_path(out, id));
+                            failed_count.fetch_add(1, Ordering::Relaxed);
+                            tracing::debug!(frame = %id, "frame failed: {e:#}");
+                            Done::Failed(FrameFailure {
+                                frame: id.clone(),
+                                error: format!("{e:#}"),
+                            })
+                        }
+                    }
+                };
+                progress(BatchProgress {
+                    finished: finished.fetch_add(1, Ordering::Relaxed) + 1,
+                    total,
+                    failed: failed_count.load(Ordering::Relaxed),
+                    skipped: skipped_count.load(Ordering::Relaxed),
+                });
+                done
+            })
+            .collect();
+
+    let mut outcome = BatchOutcome {
+        records: Vec::new(),
+        processed: 0,
+        skipped: 0,
+        failed: Vec::new(),
+        stage_totals: totals.into_inner().unwrap_or_default(),
+        elapsed: start.elapsed(),
+    };
+    for r in results {
+        match r {
+            Done::Processed(record) => {
+                outcome.processed += 1;
+                outcome.records.push(record);
+            }
+            Done::Skipped(record) => {
+                outcome.skipped += 1;
+                outcome.records.push(record);
+            }
+            Done::Failed(f) => outcome.failed.push(f),
+        }
+    }
+    Ok(outcome)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_split_the_list_without_overlap() {
+        let shards: Vec<Shard> = (0..3).map(|k| Shard { index: k, count: 3 }).collect();
+        for i in 0..20 {
+            assert_eq!(shards.iter().filter(|s| s.holds(i)).count(), 1, "{i}");
+        }
+        assert!(Shard::ALL.holds(7));
+        assert_eq!("2/3".parse::<Shard>(), Ok(shards[2]));
+        for bad in ["3/3", "1", "a/2", "0/0", "-1/2"] {
+            let e = bad.parse::<Shard>().expect_err(bad);
+            assert!(e.contains("K/N"), "{e}");
+        }
+        assert_eq!(shards[1].suffix(), ".shard-1-of-3");
+        assert_eq!(Shard::ALL.suffix(), "");
+    }
+
+    #[test]
+    fn text_hash_is_stable_and_sensitive() {
+        assert_eq!(text_hash(""), "cbf29ce484222325");
+        assert_ne!(text_hash("a"), text_hash("b"));
+    }
+
+    fn record_of(id: &str) -> Result<FrameRecord> {
+        Ok(FrameRecord {
+            frame: id.to_string(),
+            config_hash: String::new(),
+            points: 1,
+            unknown: 0,
+            people: 0,
+            outputs: Vec::new(),
+            inputs: Vec::new(),
+            scores: None,
+        })
+    }
+
+    #[test]
+    fn complete_frames_are_skipped_failed_ones_leave_nothing() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let out = dir.path();
+        let jobs: Vec<(String, u32)> = (0..6).map(|i| (format!("{i:03}"), i)).collect();
+        let process = |f: BatchFrame<'_, u32>, w: &mut FrameWriter, _: &mut Vec<Stage>| {
+            w.write(&format!("a/{}.txt", f.id), |p| {
+                Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
+            })?;
+            if *f.job == 4 {
+                bail!("frame {} is bad", f.id);
+            }
+            record_of(f.id)
+        };
+        let first =
+            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        assert_eq!((first.processed, first.skipped), (5, 0));
+        assert_eq!(first.failed.len(), 1);
+        assert!(first.failed[0].error.contains("004 is bad"));
+        assert!(
+            !out.join("a/004.txt").exists(),
+            "a failed frame leaves nothing"
+        );
+        assert!(!record_path(out, "004").exists());
+
+        let again =
+            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        assert_eq!((again.processed, again.skipped), (0, 5));
+        assert_eq!(again.records, first.records);
+
+        // A deleted output or another configuration makes a frame incomplete.
+        std::fs::remove_file(out.join("a/002.txt")).expect("remove");
+        let third =
+            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        assert_eq!((third.processed, third.skipped), (1, 4));
+        let other =
+            run_batch(&jobs, out, Shard::ALL, "h2", false, &|_| {}, &process).expect("batch");
+        assert_eq!((other.processed, other.skipped), (5, 0));
+
+        // Shards split the work.
+        let s = run_batch(
+            &jobs,
+            out,
+            Shard { index: 1, count: 2 },
+            "h3",
+            false,
+            &|_| {},
+            &process,
+        )
+        .expect("batch");
+        let ids: Vec<&str> = s.records.iter().map(|r| r.frame.as_str()).collect();
+        assert_eq!(ids, ["001", "003", "005"]);
+    }
+
+    #[test]
+    fn a_frame_whose_input_changed_is_done_again() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let out = dir.path().join("out");
+        let input = dir.path().join("in.txt");
+        std::fs::write(&input, b"one").expect("write");
+        let jobs = vec![("000".to_string(), ())];
+        let process = |f: BatchFrame<'_, ()>, _: &mut FrameWriter, _: &mut Vec<Stage>| {
+            let mut r = record_of(f.id)?;
+            r.inputs.extend(InputFile::of(&input));
+            Ok(r)
+        };
+        let run = || run_batch(&jobs, &out, Shard::ALL, "h", false, &|_| {}, &process);
+        assert_eq!(run().expect("batch").processed, 1);
+        assert_eq!(run().expect("batch").skipped, 1);
+        std::fs::write(&input, b"three").expect("rewrite");
+        assert_eq!(run().expect("batch").processed, 1, "the input changed size");
+    }
+}

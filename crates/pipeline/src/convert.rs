@@ -1,0 +1,332 @@
+//! `bodyseg convert`: a dataset in batch → labelled point clouds, resumable and sharded
+//! (the frame loop of [`crate::batch`]).
+//!
+//! - `recording`: one recording, or a folder of recordings. Each frame runs through the
+//!   pipeline as in `bodyseg run` (no figures, no label images) into
+//!   `OUT/<recording>/clouds/`, `boxes/` (`OUT/clouds/`... for a single recording); per
+//!   recording `report.md` / `report.json`, and over all of them `OUT/report.json`.
+//! - `3dpeople`: every view of a 3DPeople dataset → `OUT/clouds/<view>.ply`, the
+//!   ground-truth body parts on the back-projected depth, camera colours.
+//!
+//! Records go to `OUT/frames/<id>.json` (id `<recording>/<frame>` or the view's stem);
+//! report files carry the shard's suffix (`report.shard-3-of-8.json`) so every shard can
+//! write into one shared folder, and `bodyseg eval --merge` sums them.
+
+use crate::batch::{
+    BatchFrame, BatchOutcome, BatchProgress, FrameRecord, FrameWriter, InputFile, Shard, run_batch,
+    text_hash,
+};
+use crate::config::PipelineConfig;
+use crate::run::{FigureChoice, FrameProcessor, ParserChoice, RunOptions, RunSummary, list_frames};
+use crate::stage::{Stage, plural, timed};
+use crate::threedpeople::{ThreeDPeopleCamera, list_3dpeople_views, read_3dpeople_view};
+use anyhow::{Context, Result, bail};
+use bodyseg_eval::Report;
+use bodyseg_io::{PlyColors, PlyFormat, PlyWriteOptions};
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+/// The dataset layouts `bodyseg convert` reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConvertFormat {
+    /// bodyseg recordings (FORMATS.md).
+    Recording,
+    /// The 3DPeople dataset.
+    ThreeDPeople,
+}
+
+/// What [`convert_dataset`] reads, writes and how.
+#[derive(Clone, Debug)]
+pub struct ConvertOptions {
+    /// The dataset folder.
+    pub input: PathBuf,
+    /// Its layout.
+    pub format: ConvertFormat,
+    /// The resolved configuration, validated.
+    pub config: PipelineConfig,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Recordings: where the 2D labels come from.
+    pub parser: ParserChoice,
+    /// This process's part of the frames.
+    pub shard: Shard,
+    /// Recordings: also write the projected cloud and the ablation's clouds.
+    pub write_stages: bool,
+    /// Redo complete frames.
+    pub redo: bool,
+    /// 3DPeople: intrinsics, depth unit and palette matching.
+    pub camera_3dpeople: ThreeDPeopleCamera,
+}
+
+/// What [`convert_dataset`] did: as `bodyseg run` (no figures).
+pub type ConvertSummary = RunSummary;
+
+/// The summary of a conversion once its reports are written.
+fn summary(
+    frames: usize,
+    outcome: BatchOutcome,
+    report: Option<Report>,
+    written: Vec<PathBuf>,
+    mut stages: Vec<Stage>,
+    took: std::time::Duration,
+) -> ConvertSummary {
+    stages.push(Stage::new(
+        "report",
+        took,
+        plural(written.len(), "file", "files"),
+    ));
+    RunSummary {
+        frames,
+        outcome,
+        report,
+        written,
+        figures: Vec::new(),
+        stages,
+    }
+}
+
+/// The recordings of `input`: itself when it holds `rig.toml`, else its sub-folders that
+/// do (sorted by name), named by folder.
+///
+/// # Errors
+/// `input` is not a folder, or holds no recording.
+pub fn list_recordings(input: &Path) -> Result<Vec<(String, PathBuf)>> {
+    bodyseg_io::require_folder(input, "dataset")?;
+    if input.join("rig.toml").is_file() {
+        return Ok(vec![(String::new(), input.to_path_buf())]);
+    }
+    let mut found: Vec<(String, PathBuf)> = std::fs::read_dir(input)
+        .with_context(|| format!("{}: cannot list", input.display()))?
+        .flatten()
+        .filter(|e| e.path().join("rig.toml").is_file())
+        .map(|e| (e.file_name().to_string_lossy().into_owned(), e.path()))
+        .filter(|(name, _)| !name.starts_with('.'))
+        .collect();
+    found.sort();
+    if found.is_empty() {
+        bail!(
+            "{}: no recording (a folder with rig.toml) in it or below it",
+            input.display()
+        );
+    }
+    Ok(found)
+}
+
+/// Converts a dataset (see the module documentation).
+///
+/// # Errors
+/// The dataset cannot be listed, a recording's rig or the model cannot be loaded, the
+/// output folder cannot be created, reports cannot be written. A frame's failure is not
+/// an error: it is in [`BatchOutcome::failed`].
+pub fn convert_dataset(
+    opts: &ConvertOptions,
+    progress: &(dyn Fn(BatchProgress) + Sync),
+) -> Result<ConvertSummary> {
+    match opts.format {
+        ConvertFormat::Recording => convert_recordings(opts, progress),
+        ConvertFormat::ThreeDPeople => convert_3dpeople(opts, progress),
+    }
+}
+
+fn convert_recordings(
+    opts: &ConvertOptions,
+    progress: &(dyn Fn(BatchProgress) + Sync),
+) -> Result<ConvertSummary> {
+    let (setup, took) = timed(|| -> Result<_> {
+        let recordings = list_recordings(&opts.input)?;
+        bodyseg_io::create_folder(&opts.out)?;
+        let mut processors = Vec::new();
+        let mut jobs: Vec<(String, (usize, String))> = Vec::new();
+        for (k, (name, path)) in recordings.iter().enumerate() {
+            let prefix = if name.is_empty() {
+                String::new()
+            } else {
+                format!("{name}/")
+            };
+            let run = run_options(opts, path, &opts.out.join(name));
+            let processor = FrameProcessor::open(&run, BTreeSet::new())
+                .with_context(|| format!("recording {}", path.display()))?
+                .with_prefix(prefix.clone());
+            let rig = processor.rig().clone();
+            for frame in list_frames(path, &rig)? {
+                jobs.push((format!("{prefix}{frame}"), (k, frame)));
+            }
+            processors.push(processor);
+        }
+        jobs.sort_by(|a, b| a.0.cmp(&b.0));
+        if opts.shard == Shard::ALL {
+            crate::batch::remove_stale_temporaries(&opts.out);
+        }
+        Ok((recordings, processors, jobs))
+    })?;
+    let (recordings, processors, jobs) = setup;
+    let mut stages = vec![Stage::new(
+        "setup",
+        took,
+        format!(
+            "{}, {}",
+            plural(recordings.len(), "recording", "recordings"),
+            plural(jobs.len(), "frame", "frames")
+        ),
+    )];
+    let resolved = opts.config.resolved_toml()?;
+    let hash = text_hash(&format!(
+        "{resolved}\nconvert recording parser={:?} stages={} v1",
+        opts.parser, opts.write_stages
+    ));
+    let outcome = run_batch(
+        &jobs,
+        &opts.out,
+        opts.shard,
+        &hash,
+        opts.redo,
+        progress,
+        &|f: BatchFrame<'_, (usize, String)>,
+          writer: &mut FrameWriter,
+          stages: &mut Vec<Stage>|
+         -> Result<FrameRecord> {
+            let (k, frame) = f.job;
+            let p = &processors[*k];
+            let inputs = p.read(frame, stages)?;
+            p.process(&inputs, writer, stages)
+        },
+    )?;
+    let fps = outcome.frames_per_second();
+    stages.extend(outcome.stage_lines());
+
+    // Reports per recording (its records and failures), then over all recordings.
+    let (written_report, took) = timed(|| -> Result<_> {
+        let mut written = Vec::new();
+        for (name, path) in &recordings {
+            if name.is_empty() {
+                continue; // A single recording: the overall report is its report.
+            }
+            let prefix = format!("{name}/");
+            let sub = BatchOutcome {
+                records: outcome
+                    .records
+                    .iter()
+                    .filter(|r| r.frame.starts_with(&prefix))
+                    .cloned()
+                    .collect(),
+                processed: 0,
+                skipped: 0,
+                failed: outcome
+                    .failed
+                    .iter()
+                    .filter(|f| f.frame.starts_with(&prefix))
+                    .cloned()
+                    .collect(),
+                stage_totals: Vec::new(),
+                elapsed: outcome.elapsed,
+            };
+            let frames: Vec<String> = jobs
+                .iter()
+                .filter(|(id, _)| id.starts_with(&prefix))
+                .map(|(id, _)| id.clone())
+                .collect();
+            let run = run_options(opts, path, &opts.out.join(name));
+            let (_, w) = crate::run::write_reports(&run, &frames, &sub, &resolved, fps)?;
+            written.extend(w);
+        }
+        let frames: Vec<String> = jobs.iter().map(|(id, _)| id.clone()).collect();
+        let run = run_options(opts, &opts.input, &opts.out);
+        let (report, w) = crate::run::write_reports(&run, &frames, &outcome, &resolved, fps)?;
+        written.extend(w);
+        Ok((written, report))
+    })?;
+    let (written, report) = written_report;
+    let frames = opts.shard.share(jobs.len());
+    Ok(summary(frames, outcome, report, written, stages, took))
+}
+
+/// `bodyseg run`'s options for one recording of a conversion.
+fn run_options(opts: &ConvertOptions, recording: &Path, out: &Path) -> RunOptions {
+    let mut run = RunOptions::new(recording, opts.config.clone(), out);
+    run.parser = opts.parser;
+    run.shard = opts.shard;
+    run.write_stages = opts.write_stages;
+    run.figures = FigureChoice::Off;
+    run.label_images = false;
+    run.redo = opts.redo;
+    run
+}
+
+fn convert_3dpeople(
+    opts: &ConvertOptions,
+    progress: &(dyn Fn(BatchProgress) + Sync),
+) -> Result<ConvertSummary> {
+    let (views, took) = timed(|| -> Result<_> {
+        let views = list_3dpeople_views(&opts.input)?;
+        if views.is_empty() {
+            bail!(
+                "{}: no 3DPeople view (rgb/<subject>/<sequence>/cameraNN/*)",
+                opts.input.display()
+            );
+        }
+        bodyseg_io::create_folder(&opts.out)?;
+        if opts.shard == Shard::ALL {
+            crate::batch::remove_stale_temporaries(&opts.out);
+        }
+        Ok(views)
+    })?;
+    let mut jobs: Vec<(String, _)> = views.into_iter().map(|v| (v.stem(), v)).collect();
+    jobs.sort_by(|a, b| a.0.cmp(&b.0));
+    let mut stages = vec![Stage::new(
+        "setup",
+        took,
+        plural(jobs.len(), "view", "views"),
+    )];
+    let camera = opts.camera_3dpeople;
+    camera.validate().context("3DPeople camera")?;
+    let hash = text_hash(&format!("convert 3dpeople {camera:?} v1"));
+    let ply = PlyWriteOptions {
+        format: PlyFormat::BinaryLittleEndian,
+        colors: PlyColors::Camera,
+    };
+    let outcome = run_batch(
+        &jobs,
+        &opts.out,
+        opts.shard,
+        &hash,
+        opts.redo,
+        progress,
+        &|f, writer, stages| -> Result<FrameRecord> {
+            let (cloud, took) = timed(|| read_3dpeople_view(f.job, &camera))?;
+            stages.push(Stage::new("read", took, String::new()));
+            let ((), took) = timed(|| -> Result<()> {
+                writer.write(&format!("clouds/{}.ply", f.id), |p| {
+                    Ok(bodyseg_io::write_ply(p, &cloud, &ply)?)
+                })?;
+                Ok(())
+            })?;
+            stages.push(Stage::new("write", took, String::new()));
+            Ok(FrameRecord {
+                frame: f.id.to_string(),
+                config_hash: String::new(),
+                points: cloud.len(),
+                unknown: cloud.labels.iter().filter(|l| l.is_unknown()).count(),
+                people: 0,
+                outputs: Vec::new(),
+                inputs: [&f.job.rgb_path, &f.job.depth_path, &f.job.segmentation_path]
+                    .into_iter()
+                    .filter_map(|p| InputFile::of(p))
+                    .collect(),
+                scores: None,
+            })
+        },
+    )?;
+    let fps = outcome.frames_per_second();
+    stages.extend(outcome.stage_lines());
+    let frames: Vec<String> = jobs.iter().map(|(id, _)| id.clone()).collect();
+    let run = RunOptions::new(&opts.input, opts.config.clone(), &opts.out);
+    let run = RunOptions {
+        shard: opts.shard,
+        ..run
+    };
+    let resolved = opts.config.resolved_toml()?;
+    let ((report, written), took) =
+        timed(|| crate::run::write_reports(&run, &frames, &outcome, &resolved, fps))?;
+    let frames = opts.shard.share(jobs.len());
+    Ok(summary(frames, outcome, report, written, stages, took))
+}

@@ -1,0 +1,251 @@
+//! `bodyseg run` on a small synthetic recording (`bodyseg synth --preset handover`): the
+//! outputs and the paper's table, a second run skipping every frame, a corrupt depth PNG
+//! failing only its frame, and a run killed midway finished by running it again with the
+//! same outputs as an uninterrupted run.
+
+use crate::common::{
+    FRAMES, assert_ok, bodyseg, copy_tree, recording, stderr, stdout, tempdir, tree,
+};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn stem(i: usize) -> String {
+    format!("{i:06}")
+}
+
+fn metrics(report: &bodyseg_eval::Report, name: &str) -> bodyseg_eval::Metrics {
+    report
+        .get(name)
+        .unwrap_or_else(|| panic!("report has {name}"))
+        .metrics()
+        .clone()
+}
+
+#[test]
+fn run_writes_every_output_and_a_second_run_skips_every_frame() {
+    let rec = recording();
+    let dir = tempdir();
+    let args = [
+        "run",
+        "--recording",
+        rec.to_str().expect("utf-8"),
+        "--out",
+        "out",
+        "--write-stages",
+    ];
+    let first = bodyseg(dir.path(), &args);
+    assert_ok(&first, "bodyseg run");
+    let out = dir.path().join("out");
+    // The paper's table on stdout and in the report; the refinement helps.
+    let table = stdout(&first);
+    assert!(table.contains("| M-R-N |"), "{table}");
+    let report = bodyseg_eval::Report::from_json(
+        &std::fs::read_to_string(out.join("report.json")).expect("report.json"),
+    )
+    .expect("report parses");
+    assert_eq!(report.names(), ["Reference", "M", "N", "M-N", "M-R-N"]);
+    let (reference, mrn) = (metrics(&report, "Reference"), metrics(&report, "M-R-N"));
+    let (b0, b1) = (reference.biou.expect("BIoU"), mrn.biou.expect("BIoU"));
+    assert!(b1 >= b0, "M-R-N BIoU {b1:.4} < Reference {b0:.4}");
+    for f in ["report.md", "config.resolved.toml", "run.json"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let md = std::fs::read_to_string(out.join("report.md")).expect("report.md");
+    assert!(md.contains("| M-R-N |") && md.contains("figures/"), "{md}");
+    // The figure of the middle frame, and its path on stdout.
+    let figure = out
+        .join("figures")
+        .join(format!("{}.png", stem(FRAMES / 2)));
+    assert!(figure.is_file(), "{}", figure.display());
+    assert!(table.contains("figure: "), "{table}");
+
+    // Per frame: the refined cloud has every projected point.
+    for i in [0, FRAMES - 1] {
+        let f = stem(i);
+        let refined = bodyseg_io::read_ply(&out.join(format!("clouds/{f}.ply"))).expect("ply");
+        let projected =
+            bodyseg_io::read_ply(&out.join(format!("stages/{f}/projected.ply"))).expect("ply");
+        let mrn = bodyseg_io::read_ply(&out.join(format!("stages/{f}/M-R-N.ply"))).expect("ply");
+        // `bodyseg project` on the same frame gives the same points.
+        let alone = dir.path().join(format!("{f}.ply"));
+        let p = bodyseg(
+            dir.path(),
+            &[
+                "project",
+                "--recording",
+                rec.to_str().expect("utf-8"),
+                "--frame",
+                &f,
+                "--out",
+                alone.to_str().expect("utf-8"),
+            ],
+        );
+        assert_ok(&p, "bodyseg project");
+        let alone = bodyseg_io::read_ply(&alone).expect("ply");
+        assert_eq!(
+            projected, alone,
+            "frame {f}: run's projection = bodyseg project"
+        );
+        assert_eq!(refined.len(), alone.len(), "frame {f}");
+        assert_eq!(refined.origins, alone.origins, "frame {f}");
+        assert_eq!(
+            refined.labels, mrn.labels,
+            "frame {f}: refine.steps is M-R-N"
+        );
+        assert_ne!(
+            refined.labels, alone.labels,
+            "frame {f}: refinement changed labels"
+        );
+        for cam in ["cam0", "cam1", "cam2"] {
+            let l = bodyseg_io::read_label_png(&out.join(format!("labels/{cam}/{f}.png")))
+                .expect("label png");
+            let body = l.labels.iter().filter(|x| x.is_body()).count();
+            assert!(body > 1000, "frame {f} {cam}: {body} body pixels");
+        }
+        assert!(out.join(format!("boxes/{f}.json")).is_file());
+    }
+
+    // A second run into the same folder skips every frame and changes nothing.
+    let before: Vec<(String, Vec<u8>)> = tree(&out)
+        .into_iter()
+        .filter(|f| f != "run.json")
+        .map(|f| {
+            let bytes = std::fs::read(out.join(&f)).expect("read");
+            (f, bytes)
+        })
+        .collect();
+    let second = bodyseg(dir.path(), &args);
+    assert_ok(&second, "second bodyseg run");
+    let log = stderr(&second);
+    assert!(
+        log.contains("0 processed") && log.contains(&format!("{FRAMES} skipped")),
+        "{log}"
+    );
+    for (f, bytes) in &before {
+        assert_eq!(
+            &std::fs::read(out.join(f)).expect("read"),
+            bytes,
+            "{f} changed"
+        );
+    }
+}
+
+#[test]
+fn a_corrupt_depth_png_fails_its_frame_only() {
+    let dir = tempdir();
+    let rec = dir.path().join("rec");
+    copy_tree(recording(), &rec);
+    let bad = stem(2);
+    let depth = rec.join("cam1").join("depth").join(format!("{bad}.png"));
+    let bytes = std::fs::read(&depth).expect("read");
+    std::fs::write(&depth, &bytes[..bytes.len() / 3]).expect("truncate");
+
+    let out = bodyseg(
+        dir.path(),
+        &[
+            "run",
+            "--recording",
+            "rec",
+            "--out",
+            "out",
+            "--figure",
+            "none",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    let log = stderr(&out);
+    assert!(
+        log.contains(&format!("error: frame {bad}")) && log.contains(&format!("{bad}.png")),
+        "{log}"
+    );
+    let o = dir.path().join("out");
+    let files = tree(&o);
+    for i in (0..FRAMES).filter(|&i| stem(i) != bad) {
+        assert!(
+            files.contains(&format!("clouds/{}.ply", stem(i))),
+            "{files:?}"
+        );
+    }
+    // Nothing of the bad frame, and no temporary file anywhere.
+    assert!(
+        files
+            .iter()
+            .all(|f| !f.contains(&bad) && !f.contains(".bodyseg-")),
+        "{files:?}"
+    );
+    let md = std::fs::read_to_string(o.join("report.md")).expect("report.md");
+    assert!(
+        md.contains("Failed frames (1)") && md.contains(&bad),
+        "{md}"
+    );
+    let log: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(o.join("run.json")).expect("run.json"))
+            .expect("json");
+    assert_eq!(log["failed"][0]["frame"], bad.as_str());
+}
+
+#[test]
+fn a_killed_run_finishes_when_started_again_with_identical_outputs() {
+    let rec = recording();
+    let dir = tempdir();
+    let args = |out: &str| -> Vec<String> {
+        [
+            "run",
+            "--recording",
+            rec.to_str().expect("utf-8"),
+            "--out",
+            out,
+            "-q",
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let whole = bodyseg(
+        dir.path(),
+        &args("whole").iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    assert_ok(&whole, "uninterrupted run");
+
+    // Start, wait for the first finished frame, kill (SIGKILL: no clean-up).
+    let mut child = Command::new(env!("CARGO_BIN_EXE_bodyseg"))
+        .args(args("killed"))
+        .current_dir(dir.path())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn");
+    let records = dir.path().join("killed").join("frames");
+    let start = Instant::now();
+    let done_at_kill = loop {
+        let n = std::fs::read_dir(&records).map_or(0, |d| d.count());
+        if n >= 1 || start.elapsed() > Duration::from_secs(120) {
+            child.kill().expect("kill");
+            break std::fs::read_dir(&records).map_or(0, |d| d.count());
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let _ = child.wait();
+    assert!(
+        done_at_kill < FRAMES,
+        "the run finished before it could be killed ({done_at_kill} frames)"
+    );
+
+    let again = bodyseg(
+        dir.path(),
+        &args("killed")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    assert_ok(&again, "restarted run");
+    let (a, b) = (dir.path().join("whole"), dir.path().join("killed"));
+    let files: Vec<String> = tree(&a).into_iter().filter(|f| f != "run.json").collect();
+    let files_b: Vec<String> = tree(&b).into_iter().filter(|f| f != "run.json").collect();
+    assert_eq!(files, files_b, "the same files");
+    for f in &files {
+        assert!(
+            std::fs::read(a.join(f)).expect("read") == std::fs::read(b.join(f)).expect("read"),
+            "{f} differs between the uninterrupted and the restarted run"
+        );
+    }
+}
