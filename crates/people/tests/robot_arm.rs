@@ -7,40 +7,16 @@
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, LabeledCloud, PersonBox, PointOrigin};
 use bodyseg_people::{BoxMode, BoxesConfig, box_iou, find_boxes};
+use bodyseg_synth::geometry::{frame_from_axis, norm, sub};
 
 /// Surface sample spacing, metres: ≈ 25 points per 5 cm voxel of surface, like a Kinect
 /// v2 frame at 2–3 m.
 const STEP_M: f32 = 0.01;
 
-fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn unit(a: Vec3) -> Vec3 {
-    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-    [a[0] / n, a[1] / n, a[2] / n]
-}
-
 /// Points on the side of the cylinder from `a` to `b`.
 fn cylinder(out: &mut Vec<Vec3>, a: Vec3, b: Vec3, radius: f32) {
-    let axis = sub(b, a);
-    let len = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
-    let w = unit(axis);
-    let helper = if w[2].abs() < 0.9 {
-        [0.0, 0.0, 1.0]
-    } else {
-        [1.0, 0.0, 0.0]
-    };
-    let u = unit(cross(w, helper));
-    let v = cross(w, u);
+    let len = norm(sub(b, a));
+    let [u, v, w] = frame_from_axis(sub(b, a));
     let rings = (len / STEP_M).ceil() as usize;
     let around = (std::f32::consts::TAU * radius / STEP_M).ceil() as usize;
     for i in 0..=rings {
