@@ -335,8 +335,8 @@ pub(crate) fn fit_ground(centers: &[Vec3], cfg: &BoxesConfig) -> Option<Plane> {
 }
 
 /// Geometry mode: voxels → RANSAC ground plane removed → clusters → heads (height
-/// maxima with a continuous column below) → split between heads → size filters → boxes
-/// on the ground plane. Labels are not used.
+/// maxima with a continuous column below) → split between heads and what no person can
+/// own ([`split_people`]) → size filters → boxes on the ground plane. Labels are not used.
 fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
     let all = voxelize(
         positions.iter().enumerate().map(|(i, &p)| (i, p, 0)),
@@ -377,47 +377,7 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
         if heads.is_empty() {
             continue;
         }
-        let mut groups = if heads.len() >= 2 {
-            // Seed each person with its head: voxels near the top of its column.
-            let seeds: Vec<Vec<u32>> = heads
-                .iter()
-                .map(|&h| {
-                    let top = all.centers[h as usize];
-                    cluster
-                        .iter()
-                        .copied()
-                        .filter(|&j| {
-                            let p = all.centers[j as usize];
-                            (p[0] - top[0]).hypot(p[1] - top[1]) <= HEAD_RADIUS_M
-                                && heights[j as usize] >= heights[h as usize] - HEAD_HEIGHT_M
-                        })
-                        .collect()
-                })
-                .collect();
-            let owner = graph.split(&all.centers, &cluster, &seeds);
-            let mut groups = vec![Vec::new(); heads.len()];
-            for (&i, &g) in cluster.iter().zip(&owner) {
-                groups[g].push(i);
-            }
-            groups.sort_by_key(|g| g.first().copied());
-            groups
-        } else {
-            vec![cluster.clone()]
-        };
-        // Whatever touches a person beyond arm's reach (a robot arm, a shelf) is not them.
-        for group in &mut groups {
-            let Some(&head) = group.iter().find(|&&i| heads.contains(&i)) else {
-                continue;
-            };
-            let top = all.centers[head as usize];
-            let legs_below = LEG_HEIGHT_FRACTION * heights[head as usize];
-            group.retain(|&j| {
-                let p = all.centers[j as usize];
-                let d = (p[0] - top[0]).hypot(p[1] - top[1]);
-                // Below the hips only the legs: a table top beside a person is not them.
-                d <= cfg.max_reach_m && (heights[j as usize] >= legs_below || d <= LEG_RADIUS_M)
-            });
-        }
+        let groups = split_people(&graph, &cluster, &heads, &all.centers, &heights, cfg);
         for group in groups {
             let id = boxes.len() as u32;
             if let Some(b) = person_box(id, &group, &all.centers, &index, positions, ground, cfg) {
@@ -433,6 +393,99 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
     boxes
 }
 
+/// Splits one cluster (geometry mode) between its heads and what is nobody's, then cuts
+/// each person to arm's reach. Groups in order of their first voxel, one per head.
+///
+/// A robot arm or a shelf touching a person joins their cluster, and cutting at arm's
+/// reach alone leaves the part within reach (a robot's elbow and forearm beside the
+/// person's chest) in their box. So the cluster is split first, along the voxel graph
+/// (multi-source Dijkstra, as labels mode splits between heads), between the people —
+/// each seeded with its head and its lower legs (below [`LOW_LEG_FRACTION`] of its
+/// height, within `column_radius_m` of the head's vertical) — and the part no person can
+/// own, seeded with the voxels beyond `max_reach_m` + [`ANCHOR_SLACK_M`] of every head,
+/// or below [`LOW_LEG_FRACTION`] of every head's height and beyond [`LEG_RADIUS_M`] +
+/// [`ANCHOR_SLACK_M`] of its vertical (a robot's pedestal and shoulder, a box, a table's
+/// legs). A voxel goes to whichever seed is nearer along the graph: a robot arm touching
+/// a person is claimed from its pedestal and shoulder up to about halfway to the head,
+/// while a person's own arm, nearer their head than anything that is not them, stays
+/// theirs.
+fn split_people(
+    graph: &Graph,
+    cluster: &[u32],
+    heads: &[u32],
+    centers: &[Vec3],
+    heights: &[f32],
+    cfg: &BoxesConfig,
+) -> Vec<Vec<u32>> {
+    let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
+    // A person's seed: their head, and their lower legs (so legs beside a box or a
+    // pedestal stay theirs: the feet are far from the head along the graph).
+    let is_seed = |j: u32, head: u32, d: f32| {
+        let (hj, top) = (heights[j as usize], heights[head as usize]);
+        (d <= HEAD_RADIUS_M && hj >= top - HEAD_HEIGHT_M)
+            || (d <= cfg.column_radius_m && hj < LOW_LEG_FRACTION * top)
+    };
+    // Seeds: each person's (the nearest head's where columns touch), then nobody's.
+    let mut seeds: Vec<Vec<u32>> = vec![Vec::new(); heads.len() + 1];
+    for &j in cluster {
+        let p = centers[j as usize];
+        let nearest = heads
+            .iter()
+            .enumerate()
+            .map(|(k, &h)| (k, xy_dist(p, centers[h as usize])))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((k, d)) = nearest
+            && is_seed(j, heads[k], d)
+        {
+            seeds[k].push(j);
+            continue;
+        }
+        let ownable = heads.iter().any(|&h| {
+            let d = xy_dist(p, centers[h as usize]);
+            d <= cfg.max_reach_m + ANCHOR_SLACK_M
+                && (heights[j as usize] >= LOW_LEG_FRACTION * heights[h as usize]
+                    || d <= LEG_RADIUS_M + ANCHOR_SLACK_M)
+        });
+        if !ownable {
+            seeds[heads.len()].push(j);
+        }
+    }
+    let mut groups = vec![Vec::new(); heads.len()];
+    if heads.len() == 1 && seeds[1].is_empty() {
+        groups[0] = cluster.to_vec();
+    } else {
+        let owner = graph.split(centers, cluster, &seeds);
+        for (&i, &g) in cluster.iter().zip(&owner) {
+            // Group `heads.len()` is nobody's: dropped.
+            if let Some(group) = groups.get_mut(g) {
+                group.push(i);
+            }
+        }
+    }
+    // Whatever is still theirs beyond arm's reach (a shelf's far end) is not them.
+    for (group, &head) in groups.iter_mut().zip(heads) {
+        let top = centers[head as usize];
+        let legs_below = LEG_HEIGHT_FRACTION * heights[head as usize];
+        group.retain(|&j| {
+            let d = xy_dist(centers[j as usize], top);
+            // Below the hips only the legs: a table top beside a person is not them.
+            d <= cfg.max_reach_m && (heights[j as usize] >= legs_below || d <= LEG_RADIUS_M)
+        });
+    }
+    groups.sort_by_key(|g| g.first().copied());
+    groups
+}
+
+/// How far beyond a person's reach (`max_reach_m`, [`LEG_RADIUS_M`]) a voxel must lie to
+/// seed the part of a cluster that is nobody's, metres: a hand stretched a little past
+/// the reach limit is cut, but does not pull the person's forearm away with it.
+const ANCHOR_SLACK_M: f32 = 0.2;
+/// Below this fraction of a person's height lie only their lower legs (knees are at
+/// ≈ 0.28 of the height; the fingertips of a hanging arm at ≈ 0.38, a hand reaching to a
+/// table higher): those within `column_radius_m` of the head's vertical seed the person,
+/// and voxels this low beyond the legs' reach seed the part that is nobody's, without
+/// pulling a hand and its forearm away.
+const LOW_LEG_FRACTION: f32 = 0.3;
 /// Horizontal radius of a head around its top, metres (a head is ≈ 0.2 m wide).
 const HEAD_RADIUS_M: f32 = 0.12;
 /// Height of a head below its top, metres (crown to chin ≈ 0.22 m; the shoulders start
