@@ -4,7 +4,8 @@
 #   scripts/test.sh            from any folder
 #
 # Installs what a fresh Debian 12 machine with the Rust toolchain lacks (the rustfmt and
-# clippy components). Tests run in release: the DBSCAN property tests compare against an
+# clippy components; OpenCV and clang for the `opencv` feature, which clippy and the tests
+# build: --all-features). Tests run in release: the DBSCAN property tests compare against an
 # O(n^2) brute force on hundreds of clouds. Slow tests marked #[ignore] run last.
 set -euo pipefail
 
@@ -41,6 +42,9 @@ rustc --version
 
 step "ONNX Runtime (scripts/setup_onnxruntime.sh; once, into .deps/onnxruntime/)"
 scripts/setup_onnxruntime.sh
+
+step "OpenCV for the opencv feature (scripts/setup_opencv.sh; apt-get once)"
+scripts/setup_opencv.sh
 
 step "cargo fmt --all --check"
 cargo fmt --all --check

@@ -13,6 +13,7 @@
 //! merge_reports: report JSON files → Report::merge → Report
 //! import_rig:    calibration folders (iai_kinect2) → bodyseg_calib::Rig → rig.toml
 //! describe_rig:  rig.toml → human-readable summary
+//! calibrate_*:   chessboard images → intrinsics, colour-from-depth, world poses → rig.toml (feature `opencv`)
 //! ```
 //!
 //! No command-line parsing here (that is `crates/cli`): each command takes an options
@@ -28,6 +29,7 @@
 //! - Units are those of the stages: metres, radians; times are wall-clock.
 
 mod boxes;
+mod calibrate;
 mod boxes_study;
 mod config;
 mod eval;
@@ -44,6 +46,11 @@ pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{
     BoxesInput, BoxesOptions, BoxesSummary, boxes_file, boxes_path, read_cloud, top_view,
+};
+pub use bodyseg_calib::Board;
+pub use calibrate::{
+    CALIBRATE_AVAILABLE, CalibrateSummary, IntrinsicsCalibOptions, StereoCalibOptions, ViewReport,
+    WorldCalibOptions, calibrate_intrinsics, calibrate_stereo, calibrate_world,
 };
 pub use boxes_study::{BoxStats, FrameMatch, MATCH_IOU, box_stats, match_boxes};
 pub use config::{BackProjectConfig, PipelineConfig, RefineOverrides};

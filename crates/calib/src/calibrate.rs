@@ -1,0 +1,636 @@
+//! Chessboard calibration with OpenCV (feature `opencv`): corner detection with sub-pixel
+//! refinement, single-sensor intrinsics (`calibrateCamera`), the stereo extrinsic of two
+//! sensors (`stereoCalibrate` with both intrinsics fixed), a sensor's pose from one board
+//! view (`solvePnP`), and intrinsics files in OpenCV's FileStorage (YAML or XML) read and
+//! written by OpenCV itself.
+//!
+//! OpenCV types stay inside this module: callers see [`GrayImage`], [`Board`],
+//! [`Intrinsics`], [`Pose`] and plain arrays. Pixel coordinates follow the crate's
+//! convention, which is OpenCV's (integer coordinates at pixel centres).
+
+use std::path::Path;
+
+use opencv::core::{
+    self, FileStorage, Mat, Point2f, Point3f, Size, TermCriteria, Vector,
+};
+use opencv::prelude::*;
+use opencv::{calib3d, imgproc};
+
+use crate::board::{Board, BoardZ, GrayImage, canonical_corner_order};
+use crate::{CalibError, Intrinsics, Pose};
+
+/// Largest half side, pixels, of the `cornerSubPix` search window (OpenCV's tutorials use
+/// 11 for boards of 30+ px squares).
+const SUBPIX_MAX_HALF_WINDOW_PX: f64 = 11.0;
+
+/// The `cornerSubPix` half window as a fraction of the shortest distance between two
+/// neighbouring corners: the window must not reach the next corner, whose edges would pull
+/// the estimate.
+const SUBPIX_WINDOW_FRACTION: f64 = 0.45;
+
+/// `cornerSubPix` stops after this many iterations or a move below
+/// [`SUBPIX_EPSILON_PX`].
+const SUBPIX_MAX_ITERATIONS: i32 = 100;
+
+/// `cornerSubPix` stops when a corner moves less than this, pixels.
+const SUBPIX_EPSILON_PX: f64 = 1e-3;
+
+/// Fewest board views [`calibrate_intrinsics`] accepts: five-coefficient distortion and
+/// four pinhole parameters need several board orientations (15–20 are advised).
+pub const MIN_INTRINSICS_VIEWS: usize = 3;
+
+fn cv_err(operation: &str) -> impl Fn(opencv::Error) -> CalibError + '_ {
+    move |e| CalibError::OpenCv {
+        operation: operation.to_string(),
+        cause: e.message,
+    }
+}
+
+fn size_i32(width: u32, height: u32) -> Result<Size, CalibError> {
+    let w = i32::try_from(width).map_err(|_| CalibError::invalid("width", "too large"))?;
+    let h = i32::try_from(height).map_err(|_| CalibError::invalid("height", "too large"))?;
+    Ok(Size::new(w, h))
+}
+
+/// Finds the board's inner corners in `image`, refines them to sub-pixel accuracy and puts
+/// them in the board's canonical order ([`canonical_corner_order`] with `z`). `Ok(None)`
+/// when the board is not found.
+pub fn find_board_corners(
+    image: &GrayImage,
+    board: &Board,
+    z: BoardZ,
+) -> Result<Option<Vec<[f64; 2]>>, CalibError> {
+    let size = size_i32(image.width, image.height)?;
+    if image.data.len() != image.width as usize * image.height as usize {
+        return Err(CalibError::invalid(
+            "image",
+            format!(
+                "{}x{} needs {} pixels, got {}",
+                image.width,
+                image.height,
+                image.width as usize * image.height as usize,
+                image.data.len()
+            ),
+        ));
+    }
+    let mat = Mat::new_rows_cols_with_data(size.height, size.width, &image.data)
+        .map_err(cv_err("image"))?;
+    let pattern = size_i32(board.inner_corners[0], board.inner_corners[1])?;
+    // OpenCV's classic detector first (quick to reject an image without a board: fast
+    // check); where it fails (small or foreshortened squares, e.g. a floor board seen by an
+    // IR sensor from 3 m), the sector-based detector of Duda & Frese (findChessboardCornersSB),
+    // slower but more robust.
+    let mut corners: Vector<Point2f> = Vector::new();
+    let mut found = calib3d::find_chessboard_corners(
+        &mat,
+        pattern,
+        &mut corners,
+        calib3d::CALIB_CB_ADAPTIVE_THRESH
+            | calib3d::CALIB_CB_NORMALIZE_IMAGE
+            | calib3d::CALIB_CB_FAST_CHECK,
+    )
+    .map_err(cv_err("findChessboardCorners"))?;
+    if !found {
+        corners = Vector::new();
+        found = calib3d::find_chessboard_corners_sb(
+            &mat,
+            pattern,
+            &mut corners,
+            calib3d::CALIB_CB_NORMALIZE_IMAGE | calib3d::CALIB_CB_EXHAUSTIVE,
+        )
+        .map_err(cv_err("findChessboardCornersSB"))?;
+    }
+    if !found || corners.len() != board.num_corners() {
+        return Ok(None);
+    }
+    // The window follows the board's size in the image: half the shortest corner spacing.
+    let nx = board.inner_corners[0] as usize;
+    let pts: Vec<[f64; 2]> = corners
+        .iter()
+        .map(|p| [f64::from(p.x), f64::from(p.y)])
+        .collect();
+    let mut spacing = f64::INFINITY;
+    for (k, p) in pts.iter().enumerate() {
+        let mut neighbours = vec![k + nx];
+        if (k + 1) % nx != 0 {
+            neighbours.push(k + 1);
+        }
+        for q in neighbours.into_iter().filter_map(|n| pts.get(n)) {
+            spacing = spacing.min(((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt());
+        }
+    }
+    let half = (SUBPIX_WINDOW_FRACTION * spacing)
+        .min(SUBPIX_MAX_HALF_WINDOW_PX)
+        .floor()
+        .max(2.0) as i32;
+    imgproc::corner_sub_pix(
+        &mat,
+        &mut corners,
+        Size::new(half, half),
+        Size::new(-1, -1),
+        TermCriteria::new(
+            core::TermCriteria_COUNT + core::TermCriteria_EPS,
+            SUBPIX_MAX_ITERATIONS,
+            SUBPIX_EPSILON_PX,
+        )
+        .map_err(cv_err("TermCriteria"))?,
+    )
+    .map_err(cv_err("cornerSubPix"))?;
+    let refined: Vec<[f64; 2]> = corners
+        .iter()
+        .map(|p| [f64::from(p.x), f64::from(p.y)])
+        .collect();
+    canonical_corner_order(board, &refined, image, z).map(Some)
+}
+
+/// Intrinsics fitted to board views, with their reprojection errors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IntrinsicsFit {
+    /// The fitted sensor (five distortion coefficients).
+    pub intrinsics: Intrinsics,
+    /// Root-mean-square reprojection error over every corner of every view, pixels.
+    pub rms_px: f64,
+    /// Per view, the RMS reprojection error of its corners, pixels (views in input order).
+    pub view_rms_px: Vec<f64>,
+    /// Per view, the fitted pose of the board in the sensor frame.
+    pub sensor_from_board: Vec<Pose>,
+}
+
+fn object_vector(board: &Board) -> Vector<Point3f> {
+    board
+        .object_points()
+        .iter()
+        .map(|p| Point3f::new(p[0] as f32, p[1] as f32, p[2] as f32))
+        .collect()
+}
+
+fn image_vector(corners: &[[f64; 2]]) -> Vector<Point2f> {
+    corners
+        .iter()
+        .map(|p| Point2f::new(p[0] as f32, p[1] as f32))
+        .collect()
+}
+
+fn check_views(board: &Board, views: &[Vec<[f64; 2]>]) -> Result<(), CalibError> {
+    if let Some((k, v)) = views
+        .iter()
+        .enumerate()
+        .find(|(_, v)| v.len() != board.num_corners())
+    {
+        return Err(CalibError::invalid(
+            format!("view {k}"),
+            format!(
+                "has {} corners, a {} board has {}",
+                v.len(),
+                board.size_text(),
+                board.num_corners()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn camera_matrix(i: &Intrinsics) -> Result<Mat, CalibError> {
+    Mat::from_slice_2d(&[[i.fx, 0.0, i.cx], [0.0, i.fy, i.cy], [0.0, 0.0, 1.0]])
+        .map_err(cv_err("camera matrix"))
+}
+
+fn distortion_mat(i: &Intrinsics) -> Result<Mat, CalibError> {
+    Mat::from_slice_2d(&[i.distortion]).map_err(cv_err("distortion"))
+}
+
+/// Reads `n` doubles of a continuous `CV_64F` matrix (any shape).
+fn mat_values(m: &Mat, n: usize, what: &str) -> Result<Vec<f64>, CalibError> {
+    let values = m
+        .data_typed::<f64>()
+        .map_err(cv_err(what))?
+        .iter()
+        .copied()
+        .collect::<Vec<_>>();
+    if values.len() < n {
+        return Err(CalibError::OpenCv {
+            operation: what.to_string(),
+            cause: format!("expected {n} values, got {}", values.len()),
+        });
+    }
+    Ok(values)
+}
+
+fn intrinsics_from(
+    width: u32,
+    height: u32,
+    k: &Mat,
+    dist: &Mat,
+    what: &str,
+) -> Result<Intrinsics, CalibError> {
+    let k = mat_values(k, 9, what)?;
+    let d = mat_values(dist, 5, what)?;
+    let intrinsics = Intrinsics {
+        width,
+        height,
+        fx: k[0],
+        fy: k[4],
+        cx: k[2],
+        cy: k[5],
+        distortion: [d[0], d[1], d[2], d[3], d[4]],
+    };
+    intrinsics.validate()?;
+    Ok(intrinsics)
+}
+
+/// A pose from OpenCV's rotation vector (Rodrigues) and translation.
+fn pose_from_rvec_tvec(rvec: &impl core::ToInputArray, t: [f64; 3]) -> Result<Pose, CalibError> {
+    let mut r = Mat::default();
+    calib3d::rodrigues(rvec, &mut r, &mut core::no_array()).map_err(cv_err("Rodrigues"))?;
+    let v = mat_values(&r, 9, "Rodrigues")?;
+    Pose::from_rotation_translation([[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]], t)
+}
+
+/// Fits a sensor's intrinsics (pinhole and `k1 k2 p1 p2 k3`) to the corners of at least
+/// [`MIN_INTRINSICS_VIEWS`] views of `board` in images of `width × height` (OpenCV's
+/// `calibrateCamera`).
+pub fn calibrate_intrinsics(
+    board: &Board,
+    views: &[Vec<[f64; 2]>],
+    width: u32,
+    height: u32,
+) -> Result<IntrinsicsFit, CalibError> {
+    check_views(board, views)?;
+    if views.len() < MIN_INTRINSICS_VIEWS {
+        return Err(CalibError::invalid(
+            "views",
+            format!(
+                "calibration needs at least {MIN_INTRINSICS_VIEWS} views of the board (15 or more advised), got {}",
+                views.len()
+            ),
+        ));
+    }
+    let object = object_vector(board);
+    let object_points: Vector<Vector<Point3f>> = views.iter().map(|_| object.clone()).collect();
+    let image_points: Vector<Vector<Point2f>> = views.iter().map(|v| image_vector(v)).collect();
+    let mut k = Mat::default();
+    let mut dist = Mat::default();
+    let mut rvecs: Vector<Mat> = Vector::new();
+    let mut tvecs: Vector<Mat> = Vector::new();
+    let mut std_intrinsics = Mat::default();
+    let mut std_extrinsics = Mat::default();
+    let mut per_view = Mat::default();
+    let rms_px = calib3d::calibrate_camera_extended(
+        &object_points,
+        &image_points,
+        size_i32(width, height)?,
+        &mut k,
+        &mut dist,
+        &mut rvecs,
+        &mut tvecs,
+        &mut std_intrinsics,
+        &mut std_extrinsics,
+        &mut per_view,
+        0,
+        TermCriteria::new(
+            core::TermCriteria_COUNT + core::TermCriteria_EPS,
+            100,
+            f64::EPSILON,
+        )
+        .map_err(cv_err("TermCriteria"))?,
+    )
+    .map_err(cv_err("calibrateCamera"))?;
+    let intrinsics = intrinsics_from(width, height, &k, &dist, "calibrateCamera")?;
+    let view_rms_px = mat_values(&per_view, views.len(), "calibrateCamera per-view errors")?;
+    let mut sensor_from_board = Vec::with_capacity(views.len());
+    for (rvec, tvec) in rvecs.iter().zip(tvecs.iter()) {
+        let t = mat_values(&tvec, 3, "calibrateCamera translation")?;
+        sensor_from_board.push(pose_from_rvec_tvec(&rvec, [t[0], t[1], t[2]])?);
+    }
+    Ok(IntrinsicsFit {
+        intrinsics,
+        rms_px,
+        view_rms_px: view_rms_px[..views.len()].to_vec(),
+        sensor_from_board,
+    })
+}
+
+/// The stereo extrinsic of two sensors fitted to simultaneous board views.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StereoFit {
+    /// Maps points of the first sensor's frame into the second's.
+    pub second_from_first: Pose,
+    /// The first sensor's intrinsics: the given ones, or refined with the extrinsic.
+    pub first: Intrinsics,
+    /// The second sensor's intrinsics, likewise.
+    pub second: Intrinsics,
+    /// RMS reprojection error over both sensors' corners, pixels.
+    pub rms_px: f64,
+}
+
+/// Fits the rigid transform between two sensors from views of `board` seen by both at the
+/// same instants (`pairs[k]` = corners in the first and in the second sensor, both in
+/// canonical order): OpenCV's `stereoCalibrate`, with the intrinsics fixed
+/// (`refine_intrinsics` false) or refined together with the transform, starting from the
+/// given ones. Refining helps: each sensor alone fits its focal lengths to within a few
+/// tenths of a percent, and two independent errors of that size put millimetres of error
+/// into the baseline along the viewing direction; a board pose shared by both sensors
+/// removes most of it.
+pub fn calibrate_stereo(
+    board: &Board,
+    first: &Intrinsics,
+    second: &Intrinsics,
+    pairs: &[(Vec<[f64; 2]>, Vec<[f64; 2]>)],
+    refine_intrinsics: bool,
+) -> Result<StereoFit, CalibError> {
+    let (a, b): (Vec<_>, Vec<_>) = pairs.iter().cloned().unzip();
+    check_views(board, &a)?;
+    check_views(board, &b)?;
+    if pairs.is_empty() {
+        return Err(CalibError::invalid(
+            "views",
+            "stereo calibration needs at least one view of the board seen by both sensors",
+        ));
+    }
+    let object = object_vector(board);
+    let object_points: Vector<Vector<Point3f>> = pairs.iter().map(|_| object.clone()).collect();
+    let points_a: Vector<Vector<Point2f>> = a.iter().map(|v| image_vector(v)).collect();
+    let points_b: Vector<Vector<Point2f>> = b.iter().map(|v| image_vector(v)).collect();
+    let (mut k1, mut d1) = (camera_matrix(first)?, distortion_mat(first)?);
+    let (mut k2, mut d2) = (camera_matrix(second)?, distortion_mat(second)?);
+    let (mut r, mut t, mut e, mut f) = (
+        Mat::default(),
+        Mat::default(),
+        Mat::default(),
+        Mat::default(),
+    );
+    let rms_px = calib3d::stereo_calibrate(
+        &object_points,
+        &points_a,
+        &points_b,
+        &mut k1,
+        &mut d1,
+        &mut k2,
+        &mut d2,
+        size_i32(first.width, first.height)?,
+        &mut r,
+        &mut t,
+        &mut e,
+        &mut f,
+        if refine_intrinsics {
+            calib3d::CALIB_USE_INTRINSIC_GUESS
+        } else {
+            calib3d::CALIB_FIX_INTRINSIC
+        },
+        TermCriteria::new(
+            core::TermCriteria_COUNT + core::TermCriteria_EPS,
+            100,
+            f64::EPSILON,
+        )
+        .map_err(cv_err("TermCriteria"))?,
+    )
+    .map_err(cv_err("stereoCalibrate"))?;
+    let rv = mat_values(&r, 9, "stereoCalibrate rotation")?;
+    let tv = mat_values(&t, 3, "stereoCalibrate translation")?;
+    let second_from_first = Pose::from_rotation_translation(
+        [
+            [rv[0], rv[1], rv[2]],
+            [rv[3], rv[4], rv[5]],
+            [rv[6], rv[7], rv[8]],
+        ],
+        [tv[0], tv[1], tv[2]],
+    )?;
+    Ok(StereoFit {
+        second_from_first,
+        first: intrinsics_from(first.width, first.height, &k1, &d1, "stereoCalibrate")?,
+        second: intrinsics_from(second.width, second.height, &k2, &d2, "stereoCalibrate")?,
+        rms_px,
+    })
+}
+
+/// The pose of `board` in a sensor's frame from one view of it (OpenCV's `solvePnP`,
+/// iterative), with the RMS reprojection error of its corners, pixels.
+pub fn board_pose(
+    board: &Board,
+    intrinsics: &Intrinsics,
+    corners_px: &[[f64; 2]],
+) -> Result<(Pose, f64), CalibError> {
+    check_views(board, &[corners_px.to_vec()])?;
+    let object = object_vector(board);
+    let image = image_vector(corners_px);
+    let (mut rvec, mut tvec) = (Mat::default(), Mat::default());
+    let ok = calib3d::solve_pnp(
+        &object,
+        &image,
+        &camera_matrix(intrinsics)?,
+        &distortion_mat(intrinsics)?,
+        &mut rvec,
+        &mut tvec,
+        false,
+        calib3d::SOLVEPNP_ITERATIVE,
+    )
+    .map_err(cv_err("solvePnP"))?;
+    if !ok {
+        return Err(CalibError::OpenCv {
+            operation: "solvePnP".into(),
+            cause: "no pose found".into(),
+        });
+    }
+    let t = mat_values(&tvec, 3, "solvePnP translation")?;
+    let pose = pose_from_rvec_tvec(&rvec, [t[0], t[1], t[2]])?;
+    Ok((pose, reprojection_rms_px(board, intrinsics, &pose, corners_px)))
+}
+
+/// RMS distance, pixels, between `corners_px` and the board's corners projected through
+/// `sensor_from_board` and `intrinsics`.
+pub fn reprojection_rms_px(
+    board: &Board,
+    intrinsics: &Intrinsics,
+    sensor_from_board: &Pose,
+    corners_px: &[[f64; 2]],
+) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (p, c) in board.object_points().iter().zip(corners_px) {
+        if let Some(uv) = intrinsics.project(sensor_from_board.transform_point(*p)) {
+            sum += (uv[0] - c[0]).powi(2) + (uv[1] - c[1]).powi(2);
+            n += 1;
+        }
+    }
+    if n == 0 {
+        f64::INFINITY
+    } else {
+        (sum / n as f64).sqrt()
+    }
+}
+
+/// Writes a sensor's intrinsics with OpenCV's FileStorage, YAML or XML after the file's
+/// extension (`.yaml`, `.yml`, `.xml`), with iai_kinect2's keys (`cameraMatrix`,
+/// `distortionCoefficients`) plus `image_width`, `image_height` and, when given, the RMS
+/// reprojection error `reprojection_error_px`. Written to a temporary file and renamed.
+pub fn write_opencv_intrinsics(
+    path: &Path,
+    intrinsics: &Intrinsics,
+    rms_px: Option<f64>,
+) -> Result<(), CalibError> {
+    intrinsics.validate()?;
+    let format = storage_format(path)?;
+    let write_err = |cause: String| CalibError::Write {
+        cause: std::io::Error::other(cause),
+        path: path.to_path_buf(),
+    };
+    // OpenCV picks the syntax from the name: the temporary keeps the extension.
+    let ext = path
+        .extension()
+        .map_or_else(String::new, |e| e.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(
+        ".{}.tmp{}.{ext}",
+        path.file_stem()
+            .map_or_else(|| "intrinsics".into(), |s| s.to_string_lossy().into_owned()),
+        std::process::id()
+    ));
+    let result = (|| -> Result<(), CalibError> {
+        let mut fs = FileStorage::new(
+            tmp.to_string_lossy().as_ref(),
+            core::FileStorage_WRITE | format,
+            "",
+        )
+        .map_err(|e| write_err(e.message))?;
+        if !fs.is_opened().map_err(|e| write_err(e.message))? {
+            return Err(write_err("OpenCV cannot open it for writing".into()));
+        }
+        let w = |e: opencv::Error| write_err(e.message);
+        let size = size_i32(intrinsics.width, intrinsics.height)?;
+        fs.write_i32("image_width", size.width).map_err(w)?;
+        fs.write_i32("image_height", size.height).map_err(w)?;
+        fs.write_mat("cameraMatrix", &camera_matrix(intrinsics)?)
+            .map_err(w)?;
+        fs.write_mat("distortionCoefficients", &distortion_mat(intrinsics)?)
+            .map_err(w)?;
+        if let Some(rms) = rms_px {
+            fs.write_f64("reprojection_error_px", rms).map_err(w)?;
+        }
+        fs.release().map_err(w)?;
+        std::fs::rename(&tmp, path).map_err(|e| write_err(e.to_string()))
+    })();
+    if result.is_err() {
+        // Best effort: the temporary may not exist.
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn storage_format(path: &Path) -> Result<i32, CalibError> {
+    match path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("yaml" | "yml") => Ok(core::FileStorage_FORMAT_YAML),
+        Some("xml") => Ok(core::FileStorage_FORMAT_XML),
+        _ => Err(CalibError::BadValue {
+            key: "file name".into(),
+            reason: "an OpenCV FileStorage file ends in .yaml, .yml or .xml".into(),
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// Reads a sensor's intrinsics from an OpenCV FileStorage file (YAML or XML) through
+/// OpenCV: `cameraMatrix` or `camera_matrix` (3×3), `distortionCoefficients` or
+/// `distortion_coefficients` (5 values, k1 k2 p1 p2 k3; 4 are read with k3 = 0), and the
+/// image size from `image_width` and `image_height`, or `default_size` when the file has
+/// none (iai_kinect2's files).
+pub fn read_opencv_intrinsics(
+    path: &Path,
+    default_size: Option<[u32; 2]>,
+) -> Result<Intrinsics, CalibError> {
+    storage_format(path)?;
+    if !path.is_file() {
+        return Err(CalibError::Read {
+            cause: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+            path: path.to_path_buf(),
+        });
+    }
+    let syntax = |reason: String| CalibError::Syntax {
+        line: 0,
+        reason,
+        path: path.to_path_buf(),
+    };
+    let fs = FileStorage::new(path.to_string_lossy().as_ref(), core::FileStorage_READ, "")
+        .map_err(|e| syntax(e.message))?;
+    if !fs.is_opened().map_err(|e| syntax(e.message))? {
+        return Err(syntax("OpenCV cannot parse it as FileStorage".into()));
+    }
+    let bad = |key: &str, reason: String| CalibError::BadValue {
+        key: key.into(),
+        reason,
+        path: path.to_path_buf(),
+    };
+    let node = |keys: &[&str]| -> Result<Option<(String, core::FileNode)>, CalibError> {
+        for key in keys {
+            let n = fs.get(key).map_err(|e| bad(key, e.message))?;
+            if !n.is_none().map_err(|e| bad(key, e.message))? {
+                return Ok(Some(((*key).to_string(), n)));
+            }
+        }
+        Ok(None)
+    };
+    let matrix = |keys: &[&str], lens: &[usize]| -> Result<Vec<f64>, CalibError> {
+        let Some((key, n)) = node(keys)? else {
+            return Err(CalibError::MissingKey {
+                key: keys.join(" or "),
+                path: path.to_path_buf(),
+            });
+        };
+        let m = n.mat().map_err(|e| bad(&key, e.message))?;
+        let mut m64 = Mat::default();
+        m.convert_to(&mut m64, core::CV_64F, 1.0, 0.0)
+            .map_err(|e| bad(&key, e.message))?;
+        let values: Vec<f64> = m64
+            .data_typed::<f64>()
+            .map_err(|e| bad(&key, e.message))?
+            .to_vec();
+        if !lens.contains(&values.len()) {
+            return Err(bad(
+                &key,
+                format!("must have {lens:?} values, got {}", values.len()),
+            ));
+        }
+        Ok(values)
+    };
+    let k = matrix(&["cameraMatrix", "camera_matrix"], &[9])?;
+    let d = matrix(
+        &["distortionCoefficients", "distortion_coefficients"],
+        &[4, 5],
+    )?;
+    let dim = |key: &str| -> Result<Option<u32>, CalibError> {
+        match node(&[key])? {
+            None => Ok(None),
+            Some((_, n)) => {
+                let v = n.to_i32().map_err(|e| bad(key, e.message))?;
+                u32::try_from(v)
+                    .map(Some)
+                    .map_err(|_| bad(key, format!("must be a pixel count, got {v}")))
+            }
+        }
+    };
+    let [width, height] = match (dim("image_width")?, dim("image_height")?, default_size) {
+        (Some(w), Some(h), _) => [w, h],
+        (_, _, Some(size)) => size,
+        _ => {
+            return Err(CalibError::MissingKey {
+                key: "image_width and image_height".into(),
+                path: path.to_path_buf(),
+            });
+        }
+    };
+    let intrinsics = Intrinsics {
+        width,
+        height,
+        fx: k[0],
+        fy: k[4],
+        cx: k[2],
+        cy: k[5],
+        distortion: [d[0], d[1], d[2], d[3], d.get(4).copied().unwrap_or(0.0)],
+    };
+    intrinsics.validate().map_err(|e| match e {
+        CalibError::Invalid { field, reason } => bad(&field, reason),
+        other => other,
+    })?;
+    Ok(intrinsics)
+}
