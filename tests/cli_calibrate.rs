@@ -15,7 +15,10 @@ fn assert_fails(dir: &Path, args: &[&str], needles: &[&str], out: &str) {
     let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
     assert_eq!(lines.len(), 1, "{args:?}: {err}");
     for needle in needles {
-        assert!(lines[0].contains(needle), "{args:?}: no {needle:?} in {err}");
+        assert!(
+            lines[0].contains(needle),
+            "{args:?}: no {needle:?} in {err}"
+        );
     }
     assert!(!dir.join(out).exists(), "{args:?} wrote {out}");
 }
@@ -63,10 +66,7 @@ mod with_opencv {
     /// Distance between two poses' translations, millimetres.
     fn distance_mm(a: &Pose, b: &Pose) -> f64 {
         let (ta, tb) = (a.translation_m(), b.translation_m());
-        1e3 * (0..3)
-            .map(|i| (ta[i] - tb[i]).powi(2))
-            .sum::<f64>()
-            .sqrt()
+        1e3 * (0..3).map(|i| (ta[i] - tb[i]).powi(2)).sum::<f64>().sqrt()
     }
 
     /// Largest relative error, percent, of fx, fy, cx, cy.
@@ -94,7 +94,18 @@ mod with_opencv {
     fn synthetic_views_calibrate_to_the_true_rig() {
         let dir = tempdir();
         let d = dir.path();
-        run_ok(d, &["-q", "synth", "--chessboard", "--views", "15", "--out", "views"]);
+        run_ok(
+            d,
+            &[
+                "-q",
+                "synth",
+                "--chessboard",
+                "--views",
+                "15",
+                "--out",
+                "views",
+            ],
+        );
         let truth = read_rig_toml(&d.join("views/rig_true.toml")).expect("rig_true.toml");
         let board = ["--board", "9x6", "--square-m", "0.04"];
         let mut rigs = Vec::new();
@@ -109,7 +120,12 @@ mod with_opencv {
                 let images = format!("views/{name}/{sensor}");
                 let log = run_ok(
                     d,
-                    &[&["calibrate", "intrinsics", "--images", &images], &board[..], &["--out", file]].concat(),
+                    &[
+                        &["calibrate", "intrinsics", "--images", &images],
+                        &board[..],
+                        &["--out", file],
+                    ]
+                    .concat(),
                 );
                 assert!(log.contains("reprojection error"), "{log}");
                 let got = if file.ends_with(".toml") {
@@ -130,7 +146,12 @@ mod with_opencv {
                     &["calibrate", "stereo", "--ir", &format!("views/{name}/ir")],
                     &["--color", &format!("views/{name}/color")][..],
                     &board[..],
-                    &["--ir-intrinsics", &files[0].1, "--color-intrinsics", &files[1].1],
+                    &[
+                        "--ir-intrinsics",
+                        &files[0].1,
+                        "--color-intrinsics",
+                        &files[1].1,
+                    ],
                     &["--out", &rig],
                 ]
                 .concat(),
@@ -150,7 +171,14 @@ mod with_opencv {
         for rig in &rigs {
             args.extend(["--rig", rig.as_str()]);
         }
-        args.extend(["--floor", "views/floor", "--board", "9x6", "--square-m", "0.1"]);
+        args.extend([
+            "--floor",
+            "views/floor",
+            "--board",
+            "9x6",
+            "--square-m",
+            "0.1",
+        ]);
         args.extend(["--out", "rig.toml"]);
         run_ok(d, &args);
         let got = read_rig_toml(&d.join("rig.toml")).expect("rig.toml");
@@ -160,7 +188,16 @@ mod with_opencv {
                 distance_mm(&g.world_from_depth, &t.world_from_depth),
                 angle_deg(&g.world_from_depth, &t.world_from_depth),
             );
-            eprintln!("{}: world-from-depth error {mm:.3} mm, {deg:.4} deg", g.name);
+            eprintln!(
+                "{}: world-from-depth error {mm:.3} mm, {deg:.4} deg",
+                g.name
+            );
+            // The rig's intrinsics (refined by `stereo`) are as good as the per-sensor ones.
+            for (got, want) in [(&g.depth, &t.depth), (&g.color, &t.color)] {
+                let err = intrinsics_error_pct(got, want);
+                eprintln!("{}: rig intrinsics error {err:.3} %", g.name);
+                assert!(err < 0.5, "{}: {err} %", g.name);
+            }
             // Issue 9: world-from-camera within 5 mm and 0.3°.
             assert!(mm < 5.0 && deg < 0.3, "{}: {mm} mm, {deg} deg", g.name);
         }
@@ -171,7 +208,14 @@ mod with_opencv {
         run_ok(
             d,
             &[
-                "-q", "synth", "--chessboard", "--views", "4", "--set", "rig.cameras=1", "--out",
+                "-q",
+                "synth",
+                "--chessboard",
+                "--views",
+                "4",
+                "--set",
+                "rig.cameras=1",
+                "--out",
                 "views",
             ],
         );
@@ -179,8 +223,16 @@ mod with_opencv {
 
     fn intrinsics_args<'a>(images: &'a str, board: &'a str, out: &'a str) -> Vec<&'a str> {
         vec![
-            "calibrate", "intrinsics", "--images", images, "--board", board, "--square-m",
-            "0.04", "--out", out,
+            "calibrate",
+            "intrinsics",
+            "--images",
+            images,
+            "--board",
+            board,
+            "--square-m",
+            "0.04",
+            "--out",
+            out,
         ]
     }
 
@@ -194,7 +246,11 @@ mod with_opencv {
         assert_fails(
             d,
             &intrinsics_args(ir, "10x6", "cam.toml"),
-            &["no image shows a 10x6 chessboard", "4 images checked", "--board"],
+            &[
+                "no image shows a 10x6 chessboard",
+                "4 images checked",
+                "--board",
+            ],
             "cam.toml",
         );
         // No image shows the board.
@@ -249,8 +305,18 @@ mod with_opencv {
         assert_fails(
             d,
             &[
-                "calibrate", "stereo", "--ir", ir, "--color", "views/cam0/color", "--board",
-                "8x6", "--square-m", "0.04", "--out", "cam0.toml",
+                "calibrate",
+                "stereo",
+                "--ir",
+                ir,
+                "--color",
+                "views/cam0/color",
+                "--board",
+                "8x6",
+                "--square-m",
+                "0.04",
+                "--out",
+                "cam0.toml",
             ],
             &["8x6", "one even and one odd"],
             "cam0.toml",
@@ -260,8 +326,19 @@ mod with_opencv {
         assert_fails(
             d,
             &[
-                "calibrate", "stereo", "--ir", ir, "--color", "views/cam0/color", "--board",
-                "9x6", "--square-m", "0.04", "--ir-intrinsics", "color.toml", "--out",
+                "calibrate",
+                "stereo",
+                "--ir",
+                ir,
+                "--color",
+                "views/cam0/color",
+                "--board",
+                "9x6",
+                "--square-m",
+                "0.04",
+                "--ir-intrinsics",
+                "color.toml",
+                "--out",
                 "cam0.toml",
             ],
             &["color.toml", "intrinsics are for 960x540 images", "512x424"],
@@ -271,16 +348,36 @@ mod with_opencv {
         run_ok(
             d,
             &[
-                "calibrate", "stereo", "--ir", ir, "--color", "views/cam0/color", "--board",
-                "9x6", "--square-m", "0.04", "--out", "cam0.toml",
+                "calibrate",
+                "stereo",
+                "--ir",
+                ir,
+                "--color",
+                "views/cam0/color",
+                "--board",
+                "9x6",
+                "--square-m",
+                "0.04",
+                "--out",
+                "cam0.toml",
             ],
         );
         std::fs::create_dir(d.join("nofloor")).expect("mkdir");
         assert_fails(
             d,
             &[
-                "calibrate", "world", "--rig", "cam0.toml", "--floor", "nofloor", "--board",
-                "9x6", "--square-m", "0.1", "--out", "rig.toml",
+                "calibrate",
+                "world",
+                "--rig",
+                "cam0.toml",
+                "--floor",
+                "nofloor",
+                "--board",
+                "9x6",
+                "--square-m",
+                "0.1",
+                "--out",
+                "rig.toml",
             ],
             &["camera cam0: no floor view", "ir.png"],
             "rig.toml",
@@ -289,8 +386,18 @@ mod with_opencv {
         assert_fails(
             d,
             &[
-                "calibrate", "world", "--rig", "cam0.toml", "--floor", "views/floor", "--board",
-                "10x7", "--square-m", "0.1", "--out", "rig.toml",
+                "calibrate",
+                "world",
+                "--rig",
+                "cam0.toml",
+                "--floor",
+                "views/floor",
+                "--board",
+                "10x7",
+                "--square-m",
+                "0.1",
+                "--out",
+                "rig.toml",
             ],
             &["camera cam0: the 10x7 floor board is not found"],
             "rig.toml",

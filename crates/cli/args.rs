@@ -3,9 +3,10 @@
 
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
-    Board, DEFAULT_PREDICTION_NAME, IntrinsicsCalibOptions, StereoCalibOptions, WorldCalibOptions, EvalOptions, NamedPrediction, ParseOptions, ParseSource,
-    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
-    RigFormat, RigImportOptions, SceneSource, SynthOptions,
+    Board, DEFAULT_PREDICTION_NAME, EvalOptions, IntrinsicsCalibOptions, NamedPrediction,
+    ParseOptions, ParseSource, PipelineConfig, ProjectMode, ProjectOptions, RefineOptions,
+    RefineOverrides, ReportFormat, RigFormat, RigImportOptions, SceneSource, StereoCalibOptions,
+    SynthOptions, WorldCalibOptions,
 };
 use bodyseg_refine::Steps;
 use bodyseg_synth::ChessboardConfig;

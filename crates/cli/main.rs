@@ -12,8 +12,9 @@ use args::{
     SynthArgs,
 };
 use bodyseg_pipeline::{
-    Stage, calibrate_intrinsics, calibrate_stereo, calibrate_world, describe_rig, eval_files, import_rig, merge_reports, parse_file, project_file, read_rig,
-    refine_file, render_report, synth_recording, write_text,
+    Stage, calibrate_intrinsics, calibrate_stereo, calibrate_world, describe_rig, eval_files,
+    import_rig, merge_reports, parse_file, project_file, read_rig, refine_file, render_report,
+    synth_recording, write_text,
 };
 use clap::Parser;
 use std::io::Write;

@@ -32,9 +32,7 @@ impl Board {
         if !(2..=MAX_INNER_CORNERS).contains(&nx) || !(2..=MAX_INNER_CORNERS).contains(&ny) {
             return Err(CalibError::invalid(
                 "board",
-                format!(
-                    "must have 2 to {MAX_INNER_CORNERS} inner corners per side, got {nx}x{ny}"
-                ),
+                format!("must have 2 to {MAX_INNER_CORNERS} inner corners per side, got {nx}x{ny}"),
             ));
         }
         if !(square_m.is_finite() && square_m > 0.0 && square_m < 10.0) {
@@ -54,15 +52,10 @@ impl Board {
         let bad = || {
             CalibError::invalid(
                 "board",
-                format!(
-                    "must be the inner corners per row and per column, as 9x6, got {text:?}"
-                ),
+                format!("must be the inner corners per row and per column, as 9x6, got {text:?}"),
             )
         };
-        let (a, b) = text
-            .trim()
-            .split_once(['x', 'X'])
-            .ok_or_else(bad)?;
+        let (a, b) = text.trim().split_once(['x', 'X']).ok_or_else(bad)?;
         let a: u32 = a.trim().parse().map_err(|_| bad())?;
         let b: u32 = b.trim().parse().map_err(|_| bad())?;
         Ok([a, b])
@@ -136,14 +129,8 @@ impl GrayImage {
     fn mean_around(&self, uv_px: [f64; 2], radius_px: f64) -> Option<f64> {
         let (w, h) = (i64::from(self.width), i64::from(self.height));
         let r = radius_px.max(0.0);
-        let (u0, u1) = (
-            (uv_px[0] - r).round() as i64,
-            (uv_px[0] + r).round() as i64,
-        );
-        let (v0, v1) = (
-            (uv_px[1] - r).round() as i64,
-            (uv_px[1] + r).round() as i64,
-        );
+        let (u0, u1) = ((uv_px[0] - r).round() as i64, (uv_px[0] + r).round() as i64);
+        let (v0, v1) = ((uv_px[1] - r).round() as i64, (uv_px[1] + r).round() as i64);
         let (mut sum, mut n) = (0u64, 0u64);
         for v in v0.max(0)..=v1.min(h - 1) {
             for u in u0.max(0)..=u1.min(w - 1) {
@@ -219,9 +206,8 @@ pub fn canonical_corner_order(
             }
         }
     }
-    let even_darker = count[0] > 0
-        && count[1] > 0
-        && sum[0] / count[0] as f64 <= sum[1] / count[1] as f64;
+    let even_darker =
+        count[0] > 0 && count[1] > 0 && sum[0] / count[0] as f64 <= sum[1] / count[1] as f64;
     // The four orderings that keep the pattern's shape: identity, flip x (i → nx-1-i),
     // flip y, both. A flip of x changes the square parity by nx, of y by ny (mod 2), and
     // each single flip reverses the handedness.
@@ -311,9 +297,8 @@ mod tests {
             let (nx, ny) = (inner[0] as usize, inner[1] as usize);
             for (fx, fy) in [(false, false), (true, false), (false, true), (true, true)] {
                 let detected = reorder(&truth, nx, ny, fx, fy);
-                let got =
-                    canonical_corner_order(&board, &detected, &image, BoardZ::AwayFromCamera)
-                        .expect("order");
+                let got = canonical_corner_order(&board, &detected, &image, BoardZ::AwayFromCamera)
+                    .expect("order");
                 assert_eq!(got, truth, "{inner:?} flips {fx} {fy}");
             }
         }
@@ -323,8 +308,8 @@ mod tests {
     fn toward_camera_flips_the_handedness_keeping_the_colours() {
         let board = Board::new([9, 6], 0.04).expect("board");
         let (image, truth) = board_image(&board, 12.0, [30.0, 25.0]);
-        let got = canonical_corner_order(&board, &truth, &image, BoardZ::TowardCamera)
-            .expect("order");
+        let got =
+            canonical_corner_order(&board, &truth, &image, BoardZ::TowardCamera).expect("order");
         assert_ne!(got, truth);
         // nx = 9 is odd: flipping x would swap the colours, so y is flipped.
         assert_eq!(got, reorder(&truth, 9, 6, false, true));

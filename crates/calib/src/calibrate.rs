@@ -10,9 +10,7 @@
 
 use std::path::Path;
 
-use opencv::core::{
-    self, FileStorage, Mat, Point2f, Point3f, Size, TermCriteria, Vector,
-};
+use opencv::core::{self, FileStorage, Mat, Point2f, Point3f, Size, TermCriteria, Vector};
 use opencv::prelude::*;
 use opencv::{calib3d, imgproc};
 
@@ -21,12 +19,14 @@ use crate::{CalibError, Intrinsics, Pose};
 
 /// Largest half side, pixels, of the `cornerSubPix` search window (OpenCV's tutorials use
 /// 11 for boards of 30+ px squares).
-const SUBPIX_MAX_HALF_WINDOW_PX: f64 = 11.0;
+const SUBPIX_MAX_HALF_WINDOW_PX: i32 = 11;
 
-/// The `cornerSubPix` half window as a fraction of the shortest distance between two
-/// neighbouring corners: the window must not reach the next corner, whose edges would pull
-/// the estimate.
-const SUBPIX_WINDOW_FRACTION: f64 = 0.45;
+/// Smallest half side of the window, pixels.
+const SUBPIX_MIN_HALF_WINDOW_PX: i32 = 2;
+
+/// Distance, pixels, the `cornerSubPix` window keeps from the square edges that do not pass
+/// through its corner: the width of a blurred edge plus a margin.
+const SUBPIX_EDGE_MARGIN_PX: f64 = 2.0;
 
 /// `cornerSubPix` stops after this many iterations or a move below
 /// [`SUBPIX_EPSILON_PX`].
@@ -103,30 +103,15 @@ pub fn find_board_corners(
     if !found || corners.len() != board.num_corners() {
         return Ok(None);
     }
-    // The window follows the board's size in the image: half the shortest corner spacing.
-    let nx = board.inner_corners[0] as usize;
     let pts: Vec<[f64; 2]> = corners
         .iter()
         .map(|p| [f64::from(p.x), f64::from(p.y)])
         .collect();
-    let mut spacing = f64::INFINITY;
-    for (k, p) in pts.iter().enumerate() {
-        let mut neighbours = vec![k + nx];
-        if (k + 1) % nx != 0 {
-            neighbours.push(k + 1);
-        }
-        for q in neighbours.into_iter().filter_map(|n| pts.get(n)) {
-            spacing = spacing.min(((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt());
-        }
-    }
-    let half = (SUBPIX_WINDOW_FRACTION * spacing)
-        .min(SUBPIX_MAX_HALF_WINDOW_PX)
-        .floor()
-        .max(2.0) as i32;
+    let (hx, hy) = subpix_window(&pts, board.inner_corners[0] as usize);
     imgproc::corner_sub_pix(
         &mat,
         &mut corners,
-        Size::new(half, half),
+        Size::new(hx, hy),
         Size::new(-1, -1),
         TermCriteria::new(
             core::TermCriteria_COUNT + core::TermCriteria_EPS,
@@ -141,6 +126,65 @@ pub fn find_board_corners(
         .map(|p| [f64::from(p.x), f64::from(p.y)])
         .collect();
     canonical_corner_order(board, &refined, image, z).map(Some)
+}
+
+/// The `cornerSubPix` half window (x, y), pixels: the largest window (by area) that keeps
+/// [`SUBPIX_EDGE_MARGIN_PX`] from every square edge not passing through the corner, at
+/// every corner of the board (`corners` rows of `nx`). Only the edges through the corner
+/// satisfy `cornerSubPix`'s model (the gradient orthogonal to the ray from the corner);
+/// the others pull the estimate. The window is rectangular because a foreshortened board
+/// (a floor board seen from 3 m) has squares several times wider than high: a square
+/// window would be cut to the short side and lose most of the usable pixels.
+fn subpix_window(corners: &[[f64; 2]], nx: usize) -> (i32, i32) {
+    // Per corner and grid direction: the unit normal of the non-incident edge lines and
+    // their distance from the corner. A box of half sides (hx, hy) stays off a line of unit
+    // normal n at distance d when hx·|n_u| + hy·|n_v| < d.
+    let mut lines: Vec<([f64; 2], f64)> = Vec::new();
+    let at = |i: usize, j: usize| corners.get(j * nx + i).copied();
+    let ny = corners.len() / nx.max(1);
+    for j in 0..ny {
+        for i in 0..nx {
+            let Some(c) = at(i, j) else { continue };
+            // Edge vectors to the next corner along x and y (backwards at the far side).
+            let step = |di: isize, dj: isize| {
+                let (a, b) = (i as isize + di, j as isize + dj);
+                let q = (a >= 0 && b >= 0)
+                    .then(|| at(a as usize, b as usize))
+                    .flatten()
+                    .filter(|_| (a as usize) < nx && (b as usize) < ny)?;
+                Some([q[0] - c[0], q[1] - c[1]])
+            };
+            let (Some(ex), Some(ey)) = (
+                step(1, 0).or_else(|| step(-1, 0)),
+                step(0, 1).or_else(|| step(0, -1)),
+            ) else {
+                continue;
+            };
+            let area = (ex[0] * ey[1] - ex[1] * ey[0]).abs();
+            // The edge lines through the next corners: through c + ex along ey, and through
+            // c + ey along ex, at distances area / |ey| and area / |ex|.
+            for along in [ey, ex] {
+                let len = (along[0] * along[0] + along[1] * along[1]).sqrt();
+                if len > 0.0 {
+                    lines.push(([-along[1] / len, along[0] / len], area / len));
+                }
+            }
+        }
+    }
+    let fits = |hx: i32, hy: i32| {
+        lines.iter().all(|(n, d)| {
+            f64::from(hx) * n[0].abs() + f64::from(hy) * n[1].abs() < d - SUBPIX_EDGE_MARGIN_PX
+        })
+    };
+    let mut best = (SUBPIX_MIN_HALF_WINDOW_PX, SUBPIX_MIN_HALF_WINDOW_PX);
+    for hx in SUBPIX_MIN_HALF_WINDOW_PX..=SUBPIX_MAX_HALF_WINDOW_PX {
+        for hy in SUBPIX_MIN_HALF_WINDOW_PX..=SUBPIX_MAX_HALF_WINDOW_PX {
+            if (2 * hx + 1) * (2 * hy + 1) > (2 * best.0 + 1) * (2 * best.1 + 1) && fits(hx, hy) {
+                best = (hx, hy);
+            }
+        }
+    }
+    best
 }
 
 /// Intrinsics fitted to board views, with their reprojection errors.
@@ -243,7 +287,10 @@ fn pose_from_rvec_tvec(rvec: &impl core::ToInputArray, t: [f64; 3]) -> Result<Po
     let mut r = Mat::default();
     calib3d::rodrigues(rvec, &mut r, &mut core::no_array()).map_err(cv_err("Rodrigues"))?;
     let v = mat_values(&r, 9, "Rodrigues")?;
-    Pose::from_rotation_translation([[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]], t)
+    Pose::from_rotation_translation(
+        [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]],
+        t,
+    )
 }
 
 /// Fits a sensor's intrinsics (pinhole and `k1 k2 p1 p2 k3`) to the corners of at least
@@ -433,7 +480,10 @@ pub fn board_pose(
     }
     let t = mat_values(&tvec, 3, "solvePnP translation")?;
     let pose = pose_from_rvec_tvec(&rvec, [t[0], t[1], t[2]])?;
-    Ok((pose, reprojection_rms_px(board, intrinsics, &pose, corners_px)))
+    Ok((
+        pose,
+        reprojection_rms_px(board, intrinsics, &pose, corners_px),
+    ))
 }
 
 /// RMS distance, pixels, between `corners_px` and the board's corners projected through
@@ -633,4 +683,33 @@ pub fn read_opencv_intrinsics(
         other => other,
     })?;
     Ok(intrinsics)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(ex: [f64; 2], ey: [f64; 2]) -> Vec<[f64; 2]> {
+        let mut out = Vec::new();
+        for j in 0..6 {
+            for i in 0..9 {
+                let (i, j) = (f64::from(i), f64::from(j));
+                out.push([100.0 + i * ex[0] + j * ey[0], 80.0 + i * ex[1] + j * ey[1]]);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn subpix_window_stays_off_the_other_edges() {
+        // Squares of 11 px: the far edges are 11 px away, 2 px margin → half side 8.
+        assert_eq!(subpix_window(&grid([11.0, 0.0], [0.0, 11.0]), 9), (8, 8));
+        // Foreshortened 20 × 7 px: wide in x (capped at 11), narrow in y.
+        assert_eq!(subpix_window(&grid([20.0, 0.0], [0.0, 7.0]), 9), (11, 4));
+        // Tiny squares: never below the minimum.
+        assert_eq!(subpix_window(&grid([3.0, 0.0], [0.0, 3.0]), 9), (2, 2));
+        // Sheared squares: the window shrinks to keep off the slanted edges.
+        let (hx, hy) = subpix_window(&grid([20.0, 0.0], [14.0, 7.0]), 9);
+        assert!(hx < 11 && hy <= 4, "{hx} {hy}");
+    }
 }

@@ -109,8 +109,8 @@ pub use openptrack::{
     openptrack_poses_to_string, parse_openptrack_poses, read_openptrack_poses,
     write_openptrack_poses,
 };
-pub use pose_fit::{SensorCorners, refine_board_pose};
 pub use pose::{Pose, QUATERNION_NORM_TOLERANCE, ROTATION_TOLERANCE};
+pub use pose_fit::{SensorCorners, refine_board_pose};
 pub use rig_toml::{
     intrinsics_to_toml_string, parse_intrinsics_toml, parse_rig_toml, read_intrinsics_toml,
     read_rig_toml, rig_to_toml_string, write_intrinsics_toml, write_rig_toml,

@@ -63,13 +63,19 @@ fn perturbed(pose: &Pose, delta: &[f64; 6]) -> Result<Pose, CalibError> {
 
 /// The stacked pixel residuals (projected − observed) of every corner of every sensor;
 /// `None` when a corner falls behind a sensor.
-fn residuals(board: &Board, views: &[SensorCorners<'_>], reference_from_board: &Pose) -> Option<Vec<f64>> {
+fn residuals(
+    board: &Board,
+    views: &[SensorCorners<'_>],
+    reference_from_board: &Pose,
+) -> Option<Vec<f64>> {
     let object = board.object_points();
     let mut out = Vec::new();
     for view in views {
         let sensor_from_board = view.sensor_from_reference.compose(reference_from_board);
         for (p, c) in object.iter().zip(view.corners_px) {
-            let uv = view.intrinsics.project(sensor_from_board.transform_point(*p))?;
+            let uv = view
+                .intrinsics
+                .project(sensor_from_board.transform_point(*p))?;
             out.push(uv[0] - c[0]);
             out.push(uv[1] - c[1]);
         }
@@ -110,7 +116,10 @@ pub fn refine_board_pose(
     views: &[SensorCorners<'_>],
     reference_from_board: &Pose,
 ) -> Result<Pose, CalibError> {
-    if let Some(v) = views.iter().find(|v| v.corners_px.len() != board.num_corners()) {
+    if let Some(v) = views
+        .iter()
+        .find(|v| v.corners_px.len() != board.num_corners())
+    {
         return Err(CalibError::invalid(
             "corners",
             format!(
@@ -133,9 +142,8 @@ pub fn refine_board_pose(
         for k in 0..6 {
             let mut d = [0.0; 6];
             d[k] = DERIVATIVE_STEP;
-            let moved = residuals(board, views, &perturbed(&pose, &d)?).ok_or_else(|| {
-                CalibError::invalid("pose", "the board moved behind a sensor")
-            })?;
+            let moved = residuals(board, views, &perturbed(&pose, &d)?)
+                .ok_or_else(|| CalibError::invalid("pose", "the board moved behind a sensor"))?;
             jac.push(
                 moved
                     .iter()

@@ -69,14 +69,15 @@ pub fn write_intrinsics_toml(
 }
 
 fn parse_table(text: &str, path: &Path) -> Result<Table, CalibError> {
-    text.parse().map_err(|e: toml::de::Error| CalibError::Syntax {
-        line: e.span().map_or(0, |span| {
-            let before = &text.as_bytes()[..span.start.min(text.len())];
-            before.iter().filter(|&&b| b == b'\n').count() + 1
-        }),
-        reason: e.message().to_string(),
-        path: path.to_path_buf(),
-    })
+    text.parse()
+        .map_err(|e: toml::de::Error| CalibError::Syntax {
+            line: e.span().map_or(0, |span| {
+                let before = &text.as_bytes()[..span.start.min(text.len())];
+                before.iter().filter(|&&b| b == b'\n').count() + 1
+            }),
+            reason: e.message().to_string(),
+            path: path.to_path_buf(),
+        })
 }
 
 /// Reads and validates a `rig.toml`.

@@ -196,10 +196,9 @@ mod imp {
     use anyhow::{Context, bail};
     use bodyseg_calib::{
         BoardZ, GrayImage, Intrinsics, MIN_INTRINSICS_VIEWS, Pose, RgbdCamera, Rig, SensorCorners,
-        board_pose, refine_board_pose,
-        calibrate_intrinsics as fit_intrinsics, calibrate_stereo as fit_stereo,
+        board_pose, calibrate_intrinsics as fit_intrinsics, calibrate_stereo as fit_stereo,
         find_board_corners, read_intrinsics_toml, read_opencv_intrinsics, read_rig_toml,
-        rig_to_toml_string, write_intrinsics_toml, write_opencv_intrinsics,
+        refine_board_pose, rig_to_toml_string, write_intrinsics_toml, write_opencv_intrinsics,
     };
     use rayon::prelude::*;
     use std::time::Instant;
@@ -312,8 +311,7 @@ mod imp {
                 board.size_text()
             );
         }
-        let corners: Vec<Vec<[f64; 2]>> =
-            found.iter().filter_map(|v| v.corners.clone()).collect();
+        let corners: Vec<Vec<[f64; 2]>> = found.iter().filter_map(|v| v.corners.clone()).collect();
         let fit = fit_intrinsics(board, &corners, width, height)
             .with_context(|| dir.display().to_string())?;
         let mut errors = fit.view_rms_px.iter();
@@ -548,18 +546,10 @@ mod imp {
         for (file, (ir_corners, color_corners)) in paired_files.iter().zip(&pairs) {
             let (depth_from_board, _) = board_pose(board, &depth, ir_corners)?;
             let color_from_board = fit.second_from_first.compose(&depth_from_board);
-            let a = bodyseg_calib::reprojection_rms_px(
-                board,
-                &depth,
-                &depth_from_board,
-                ir_corners,
-            );
-            let b = bodyseg_calib::reprojection_rms_px(
-                board,
-                &color,
-                &color_from_board,
-                color_corners,
-            );
+            let a =
+                bodyseg_calib::reprojection_rms_px(board, &depth, &depth_from_board, ir_corners);
+            let b =
+                bodyseg_calib::reprojection_rms_px(board, &color, &color_from_board, color_corners);
             reports.push(ViewReport {
                 file: file.clone(),
                 rms_px: Some(((a * a + b * b) / 2.0).sqrt()),
@@ -752,11 +742,13 @@ mod imp {
         tracing::debug!(?estimates, "depth_from_world per sensor");
         let views: Vec<SensorCorners<'_>> = observations
             .iter()
-            .map(|(intrinsics, sensor_from_depth, corners, _)| SensorCorners {
-                intrinsics,
-                sensor_from_reference: *sensor_from_depth,
-                corners_px: corners,
-            })
+            .map(
+                |(intrinsics, sensor_from_depth, corners, _)| SensorCorners {
+                    intrinsics,
+                    sensor_from_reference: *sensor_from_depth,
+                    corners_px: corners,
+                },
+            )
             .collect();
         Ok(refine_board_pose(board, &views, &estimates[0])?)
     }

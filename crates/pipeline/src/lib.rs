@@ -29,8 +29,8 @@
 //! - Units are those of the stages: metres, radians; times are wall-clock.
 
 mod boxes;
-mod calibrate;
 mod boxes_study;
+mod calibrate;
 mod config;
 mod eval;
 mod fs;
@@ -42,17 +42,17 @@ mod rig;
 mod stage;
 mod synth;
 
+pub use bodyseg_calib::Board;
 pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{
     BoxesInput, BoxesOptions, BoxesSummary, boxes_file, boxes_path, read_cloud, top_view,
 };
-pub use bodyseg_calib::Board;
+pub use boxes_study::{BoxStats, FrameMatch, MATCH_IOU, box_stats, match_boxes};
 pub use calibrate::{
     CALIBRATE_AVAILABLE, CalibrateSummary, IntrinsicsCalibOptions, StereoCalibOptions, ViewReport,
     WorldCalibOptions, calibrate_intrinsics, calibrate_stereo, calibrate_world,
 };
-pub use boxes_study::{BoxStats, FrameMatch, MATCH_IOU, box_stats, match_boxes};
 pub use config::{BackProjectConfig, PipelineConfig, RefineOverrides};
 pub use eval::{
     DEFAULT_PREDICTION_NAME, EvalOptions, EvalSummary, NamedPrediction, ReportFormat, eval_files,
