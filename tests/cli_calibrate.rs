@@ -3,7 +3,7 @@
 //! line, exit 1, no output file). Without the `opencv` feature: the clear "built without
 //! OpenCV" error.
 
-use crate::common::{assert_ok, bodyseg, stderr, tempdir};
+use crate::common::{bodyseg, stderr, tempdir};
 use std::path::Path;
 
 /// Asserts a failed run: exit 1, one `error:` line containing every `needle`, and `out`
@@ -50,6 +50,7 @@ fn without_the_feature_calibrate_says_how_to_build_it() {
 #[cfg(feature = "opencv")]
 mod with_opencv {
     use super::*;
+    use crate::common::assert_ok;
     use bodyseg_calib::{Intrinsics, Pose, read_rig_toml};
     use bodyseg_io::write_gray8_png;
 

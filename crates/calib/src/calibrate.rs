@@ -245,12 +245,7 @@ fn distortion_mat(i: &Intrinsics) -> Result<Mat, CalibError> {
 
 /// Reads `n` doubles of a continuous `CV_64F` matrix (any shape).
 fn mat_values(m: &Mat, n: usize, what: &str) -> Result<Vec<f64>, CalibError> {
-    let values = m
-        .data_typed::<f64>()
-        .map_err(cv_err(what))?
-        .iter()
-        .copied()
-        .collect::<Vec<_>>();
+    let values = m.data_typed::<f64>().map_err(cv_err(what))?.to_vec();
     if values.len() < n {
         return Err(CalibError::OpenCv {
             operation: what.to_string(),
@@ -357,6 +352,10 @@ pub fn calibrate_intrinsics(
     })
 }
 
+/// One board view seen by two sensors at once: its corners in the first sensor's image and
+/// in the second's, both in canonical order, pixels.
+pub type CornerPair = (Vec<[f64; 2]>, Vec<[f64; 2]>);
+
 /// The stereo extrinsic of two sensors fitted to simultaneous board views.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StereoFit {
@@ -382,7 +381,7 @@ pub fn calibrate_stereo(
     board: &Board,
     first: &Intrinsics,
     second: &Intrinsics,
-    pairs: &[(Vec<[f64; 2]>, Vec<[f64; 2]>)],
+    pairs: &[CornerPair],
     refine_intrinsics: bool,
 ) -> Result<StereoFit, CalibError> {
     let (a, b): (Vec<_>, Vec<_>) = pairs.iter().cloned().unzip();

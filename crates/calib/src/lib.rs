@@ -95,7 +95,7 @@ pub use back_project::{
 pub use board::{Board, BoardZ, GrayImage, MAX_INNER_CORNERS, canonical_corner_order};
 #[cfg(feature = "opencv")]
 pub use calibrate::{
-    IntrinsicsFit, MIN_INTRINSICS_VIEWS, StereoFit, board_pose, calibrate_intrinsics,
+    CornerPair, IntrinsicsFit, MIN_INTRINSICS_VIEWS, StereoFit, board_pose, calibrate_intrinsics,
     calibrate_stereo, find_board_corners, read_opencv_intrinsics, reprojection_rms_px,
     write_opencv_intrinsics,
 };
