@@ -81,7 +81,7 @@ fn calibrate_help() {
     // Present with or without the opencv feature: the commands explain how to build it.
     help(
         &["calibrate", "--help"],
-        &["intrinsics", "stereo", "world", "--features opencv"],
+        &["intrinsics", "stereo", "world", "OpenCV", "setup_opencv.sh"],
     );
     help(
         &["calibrate", "intrinsics", "--help"],
@@ -106,6 +106,6 @@ fn calibrate_help() {
     );
     help(
         &["calibrate", "world", "--help"],
-        &["--rig", "--floor", "z up", "ir.png", "color.png"],
+        &["--rig", "--floor", "points up", "ir.png", "color.png"],
     );
 }

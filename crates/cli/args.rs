@@ -931,7 +931,8 @@ A larger board (e.g. 0.1 m squares) is easier to see from 3 m than a hand-held o
 board must have one even and one odd count of inner corners (9x6).";
 
 const CALIBRATE_EXAMPLES: &str = "\
-Examples (the views of `bodyseg synth --chessboard --out views`):
+Examples:
+  # on the views of `bodyseg synth --chessboard --out views`:
   bodyseg calibrate intrinsics --images views/cam0/ir --board 9x6 --square-m 0.04 --out cam0_ir.toml
   bodyseg calibrate intrinsics --images views/cam0/color --board 9x6 --square-m 0.04 --out cam0_color.yaml
   bodyseg calibrate stereo --ir views/cam0/ir --color views/cam0/color --board 9x6 --square-m 0.04 \\
