@@ -222,6 +222,44 @@ mod with_opencv {
         );
     }
 
+    /// `calibrate world` of cam0.toml on the floor views in `floor` with a `board` board.
+    fn world_args<'a>(floor: &'a str, board: &'a str) -> Vec<&'a str> {
+        vec![
+            "calibrate",
+            "world",
+            "--rig",
+            "cam0.toml",
+            "--floor",
+            floor,
+            "--board",
+            board,
+            "--square-m",
+            "0.1",
+            "--out",
+            "rig.toml",
+        ]
+    }
+
+    /// `calibrate stereo` of the small set's cam0 with a `board` board, then `extra`.
+    fn stereo_args<'a>(board: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+        let mut args = vec![
+            "calibrate",
+            "stereo",
+            "--ir",
+            "views/cam0/ir",
+            "--color",
+            "views/cam0/color",
+            "--board",
+            board,
+            "--square-m",
+            "0.04",
+            "--out",
+            "cam0.toml",
+        ];
+        args.extend_from_slice(extra);
+        args
+    }
+
     fn intrinsics_args<'a>(images: &'a str, board: &'a str, out: &'a str) -> Vec<&'a str> {
         vec![
             "calibrate",
@@ -305,20 +343,7 @@ mod with_opencv {
         // A symmetric board cannot number both sensors' corners alike.
         assert_fails(
             d,
-            &[
-                "calibrate",
-                "stereo",
-                "--ir",
-                ir,
-                "--color",
-                "views/cam0/color",
-                "--board",
-                "8x6",
-                "--square-m",
-                "0.04",
-                "--out",
-                "cam0.toml",
-            ],
+            &stereo_args("8x6", &[]),
             &["8x6", "one even and one odd"],
             "cam0.toml",
         );
@@ -326,81 +351,39 @@ mod with_opencv {
         run_ok(d, &intrinsics_args("views/cam0/color", "9x6", "color.toml"));
         assert_fails(
             d,
-            &[
-                "calibrate",
-                "stereo",
-                "--ir",
-                ir,
-                "--color",
-                "views/cam0/color",
-                "--board",
-                "9x6",
-                "--square-m",
-                "0.04",
-                "--ir-intrinsics",
-                "color.toml",
-                "--out",
-                "cam0.toml",
-            ],
+            &stereo_args("9x6", &["--ir-intrinsics", "color.toml"]),
             &["color.toml", "intrinsics are for 960x540 images", "512x424"],
             "cam0.toml",
         );
         // A world run whose floor folder lacks the camera.
-        run_ok(
-            d,
-            &[
-                "calibrate",
-                "stereo",
-                "--ir",
-                ir,
-                "--color",
-                "views/cam0/color",
-                "--board",
-                "9x6",
-                "--square-m",
-                "0.04",
-                "--out",
-                "cam0.toml",
-            ],
-        );
+        run_ok(d, &stereo_args("9x6", &[]));
         std::fs::create_dir(d.join("nofloor")).expect("mkdir");
         assert_fails(
             d,
-            &[
-                "calibrate",
-                "world",
-                "--rig",
-                "cam0.toml",
-                "--floor",
-                "nofloor",
-                "--board",
-                "9x6",
-                "--square-m",
-                "0.1",
-                "--out",
-                "rig.toml",
-            ],
+            &world_args("nofloor", "9x6"),
             &["camera cam0: no floor view", "ir.png"],
             "rig.toml",
         );
-        // The floor board given the hand-held board's size: not found.
+        // A floor view without the board, and one of the wrong size.
+        std::fs::create_dir_all(d.join("blankfloor/cam0")).expect("mkdir");
+        write_gray8_png(
+            &d.join("blankfloor/cam0/ir.png"),
+            512,
+            424,
+            &[90; 512 * 424],
+        )
+        .expect("png");
         assert_fails(
             d,
-            &[
-                "calibrate",
-                "world",
-                "--rig",
-                "cam0.toml",
-                "--floor",
-                "views/floor",
-                "--board",
-                "10x7",
-                "--square-m",
-                "0.1",
-                "--out",
-                "rig.toml",
-            ],
-            &["camera cam0: the 10x7 floor board is not found"],
+            &world_args("blankfloor", "9x6"),
+            &["camera cam0: the 9x6 floor board is not found in", "ir.png"],
+            "rig.toml",
+        );
+        write_gray8_png(&d.join("blankfloor/cam0/color.png"), 64, 48, &[90; 64 * 48]).expect("png");
+        assert_fails(
+            d,
+            &world_args("blankfloor", "9x6"),
+            &["color.png: image is 64x48, camera cam0's sensor is 960x540"],
             "rig.toml",
         );
     }

@@ -96,7 +96,7 @@ pub fn find_board_corners(
             &mat,
             pattern,
             &mut corners,
-            calib3d::CALIB_CB_NORMALIZE_IMAGE | calib3d::CALIB_CB_EXHAUSTIVE,
+            calib3d::CALIB_CB_NORMALIZE_IMAGE,
         )
         .map_err(cv_err("findChessboardCornersSB"))?;
     }
@@ -264,28 +264,35 @@ fn intrinsics_from(
 ) -> Result<Intrinsics, CalibError> {
     let k = mat_values(k, 9, what)?;
     let d = mat_values(dist, 5, what)?;
-    let intrinsics = Intrinsics {
-        width,
-        height,
-        fx: k[0],
-        fy: k[4],
-        cx: k[2],
-        cy: k[5],
-        distortion: [d[0], d[1], d[2], d[3], d[4]],
-    };
+    let intrinsics = Intrinsics::from_camera_matrix(width, height, &k, &d);
     intrinsics.validate()?;
     Ok(intrinsics)
+}
+
+/// When `calibrateCamera` and `stereoCalibrate` stop: 100 Levenberg-Marquardt iterations
+/// or no change at machine precision (OpenCV's default is 30 iterations or 1e-16 change).
+fn fit_criteria() -> Result<TermCriteria, CalibError> {
+    TermCriteria::new(
+        core::TermCriteria_COUNT + core::TermCriteria_EPS,
+        100,
+        f64::EPSILON,
+    )
+    .map_err(cv_err("TermCriteria"))
+}
+
+/// A pose from a row-major 3×3 rotation (OpenCV's `CV_64F` matrix values) and a translation.
+fn pose_from_values(r: &[f64], t: &[f64]) -> Result<Pose, CalibError> {
+    Pose::from_rotation_translation(
+        [[r[0], r[1], r[2]], [r[3], r[4], r[5]], [r[6], r[7], r[8]]],
+        [t[0], t[1], t[2]],
+    )
 }
 
 /// A pose from OpenCV's rotation vector (Rodrigues) and translation.
 fn pose_from_rvec_tvec(rvec: &impl core::ToInputArray, t: [f64; 3]) -> Result<Pose, CalibError> {
     let mut r = Mat::default();
     calib3d::rodrigues(rvec, &mut r, &mut core::no_array()).map_err(cv_err("Rodrigues"))?;
-    let v = mat_values(&r, 9, "Rodrigues")?;
-    Pose::from_rotation_translation(
-        [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]],
-        t,
-    )
+    pose_from_values(&mat_values(&r, 9, "Rodrigues")?, &t)
 }
 
 /// Fits a sensor's intrinsics (pinhole and `k1 k2 p1 p2 k3`) to the corners of at least
@@ -329,12 +336,7 @@ pub fn calibrate_intrinsics(
         &mut std_extrinsics,
         &mut per_view,
         0,
-        TermCriteria::new(
-            core::TermCriteria_COUNT + core::TermCriteria_EPS,
-            100,
-            f64::EPSILON,
-        )
-        .map_err(cv_err("TermCriteria"))?,
+        fit_criteria()?,
     )
     .map_err(cv_err("calibrateCamera"))?;
     let intrinsics = intrinsics_from(width, height, &k, &dist, "calibrateCamera")?;
@@ -423,24 +425,12 @@ pub fn calibrate_stereo(
         } else {
             calib3d::CALIB_FIX_INTRINSIC
         },
-        TermCriteria::new(
-            core::TermCriteria_COUNT + core::TermCriteria_EPS,
-            100,
-            f64::EPSILON,
-        )
-        .map_err(cv_err("TermCriteria"))?,
+        fit_criteria()?,
     )
     .map_err(cv_err("stereoCalibrate"))?;
     let rv = mat_values(&r, 9, "stereoCalibrate rotation")?;
     let tv = mat_values(&t, 3, "stereoCalibrate translation")?;
-    let second_from_first = Pose::from_rotation_translation(
-        [
-            [rv[0], rv[1], rv[2]],
-            [rv[3], rv[4], rv[5]],
-            [rv[6], rv[7], rv[8]],
-        ],
-        [tv[0], tv[1], tv[2]],
-    )?;
+    let second_from_first = pose_from_values(&rv, &tv)?;
     Ok(StereoFit {
         second_from_first,
         first: intrinsics_from(first.width, first.height, &k1, &d1, "stereoCalibrate")?,
@@ -668,15 +658,7 @@ pub fn read_opencv_intrinsics(
             });
         }
     };
-    let intrinsics = Intrinsics {
-        width,
-        height,
-        fx: k[0],
-        fy: k[4],
-        cx: k[2],
-        cy: k[5],
-        distortion: [d[0], d[1], d[2], d[3], d.get(4).copied().unwrap_or(0.0)],
-    };
+    let intrinsics = Intrinsics::from_camera_matrix(width, height, &k, &d);
     intrinsics.validate().map_err(|e| match e {
         CalibError::Invalid { field, reason } => bad(&field, reason),
         other => other,

@@ -568,24 +568,25 @@ mod imp {
                 fit.rms_px
             ),
         ));
-        let t = Instant::now();
         let mut camera = RgbdCamera::new(name, depth, color);
         camera.color_from_depth = cfd;
         let rig = Rig {
             cameras: vec![camera],
         };
-        write_text(&options.out, &rig_to_toml_string(&rig)?)?;
-        stages.push(Stage::new(
-            "write",
-            t.elapsed(),
-            options.out.display().to_string(),
-        ));
+        stages.push(write_rig(&rig, &options.out)?);
         Ok(CalibrateSummary {
             views: reports,
             rms_px: fit.rms_px,
             notes,
             stages,
         })
+    }
+
+    /// Writes `rig` to `out` atomically; the stage line.
+    fn write_rig(rig: &Rig, out: &Path) -> Result<Stage> {
+        let t = Instant::now();
+        write_text(out, &rig_to_toml_string(rig)?)?;
+        Ok(Stage::new("write", t.elapsed(), out.display().to_string()))
     }
 
     /// The default camera name: the folder holding the IR folder (`calib/cam0/ir` → `cam0`).
@@ -711,13 +712,7 @@ mod imp {
                 board.size_text()
             ),
         )];
-        let t = Instant::now();
-        write_text(&options.out, &rig_to_toml_string(&rig)?)?;
-        stages.push(Stage::new(
-            "write",
-            t.elapsed(),
-            options.out.display().to_string(),
-        ));
+        stages.push(write_rig(&rig, &options.out)?);
         Ok(CalibrateSummary {
             views: reports,
             rms_px,
