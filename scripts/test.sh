@@ -4,7 +4,8 @@
 #   scripts/test.sh            from any folder
 #
 # Installs what a fresh Debian 12 machine with the Rust toolchain lacks (the rustfmt and
-# clippy components). Tests run in release: the DBSCAN property tests compare against an
+# clippy components; OpenCV and clang for the `opencv` feature, which clippy and the tests
+# build: --all-features). Tests run in release: the DBSCAN property tests compare against an
 # O(n^2) brute force on hundreds of clouds. Slow tests marked #[ignore] run last.
 set -euo pipefail
 
@@ -42,11 +43,16 @@ rustc --version
 step "ONNX Runtime (scripts/setup_onnxruntime.sh; once, into .deps/onnxruntime/)"
 scripts/setup_onnxruntime.sh
 
+step "OpenCV for the opencv feature (scripts/setup_opencv.sh; apt-get once)"
+scripts/setup_opencv.sh
+
 step "cargo fmt --all --check"
 cargo fmt --all --check
 
-step "cargo clippy --workspace --all-targets --all-features -- -D warnings"
-cargo clippy --workspace --all-targets --all-features -- -D warnings
+# --release: the opencv crate's build script (binding generation and its C++ wrapper, several
+# minutes) then runs once for clippy and the release tests below, instead of once per profile.
+step "cargo clippy --release --workspace --all-targets --all-features -- -D warnings"
+cargo clippy --release --workspace --all-targets --all-features -- -D warnings
 
 step "python3 scripts/check_boundaries.py"
 python3 scripts/check_boundaries.py

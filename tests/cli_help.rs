@@ -75,3 +75,37 @@ fn parse_help() {
         ],
     );
 }
+
+#[test]
+fn calibrate_help() {
+    // Present with or without the opencv feature: the commands explain how to build it.
+    help(
+        &["calibrate", "--help"],
+        &["intrinsics", "stereo", "world", "OpenCV", "setup_opencv.sh"],
+    );
+    help(
+        &["calibrate", "intrinsics", "--help"],
+        &[
+            "--images",
+            "--board",
+            "--square-m",
+            "--out",
+            ".yaml",
+            "Examples:",
+        ],
+    );
+    help(
+        &["calibrate", "stereo", "--help"],
+        &[
+            "--ir",
+            "--color",
+            "--ir-intrinsics",
+            "--fix-intrinsics",
+            "--name",
+        ],
+    );
+    help(
+        &["calibrate", "world", "--help"],
+        &["--rig", "--floor", "points up", "ir.png", "color.png"],
+    );
+}

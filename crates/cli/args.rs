@@ -3,10 +3,11 @@
 
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
-    ConvertFormat, ConvertOptions, DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice,
-    NamedPrediction, ParseOptions, ParseSource, ParserChoice, PipelineConfig, ProjectMode,
-    ProjectOptions, RefineOptions, RefineOverrides, ReportFormat, RigFormat, RigImportOptions,
-    RunOptions, SceneSource, SynthOptions, ThreeDPeopleCamera,
+    Board, ConvertFormat, ConvertOptions, DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice,
+    IntrinsicsCalibOptions, NamedPrediction, ParseOptions, ParseSource, ParserChoice,
+    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
+    RigFormat, RigImportOptions, RunOptions, SceneSource, StereoCalibOptions, SynthOptions,
+    ThreeDPeopleCamera, WorldCalibOptions,
 };
 use bodyseg_refine::Steps;
 use bodyseg_synth::ChessboardConfig;
@@ -37,6 +38,7 @@ Examples:
   bodyseg rig import --from iai_kinect2 calib/cam0 calib/cam1 --out rig.toml
   bodyseg run --recording rec --out run1
   bodyseg convert --input datasets/recs --format recording --out converted --shard 0/4
+  bodyseg calibrate intrinsics --images calib/cam0/ir --board 9x6 --square-m 0.04 --out cam0_ir.toml
   bodyseg refine --help
 
 Logging: RUST_LOG=debug (default warn); -v is info, -vv debug.";
@@ -109,6 +111,10 @@ pub enum Command {
     /// machines): bodyseg recordings, or 3DPeople
     #[command(long_about = CONVERT_LONG_ABOUT, after_help = CONVERT_EXAMPLES)]
     Convert(ConvertArgs),
+    /// Calibrate cameras from chessboard images (OpenCV): intrinsics, colour-from-depth,
+    /// world poses → rig.toml
+    #[command(subcommand, long_about = CALIBRATE_LONG_ABOUT)]
+    Calibrate(CalibrateCommand),
 }
 
 const SYNTH_LONG_ABOUT: &str = "\
@@ -861,6 +867,221 @@ pub struct RigShowArgs {
     /// The rig to show (rig.toml, shared/FORMATS.md)
     #[arg(value_name = "RIG.toml")]
     pub rig: PathBuf,
+}
+
+/// `bodyseg calibrate`.
+#[derive(Debug, Subcommand)]
+pub enum CalibrateCommand {
+    /// One sensor's intrinsics (focal lengths, principal point, k1 k2 p1 p2 k3) from a
+    /// folder of chessboard views
+    #[command(long_about = CALIBRATE_INTRINSICS_LONG_ABOUT, after_help = CALIBRATE_EXAMPLES)]
+    Intrinsics(CalibrateIntrinsicsArgs),
+    /// One RGB-D camera's colour-from-depth from IR and colour views of the same board
+    /// poses: writes a one-camera rig.toml
+    #[command(long_about = CALIBRATE_STEREO_LONG_ABOUT, after_help = CALIBRATE_EXAMPLES)]
+    Stereo(CalibrateStereoArgs),
+    /// Every camera's world pose from simultaneous views of a board lying on the floor
+    /// (the board's frame is the world, z up): writes the rig.toml
+    #[command(long_about = CALIBRATE_WORLD_LONG_ABOUT, after_help = CALIBRATE_EXAMPLES)]
+    World(CalibrateWorldArgs),
+}
+
+const CALIBRATE_LONG_ABOUT: &str = "\
+Calibrate RGB-D cameras from images of a printed chessboard, with OpenCV (corners with \
+sub-pixel refinement, calibrateCamera, stereoCalibrate, solvePnP). Three steps lead from \
+board images to a rig.toml: `intrinsics` per sensor, `stereo` per camera (colour-from-depth), \
+`world` once for the rig (every camera placed on a board lying on the floor). README.md \
+\"Calibrating your cameras\" walks through them.
+
+The commands need a bodyseg built with the `opencv` feature (cargo build --release \
+--features opencv, with libopencv-dev, clang and libclang-dev: scripts/setup_opencv.sh); \
+without it they say so and exit with status 1.";
+
+const CALIBRATE_INTRINSICS_LONG_ABOUT: &str = "\
+Calibrate one sensor (a colour camera, or a depth camera's IR sensor) from a folder of PNG \
+or JPEG views of a chessboard, all of the same size: the board's inner corners are found \
+and refined to sub-pixel accuracy, then OpenCV's calibrateCamera fits fx, fy, cx, cy and \
+the distortion k1 k2 p1 p2 k3. Images where the board is not found are reported and \
+skipped; at least 3 must show it (15-20 views, the board tilted in every direction and \
+reaching the image corners, give good results).
+
+Prints the RMS reprojection error of each image and of all: below 0.3 px is good; an image \
+far above the others is likely blurred or misdetected, remove it and rerun.
+
+--out ending in .toml writes the fields of a rig.toml sensor table (width, height, fx, fy, \
+cx, cy, distortion) with the errors as comments; .yaml, .yml or .xml writes OpenCV \
+FileStorage (cameraMatrix, distortionCoefficients, image_width, image_height, as \
+iai_kinect2's calib_*.yaml).";
+
+const CALIBRATE_STEREO_LONG_ABOUT: &str = "\
+Calibrate one RGB-D camera's colour-from-depth (the rigid transform from the depth (IR) \
+sensor's frame into the colour sensor's) from views of a chessboard taken by both sensors \
+at the same instants: an IR image and a colour image of the same file name (stem) form a \
+pair. The intrinsics come from --ir-intrinsics / --color-intrinsics (files written by \
+`calibrate intrinsics`, or OpenCV FileStorage YAML/XML such as iai_kinect2's calib_ir.yaml), \
+else they are calibrated from the same views first. OpenCV's stereoCalibrate then fits the \
+transform and refines both intrinsics with it (a board pose shared by both sensors fixes \
+their relative scale: millimetres better along the viewing direction); --fix-intrinsics \
+keeps them as they are.
+
+Writes a rig.toml with this one camera (depth scale 1000, world pose identity): the input \
+of `calibrate world`. The board must have one even and one odd count of inner corners \
+(9x6) so that both sensors number its corners alike.";
+
+const CALIBRATE_WORLD_LONG_ABOUT: &str = "\
+Place every camera in one world frame: lay a chessboard flat on the floor where all cameras \
+see it and save, per camera, its IR and/or colour view as FLOOR/<camera name>/ir.png and \
+FLOOR/<camera name>/color.png (or .jpg). The board defines the world: the origin is its \
+inner corner (0, 0) (next to a black corner square), x runs along the rows of the first \
+inner-corner count, z points up, y = z cross x. Seen from above, x turned 90 degrees \
+counter-clockwise is y. Each camera's world_from_depth is fitted to all its views (solvePnP, \
+then IR and colour corners together through the camera's colour-from-depth); its \
+intrinsics and colour-from-depth are kept from the --rig files.
+
+A larger board (e.g. 0.1 m squares) is easier to see from 3 m than a hand-held one. The \
+board must have one even and one odd count of inner corners (9x6).";
+
+const CALIBRATE_EXAMPLES: &str = "\
+Examples:
+  # on the views of `bodyseg synth --chessboard --out views`:
+  bodyseg calibrate intrinsics --images views/cam0/ir --board 9x6 --square-m 0.04 --out cam0_ir.toml
+  bodyseg calibrate intrinsics --images views/cam0/color --board 9x6 --square-m 0.04 --out cam0_color.yaml
+  bodyseg calibrate stereo --ir views/cam0/ir --color views/cam0/color --board 9x6 --square-m 0.04 \\
+      --ir-intrinsics cam0_ir.toml --color-intrinsics cam0_color.yaml --name cam0 --out cam0.toml
+  bodyseg calibrate world --rig cam0.toml --rig cam1.toml --rig cam2.toml --floor views/floor \\
+      --board 9x6 --square-m 0.1 --out rig.toml";
+
+/// The board flags shared by the calibrate commands.
+#[derive(Debug, Args)]
+pub struct BoardArgs {
+    /// Inner corners of the chessboard per row x per column (a board of 10x7 squares is 9x6)
+    #[arg(long, value_name = "COLSxROWS", value_parser = parse_board)]
+    pub board: [u32; 2],
+
+    /// Side of one square of the board, metres (measure the print)
+    #[arg(long, value_name = "M")]
+    pub square_m: f64,
+}
+
+fn parse_board(text: &str) -> std::result::Result<[u32; 2], String> {
+    Board::parse_inner_corners(text).map_err(|e| e.to_string())
+}
+
+impl BoardArgs {
+    fn board(&self) -> Result<Board> {
+        Ok(Board::new(self.board, self.square_m)?)
+    }
+}
+
+/// `bodyseg calibrate intrinsics`.
+#[derive(Debug, Args)]
+pub struct CalibrateIntrinsicsArgs {
+    /// Folder of the sensor's chessboard views (PNG or JPEG, all the same size)
+    #[arg(long, value_name = "DIR")]
+    pub images: PathBuf,
+
+    #[command(flatten)]
+    pub board: BoardArgs,
+
+    /// Intrinsics file to write: .toml, or OpenCV FileStorage .yaml, .yml or .xml
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+impl CalibrateIntrinsicsArgs {
+    /// The pipeline's options.
+    pub fn options(&self) -> Result<IntrinsicsCalibOptions> {
+        Ok(IntrinsicsCalibOptions {
+            images: self.images.clone(),
+            board: self.board.board()?,
+            out: self.out.clone(),
+        })
+    }
+}
+
+/// `bodyseg calibrate stereo`.
+#[derive(Debug, Args)]
+pub struct CalibrateStereoArgs {
+    /// Folder of the IR (depth sensor) views
+    #[arg(long, value_name = "DIR")]
+    pub ir: PathBuf,
+
+    /// Folder of the colour views; each pairs with the IR view of the same file stem
+    #[arg(long, value_name = "DIR")]
+    pub color: PathBuf,
+
+    #[command(flatten)]
+    pub board: BoardArgs,
+
+    /// IR intrinsics (.toml from `calibrate intrinsics`, or OpenCV .yaml/.yml/.xml)
+    /// [default: calibrated from the IR views]
+    #[arg(long, value_name = "FILE")]
+    pub ir_intrinsics: Option<PathBuf>,
+
+    /// Colour intrinsics [default: calibrated from the colour views]
+    #[arg(long, value_name = "FILE")]
+    pub color_intrinsics: Option<PathBuf>,
+
+    /// Keep the intrinsics as given (or as calibrated from each folder) instead of refining
+    /// them together with colour-from-depth
+    #[arg(long)]
+    pub fix_intrinsics: bool,
+
+    /// Camera name in the rig [default: the folder holding the IR folder]
+    #[arg(long, value_name = "NAME")]
+    pub name: Option<String>,
+
+    /// The one-camera rig.toml to write
+    #[arg(long, value_name = "RIG.toml")]
+    pub out: PathBuf,
+}
+
+impl CalibrateStereoArgs {
+    /// The pipeline's options.
+    pub fn options(&self) -> Result<StereoCalibOptions> {
+        Ok(StereoCalibOptions {
+            ir: self.ir.clone(),
+            color: self.color.clone(),
+            board: self.board.board()?,
+            ir_intrinsics: self.ir_intrinsics.clone(),
+            color_intrinsics: self.color_intrinsics.clone(),
+            fix_intrinsics: self.fix_intrinsics,
+            name: self.name.clone(),
+            out: self.out.clone(),
+        })
+    }
+}
+
+/// `bodyseg calibrate world`.
+#[derive(Debug, Args)]
+pub struct CalibrateWorldArgs {
+    /// Rig file(s) with the cameras to place (from `calibrate stereo` or `rig import`);
+    /// repeat for several, the rig order is the order given
+    #[arg(long = "rig", value_name = "RIG.toml", required = true)]
+    pub rigs: Vec<PathBuf>,
+
+    /// Folder of the floor views: <camera name>/ir.png and/or <camera name>/color.png
+    #[arg(long, value_name = "DIR")]
+    pub floor: PathBuf,
+
+    #[command(flatten)]
+    pub board: BoardArgs,
+
+    /// The rig.toml to write
+    #[arg(long, value_name = "RIG.toml")]
+    pub out: PathBuf,
+}
+
+impl CalibrateWorldArgs {
+    /// The pipeline's options.
+    pub fn options(&self) -> Result<WorldCalibOptions> {
+        Ok(WorldCalibOptions {
+            rigs: self.rigs.clone(),
+            floor: self.floor.clone(),
+            board: self.board.board()?,
+            out: self.out.clone(),
+        })
+    }
 }
 
 #[cfg(test)]

@@ -8,10 +8,14 @@
 mod args;
 
 use anyhow::Result;
-use args::{Cli, Command, EvalArgs, ParseArgs, ProjectArgs, RefineArgs, RigCommand, SynthArgs};
+use args::{
+    CalibrateCommand, Cli, Command, EvalArgs, ParseArgs, ProjectArgs, RefineArgs, RigCommand,
+    SynthArgs,
+};
 use bodyseg_pipeline::{
-    Stage, describe_rig, eval_files, import_rig, merge_reports, parse_file, project_file, read_rig,
-    refine_file, render_report, synth_recording, write_text,
+    Stage, calibrate_intrinsics, calibrate_stereo, calibrate_world, describe_rig, eval_files,
+    import_rig, merge_reports, parse_file, project_file, read_rig, refine_file, render_report,
+    synth_recording, write_text,
 };
 use clap::Parser;
 use std::io::Write;
@@ -87,6 +91,7 @@ fn run(cli: &Cli) -> Result<Outcome> {
             }
             stages
         }
+        Command::Calibrate(cmd) => calibrate(cmd, cli.quiet)?,
     };
     if !cli.quiet {
         for s in stages {
@@ -244,6 +249,28 @@ fn rig(cmd: &RigCommand) -> Result<Vec<Stage>> {
             Ok(vec![read])
         }
     }
+}
+
+fn calibrate(cmd: &CalibrateCommand, quiet: bool) -> Result<Vec<Stage>> {
+    let summary = match cmd {
+        CalibrateCommand::Intrinsics(args) => calibrate_intrinsics(&args.options()?)?,
+        CalibrateCommand::Stereo(args) => calibrate_stereo(&args.options()?)?,
+        CalibrateCommand::World(args) => calibrate_world(&args.options()?)?,
+    };
+    // Skipped views are always reported; the per-view errors unless --quiet.
+    for note in &summary.notes {
+        eprintln!("note: {note}");
+    }
+    if !quiet {
+        eprintln!("reprojection error (RMS, px):");
+        for view in summary.views.iter().filter(|v| v.rms_px.is_some()) {
+            if let Some(e) = view.rms_px {
+                eprintln!("  {e:>7.4}  {}", view.file.display());
+            }
+        }
+        eprintln!("  {:>7.4}  all", summary.rms_px);
+    }
+    Ok(summary.stages)
 }
 
 /// Prints to stdout; a closed pipe (`bodyseg eval ... | head`) is not an error.

@@ -73,6 +73,14 @@ pub enum CalibError {
         /// The rig file.
         path: PathBuf,
     },
+    /// An OpenCV call failed (feature `opencv`).
+    #[error("OpenCV {operation}: {cause}")]
+    OpenCv {
+        /// The OpenCV function or step, e.g. `calibrateCamera`.
+        operation: String,
+        /// OpenCV's message.
+        cause: String,
+    },
     /// A depth image does not have the size of the camera's depth sensor.
     #[error("camera {camera}: depth image has {got} pixels, calibration says {want_w}x{want_h}")]
     DepthSize {

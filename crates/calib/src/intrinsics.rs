@@ -79,6 +79,23 @@ impl Intrinsics {
         Ok(())
     }
 
+    /// The intrinsics of an OpenCV camera matrix `K` (3×3, row-major) and distortion
+    /// vector `[k1, k2, p1, p2, k3]` (a missing k3 is 0), not validated.
+    ///
+    /// # Panics
+    /// Never for `k` of 9 values and `d` of at least 4 (callers check the shapes).
+    pub(crate) fn from_camera_matrix(width: u32, height: u32, k: &[f64], d: &[f64]) -> Self {
+        Intrinsics {
+            width,
+            height,
+            fx: k[0],
+            fy: k[4],
+            cx: k[2],
+            cy: k[5],
+            distortion: [d[0], d[1], d[2], d[3], d.get(4).copied().unwrap_or(0.0)],
+        }
+    }
+
     /// Number of pixels, `width * height`.
     pub fn num_pixels(&self) -> usize {
         self.width as usize * self.height as usize

@@ -18,8 +18,20 @@
 //!   [`write_ros_camera_info`] (`plumb_bob` only);
 //! - OpenPTrack `camera_poses.yaml` ⇄ `(name, world_from_sensor)`:
 //!   [`read_openptrack_poses`], [`write_openptrack_poses`];
+//! - one sensor's intrinsics TOML (the fields of a rig.toml `[camera.depth]` table at the
+//!   top level) ⇄ [`Intrinsics`]: [`read_intrinsics_toml`], [`write_intrinsics_toml`];
+//! - with the `opencv` feature, OpenCV FileStorage YAML/XML through OpenCV ⇄
+//!   [`Intrinsics`]: `read_opencv_intrinsics`, `write_opencv_intrinsics`;
 //! - Azure Kinect factory calibration JSON ⇄ [`RgbdCamera`]: [`read_azure_kinect_json`]
 //!   (with warnings for the dropped rational coefficients), [`write_azure_kinect_json`].
+//!
+//! # Calibration (feature `opencv`)
+//! Chessboard calibration through OpenCV (`bodyseg calibrate`): [`Board`] and the canonical
+//! corner order ([`canonical_corner_order`], pure Rust) are always built; with the
+//! feature, `find_board_corners` (detection, sub-pixel refinement), `calibrate_intrinsics`
+//! (`calibrateCamera`), `calibrate_stereo` (`stereoCalibrate`, intrinsics fixed) and
+//! `board_pose` (`solvePnP`). Views and images come in memory ([`GrayImage`]); reading
+//! image files is the caller's.
 //!
 //! # Conventions
 //! - Camera frames: OpenCV optical frame of each sensor, x right, y down, z forward.
@@ -55,6 +67,9 @@
 
 mod azure_kinect;
 mod back_project;
+mod board;
+#[cfg(feature = "opencv")]
+mod calibrate;
 mod camera;
 mod error;
 mod files;
@@ -63,6 +78,7 @@ mod intrinsics;
 mod opencv_yaml;
 mod openptrack;
 mod pose;
+mod pose_fit;
 mod rig_toml;
 mod ros_camera_info;
 mod yaml;
@@ -76,6 +92,13 @@ pub use back_project::{
     BackProjectOptions, BackProjected, CloudFrame, DepthBackProjector, PIXELS_PER_CHUNK, RayTable,
     RigBackProjector, back_project, back_project_rig,
 };
+pub use board::{Board, BoardZ, GrayImage, MAX_INNER_CORNERS, canonical_corner_order};
+#[cfg(feature = "opencv")]
+pub use calibrate::{
+    CornerPair, IntrinsicsFit, MIN_INTRINSICS_VIEWS, StereoFit, board_pose, calibrate_intrinsics,
+    calibrate_stereo, find_board_corners, read_opencv_intrinsics, reprojection_rms_px,
+    write_opencv_intrinsics,
+};
 pub use camera::{DEFAULT_DEPTH_SCALE, RgbdCamera, Rig};
 pub use error::CalibError;
 pub use iai_kinect2::{
@@ -87,7 +110,11 @@ pub use openptrack::{
     write_openptrack_poses,
 };
 pub use pose::{Pose, QUATERNION_NORM_TOLERANCE, ROTATION_TOLERANCE};
-pub use rig_toml::{parse_rig_toml, read_rig_toml, rig_to_toml_string, write_rig_toml};
+pub use pose_fit::{SensorCorners, refine_board_pose};
+pub use rig_toml::{
+    intrinsics_to_toml_string, parse_intrinsics_toml, parse_rig_toml, read_intrinsics_toml,
+    read_rig_toml, rig_to_toml_string, write_intrinsics_toml, write_rig_toml,
+};
 pub use ros_camera_info::{
     ROS_PLUMB_BOB, RosCameraInfo, parse_ros_camera_info, read_ros_camera_info,
     ros_camera_info_to_string, write_ros_camera_info,

@@ -13,6 +13,73 @@ use toml::{Table, Value};
 
 use crate::{CalibError, DEFAULT_DEPTH_SCALE, Intrinsics, Pose, RgbdCamera, Rig};
 
+/// Reads and validates one sensor's intrinsics TOML (see [`parse_intrinsics_toml`]).
+pub fn read_intrinsics_toml(path: &Path) -> Result<Intrinsics, CalibError> {
+    let text = crate::files::read_text(path)?;
+    parse_intrinsics_toml(&text, path)
+}
+
+/// Parses one sensor's intrinsics: the keys of a rig.toml `[camera.depth]` table (`width`,
+/// `height`, `fx`, `fy`, `cx`, `cy`, `distortion`) at the top level; other keys are
+/// ignored. `path` is only used in error messages.
+pub fn parse_intrinsics_toml(text: &str, path: &Path) -> Result<Intrinsics, CalibError> {
+    let root = parse_table(text, path)?;
+    let located = |e: CalibError| match e {
+        CalibError::CameraField {
+            field,
+            reason,
+            path,
+            ..
+        } => CalibError::BadValue {
+            key: field,
+            reason,
+            path,
+        },
+        CalibError::Invalid { field, reason } => CalibError::BadValue {
+            key: field,
+            reason,
+            path: path.to_path_buf(),
+        },
+        other => other,
+    };
+    let intrinsics = read_intrinsics(&root, "", "", path).map_err(located)?;
+    intrinsics.validate().map_err(located)?;
+    Ok(intrinsics)
+}
+
+/// The text of one sensor's intrinsics TOML, `comment` (lines without `#`) first.
+pub fn intrinsics_to_toml_string(
+    intrinsics: &Intrinsics,
+    comment: &str,
+) -> Result<String, CalibError> {
+    intrinsics.validate()?;
+    let body = toml::to_string(&IntrinsicsOut::from(intrinsics))
+        .map_err(|e| CalibError::invalid("intrinsics", e.to_string()))?;
+    let header: String = comment.lines().map(|l| format!("# {l}\n")).collect();
+    Ok(format!("{header}{body}"))
+}
+
+/// Writes one sensor's intrinsics TOML atomically (temporary file, then rename).
+pub fn write_intrinsics_toml(
+    intrinsics: &Intrinsics,
+    comment: &str,
+    path: &Path,
+) -> Result<(), CalibError> {
+    crate::files::write_atomic(path, &intrinsics_to_toml_string(intrinsics, comment)?)
+}
+
+fn parse_table(text: &str, path: &Path) -> Result<Table, CalibError> {
+    text.parse()
+        .map_err(|e: toml::de::Error| CalibError::Syntax {
+            line: e.span().map_or(0, |span| {
+                let before = &text.as_bytes()[..span.start.min(text.len())];
+                before.iter().filter(|&&b| b == b'\n').count() + 1
+            }),
+            reason: e.message().to_string(),
+            path: path.to_path_buf(),
+        })
+}
+
 /// Reads and validates a `rig.toml`.
 pub fn read_rig_toml(path: &Path) -> Result<Rig, CalibError> {
     let text = crate::files::read_text(path)?;
@@ -21,16 +88,7 @@ pub fn read_rig_toml(path: &Path) -> Result<Rig, CalibError> {
 
 /// Parses and validates the text of a `rig.toml`; `path` is only used in error messages.
 pub fn parse_rig_toml(text: &str, path: &Path) -> Result<Rig, CalibError> {
-    let root: Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| CalibError::Syntax {
-            line: e.span().map_or(0, |span| {
-                let before = &text.as_bytes()[..span.start.min(text.len())];
-                before.iter().filter(|&&b| b == b'\n').count() + 1
-            }),
-            reason: e.message().to_string(),
-            path: path.to_path_buf(),
-        })?;
+    let root = parse_table(text, path)?;
     let cameras = match root.get("camera") {
         Some(Value::Array(items)) if !items.is_empty() => items,
         Some(Value::Array(_)) | None => {

@@ -110,15 +110,7 @@ pub fn parse_ros_camera_info(text: &str, path: &Path) -> Result<RosCameraInfo, C
         1,
         5,
     )?;
-    let intrinsics = Intrinsics {
-        width,
-        height,
-        fx: k[0],
-        fy: k[4],
-        cx: k[2],
-        cy: k[5],
-        distortion: [d[0], d[1], d[2], d[3], d[4]],
-    };
+    let intrinsics = Intrinsics::from_camera_matrix(width, height, &k, &d);
     intrinsics.validate().map_err(|e| match e {
         CalibError::Invalid { field, reason } => doc.bad(
             if field == "distortion" {

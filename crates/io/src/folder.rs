@@ -90,3 +90,30 @@ pub fn publish_folder(staging: &Path, dest: &Path, replace: bool) -> Result<(), 
 pub fn discard_folder(staging: &Path) {
     let _ = std::fs::remove_dir_all(staging);
 }
+
+/// The PNG and JPEG files of a folder (by extension, any case: `.png`, `.jpg`, `.jpeg`),
+/// sorted by name; sub-folders and other files are ignored.
+///
+/// # Errors
+/// [`IoError::MissingFolder`] when `dir` is not a folder (`what` says what it should hold);
+/// [`IoError::Read`] when it cannot be listed.
+pub fn image_files(dir: &Path, what: &str) -> Result<Vec<std::path::PathBuf>, IoError> {
+    require_folder(dir, what)?;
+    let read_err = |cause| IoError::Read {
+        cause,
+        path: dir.to_path_buf(),
+    };
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(read_err)? {
+        let path = entry.map_err(read_err)?.path();
+        let is_image = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .is_some_and(|e| matches!(e.as_str(), "png" | "jpg" | "jpeg"));
+        if is_image && path.is_file() {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}

@@ -50,7 +50,9 @@ mod text;
 pub use atomic::{write_atomic, write_bytes_atomic};
 pub use boxes::{parse_boxes, read_boxes, write_boxes};
 pub use error::IoError;
-pub use folder::{create_folder, discard_folder, publish_folder, require_folder, staging_folder};
+pub use folder::{
+    create_folder, discard_folder, image_files, publish_folder, require_folder, staging_folder,
+};
 pub use image::{
     DepthImage, read_depth_png, read_label_png, read_rgb_image, write_depth_png, write_gray8_png,
     write_label_png, write_rgb_png,

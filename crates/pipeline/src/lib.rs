@@ -13,6 +13,7 @@
 //! merge_reports: report JSON files → Report::merge → Report
 //! import_rig:    calibration folders (iai_kinect2) → bodyseg_calib::Rig → rig.toml
 //! describe_rig:  rig.toml → human-readable summary
+//! calibrate_*:   chessboard images → intrinsics, colour-from-depth, world poses → rig.toml (feature `opencv`)
 //! ```
 //!
 //! No command-line parsing here (that is `crates/cli`): each command takes an options
@@ -30,6 +31,7 @@
 mod batch;
 mod boxes;
 mod boxes_study;
+mod calibrate;
 mod config;
 mod convert;
 mod eval;
@@ -49,12 +51,17 @@ pub use batch::{
     BatchFrame, BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameWriter, InputFile,
     OutputFile, Shard, complete_record, record_path, run_batch,
 };
+pub use bodyseg_calib::Board;
 pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{
     BoxesInput, BoxesOptions, BoxesSummary, boxes_file, boxes_path, read_cloud, top_view,
 };
 pub use boxes_study::{BoxStats, FrameMatch, MATCH_IOU, box_stats, match_boxes};
+pub use calibrate::{
+    CALIBRATE_AVAILABLE, CalibrateSummary, IntrinsicsCalibOptions, StereoCalibOptions, ViewReport,
+    WorldCalibOptions, calibrate_intrinsics, calibrate_stereo, calibrate_world,
+};
 pub use config::{BackProjectConfig, PipelineConfig, RefineOverrides};
 pub use convert::{
     ConvertFormat, ConvertOptions, ConvertSummary, convert_dataset, list_recordings,
