@@ -6,8 +6,8 @@ mod common;
 
 mod cli_bad_input;
 mod cli_boxes;
-mod cli_convert;
 mod cli_calibrate;
+mod cli_convert;
 mod cli_eval;
 mod cli_help;
 mod cli_parse;
@@ -16,3 +16,4 @@ mod cli_refine;
 mod cli_rig;
 mod cli_run;
 mod cli_synth;
+mod results_regression;

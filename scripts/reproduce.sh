@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# Regenerates docs/results.md from nothing: renders the fixed benchmark of
+# configs/benchmarks/paper.toml (3 presets x 4 seeds x 25 frames, exact ground truth),
+# runs the paper's five configurations (Reference, M, N, M-N, M-R-N) for both 2D prediction
+# sources (the synthetic parser errors recorded with the recording, and the bundled ONNX
+# model) and both projection modes (naive, DSA), then the improved refinement
+# (configs/benchmarks/improved.toml), the projection study, the figures and the regression
+# subset, and writes the tables and their reading into docs/results.md.
+#
+#   scripts/reproduce.sh [WORK_DIR]        (default: target/reproduce; reused when run again)
+#
+# About 10 minutes on a 2-core machine. A second run reuses the rendered recordings (the
+# same seeds give the same bytes) but runs every configuration again: the code may have
+# changed since.
+set -euo pipefail
+
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+work="${1:-target/reproduce}"
+mkdir -p "$work"
+rm -rf "$work/runs" "$work/subset" "$work"/figure_*
+start=$(date +%s)
+
+echo "==> ONNX Runtime (once), release build"
+scripts/setup_onnxruntime.sh
+cargo build --release --quiet --bin bodyseg
+cargo build --release --quiet -p bodyseg-pipeline --example projection_report
+bodyseg=target/release/bodyseg
+
+# "preset seed frames" lines of the benchmark, and the subset's frame count.
+recordings=$(python3 - <<'PY'
+import tomllib
+b = tomllib.load(open("configs/benchmarks/paper.toml", "rb"))
+for r in b["recording"]:
+    for s in r["seeds"]:
+        print(r["preset"], s, r["frames"])
+PY
+)
+subset_frames=$(python3 -c 'import tomllib; print(tomllib.load(open("configs/benchmarks/paper.toml","rb"))["subset"]["frames"])')
+
+echo "==> rendering the benchmark ($(echo "$recordings" | wc -l) recordings)"
+while read -r preset seed frames; do
+    rec="$work/rec/${preset}_${seed}"
+    if [ ! -f "$rec/rig.toml" ]; then
+        "$bodyseg" synth --preset "$preset" --seed "$seed" --frames "$frames" --no-preview --out "$rec" -q
+    fi
+done <<< "$recordings"
+
+# bodyseg convert exits 3 when some frames failed: they are listed in the reports, go on.
+convert() {
+    local out=$1
+    shift
+    echo "==> $out"
+    "$bodyseg" convert --input "$work/rec" --format recording --out "$work/runs/$out" -q "$@" \
+        || [ $? -eq 3 ]
+}
+for source in recorded model; do
+    for mode in naive dsa; do
+        convert "${source}_${mode}" --parser "$source" --mode "$mode"
+    done
+    convert "${source}_dsa_improved" --parser "$source" --mode dsa --config configs/benchmarks/improved.toml
+done
+
+echo "==> projection study (perfect parser: every wrong point is a DSA error)"
+target/release/examples/projection_report 10 > "$work/projection.md"
+
+echo "==> figures"
+fig_rec="$work/rec/handover_2005"
+for cfg in paper improved; do
+    args=()
+    [ "$cfg" = improved ] && args=(--config configs/benchmarks/improved.toml)
+    "$bodyseg" run --recording "$fig_rec" --out "$work/figure_$cfg" --frame 000012 --figure 000012 \
+        --no-label-images -q "${args[@]}" > /dev/null
+    mkdir -p docs/images
+    cp "$work/figure_$cfg/figures/000012.png" "docs/images/results_$cfg.png"
+done
+
+echo "==> regression subset (first seed of each preset, $subset_frames frames)"
+subset_reports=()
+while read -r preset seed frames; do
+    case " ${subset_done:-} " in *" $preset "*) continue ;; esac
+    subset_done="${subset_done:-} $preset"
+    "$bodyseg" run --recording "$work/rec/${preset}_${seed}" --out "$work/subset/$preset" \
+        --limit "$subset_frames" --figure none --no-label-images -q > /dev/null
+    subset_reports+=("$work/subset/$preset/report.json")
+done <<< "$recordings"
+"$bodyseg" eval --merge "${subset_reports[@]}" --format json --out "$work/subset/report.json" -q
+
+elapsed=$(( $(date +%s) - start ))
+echo "==> docs/results.md"
+python3 scripts/results_doc.py "$work" "$elapsed" > docs/results.md.tmp
+mv docs/results.md.tmp docs/results.md
+echo "done in ${elapsed} s: docs/results.md"
