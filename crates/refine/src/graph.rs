@@ -3,6 +3,7 @@
 use crate::dbscan::Clustering;
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label};
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// Features of one cluster (paper §3.2). Centroid and radius never change; the label may
 /// change in M and R, so it is kept outside, in a per-cluster label array.
@@ -107,6 +108,161 @@ pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> Graph
         containers,
         adjacent,
     }
+}
+
+/// Builds the inside / intersect edges from actual point gaps (`graph = "contact"`): A and
+/// B touch when some point of A lies within `contact_gap_m` of some point of B; A is inside
+/// B when A's bounding sphere lies inside B's (as in [`build_graph`]) *and* they touch. So a
+/// cluster whose sphere overlaps the body but whose points stay apart (a blob of the
+/// neighbour or of the robot, a hand held in front of the torso) gets no edge.
+///
+/// Clustered points are bucketed in cells of side `contact_gap_m`, per (cell, cluster) with
+/// the bounding box of the bucket's points; only buckets of different clusters in
+/// neighbouring cells whose boxes come within the gap are compared point by point, and a
+/// pair stops at its first contact.
+pub fn build_graph_contact(
+    positions_m: &[Vec3],
+    clustering: &Clustering,
+    features: &[ClusterFeatures],
+    inside_tolerance: f32,
+    contact_gap_m: f32,
+) -> Graph {
+    let touching = contact_pairs(positions_m, clustering, contact_gap_m);
+    let k = features.len();
+    let mut containers = vec![Vec::new(); k];
+    let mut adjacent = vec![Vec::new(); k];
+    let mut pairs: Vec<(u32, u32)> = touching.into_iter().collect();
+    pairs.sort_unstable();
+    for (a, b) in pairs {
+        let (fa, fb) = (&features[a as usize], &features[b as usize]);
+        let d = bodyseg_core::math::dist(fa.centroid_m, fb.centroid_m);
+        if d + fa.radius_m <= fb.radius_m * (1.0 + inside_tolerance) {
+            containers[a as usize].push(b);
+        }
+        if d + fb.radius_m <= fa.radius_m * (1.0 + inside_tolerance) {
+            containers[b as usize].push(a);
+        }
+        adjacent[a as usize].push(b);
+        adjacent[b as usize].push(a);
+    }
+    for v in containers.iter_mut().chain(adjacent.iter_mut()) {
+        v.sort_unstable();
+    }
+    Graph {
+        containers,
+        adjacent,
+    }
+}
+
+/// The pairs `(a, b)`, `a < b`, of clusters with two points at most `gap_m` apart.
+fn contact_pairs(
+    positions_m: &[Vec3],
+    clustering: &Clustering,
+    gap_m: f32,
+) -> FxHashSet<(u32, u32)> {
+    let inv = 1.0 / gap_m;
+    let cell = |p: Vec3| [0, 1, 2].map(|a| (p[a] * inv).floor() as i32);
+    // Clustered points sorted by (cell, cluster): runs are the buckets.
+    let mut pts: Vec<([i32; 3], u32, Vec3)> = positions_m
+        .iter()
+        .zip(&clustering.cluster_of)
+        .filter_map(|(&p, c)| c.map(|c| (cell(p), c, p)))
+        .collect();
+    pts.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
+    struct Bucket {
+        cluster: u32,
+        range: std::ops::Range<usize>,
+        lo: Vec3,
+        hi: Vec3,
+    }
+    let mut buckets: Vec<Bucket> = Vec::new();
+    // Per cell, the range of its buckets.
+    let mut cells: FxHashMap<[i32; 3], std::ops::Range<usize>> = FxHashMap::default();
+    let mut i = 0;
+    while i < pts.len() {
+        let (key, cluster) = (pts[i].0, pts[i].1);
+        let mut j = i;
+        let (mut lo, mut hi) = (pts[i].2, pts[i].2);
+        while j < pts.len() && pts[j].0 == key && pts[j].1 == cluster {
+            for a in 0..3 {
+                lo[a] = lo[a].min(pts[j].2[a]);
+                hi[a] = hi[a].max(pts[j].2[a]);
+            }
+            j += 1;
+        }
+        let b = buckets.len();
+        buckets.push(Bucket {
+            cluster,
+            range: i..j,
+            lo,
+            hi,
+        });
+        cells.entry(key).or_insert(b..b).end = b + 1;
+        i = j;
+    }
+    let gap2 = gap_m * gap_m;
+    let box_gap2 = |a: &Bucket, b: &Bucket| -> f32 {
+        (0..3)
+            .map(|k| {
+                let g = (a.lo[k] - b.hi[k]).max(b.lo[k] - a.hi[k]).max(0.0);
+                g * g
+            })
+            .sum()
+    };
+    let point_box_gap2 = |p: Vec3, b: &Bucket| -> f32 {
+        (0..3)
+            .map(|k| {
+                let g = (b.lo[k] - p[k]).max(p[k] - b.hi[k]).max(0.0);
+                g * g
+            })
+            .sum()
+    };
+    let mut touching: FxHashSet<(u32, u32)> = FxHashSet::default();
+    let mut near_a: Vec<Vec3> = Vec::new();
+    let mut sorted_cells: Vec<(&[i32; 3], &std::ops::Range<usize>)> = cells.iter().collect();
+    sorted_cells.sort_unstable_by_key(|(k, _)| **k);
+    for (key, own) in sorted_cells {
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let Some(other) = cells.get(&[key[0] + dx, key[1] + dy, key[2] + dz]) else {
+                        continue;
+                    };
+                    for a in &buckets[own.clone()] {
+                        for b in &buckets[other.clone()] {
+                            // Each unordered bucket pair once: from the smaller cluster.
+                            if a.cluster >= b.cluster
+                                || touching.contains(&(a.cluster, b.cluster))
+                                || box_gap2(a, b) > gap2
+                            {
+                                continue;
+                            }
+                            near_a.clear();
+                            near_a.extend(
+                                pts[a.range.clone()]
+                                    .iter()
+                                    .map(|t| t.2)
+                                    .filter(|&p| point_box_gap2(p, b) <= gap2),
+                            );
+                            let hit = pts[b.range.clone()]
+                                .iter()
+                                .map(|t| t.2)
+                                .filter(|&q| point_box_gap2(q, a) <= gap2)
+                                .any(|q| {
+                                    near_a
+                                        .iter()
+                                        .any(|&p| bodyseg_core::math::dist2(p, q) <= gap2)
+                                });
+                            if hit {
+                                touching.insert((a.cluster, b.cluster));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    touching
 }
 
 /// A slot of the body template: its class, and the slot it hangs from.
@@ -249,4 +405,104 @@ pub fn best_tree_paper(features: &[ClusterFeatures], graph: &Graph) -> BodyTree 
         }
     }
     tree
+}
+
+/// The best tree covering the most points (`tree = "coverage"`): every torso cluster is
+/// tried as the root; for each, the head slot takes the largest adjacent head cluster and
+/// the two arm chains (upper arm adjacent to the root, lower arm adjacent to that upper
+/// arm) are chosen together — likewise the legs — so that the tree's nodes hold the most
+/// points. Slot order and template are [`TEMPLATE`]'s; a lower slot is filled only under a
+/// filled upper slot, as in the paper. Ties go to the first found in increasing ids.
+///
+/// Greedy slot filling ([`best_tree_paper`]) gives an upper-arm slot to the largest
+/// upper-arm cluster even when it carries no lower arm (a mislabelled patch on the torso),
+/// leaving a real arm and its forearm out of the tree; this search does not.
+pub fn best_tree_coverage(features: &[ClusterFeatures], graph: &Graph) -> BodyTree {
+    let size = |c: u32| features[c as usize].size;
+    let with_label = |cands: &[u32], class: Class| -> Vec<u32> {
+        let want = Label::from(class);
+        cands
+            .iter()
+            .copied()
+            .filter(|&c| features[c as usize].label == want)
+            .collect()
+    };
+    let torso = Label::from(Class::Torso);
+    let mut best: Option<(usize, BodyTree)> = None;
+    for root in (0..features.len() as u32).filter(|&c| features[c as usize].label == torso) {
+        let adjacent = &graph.adjacent[root as usize];
+        let mut tree = BodyTree {
+            root: Some(root),
+            slots: [None; 9],
+        };
+        let mut total = size(root);
+        // Head: the largest adjacent head cluster (ties: smaller id).
+        let head = with_label(adjacent, Class::Head)
+            .into_iter()
+            .fold(None, |b: Option<u32>, c| match b {
+                Some(b) if size(b) >= size(c) => Some(b),
+                _ => Some(c),
+            });
+        if let Some(h) = head {
+            tree.slots[0] = Some(h);
+            total += size(h);
+        }
+        for (upper, lower, slots) in [
+            (Class::UpperArms, Class::LowerArms, [1, 2, 5, 6]),
+            (Class::UpperLegs, Class::LowerLegs, [3, 4, 7, 8]),
+        ] {
+            let uppers = with_label(adjacent, upper);
+            let lowers: Vec<Vec<u32>> = uppers
+                .iter()
+                .map(|&u| with_label(&graph.adjacent[u as usize], lower))
+                .collect();
+            let (points, pick) = best_limb_pair(&uppers, &lowers, &size);
+            total += points;
+            for (slot, c) in slots.into_iter().zip(pick) {
+                tree.slots[slot] = c;
+            }
+        }
+        if best.as_ref().is_none_or(|(t, _)| total > *t) {
+            best = Some((total, tree));
+        }
+    }
+    best.map(|(_, t)| t).unwrap_or_default()
+}
+
+/// Two limb chains (upper, optional lower under it) with distinct clusters covering the
+/// most points: `[upper 1, upper 2, lower 1, lower 2]` and their points. `lowers[i]` are
+/// the lower clusters adjacent to `uppers[i]`.
+fn best_limb_pair(
+    uppers: &[u32],
+    lowers: &[Vec<u32>],
+    size: &dyn Fn(u32) -> usize,
+) -> (usize, [Option<u32>; 4]) {
+    // Chains: (upper index or none, lower or none).
+    let mut chains: Vec<(Option<usize>, Option<u32>)> = vec![(None, None)];
+    for (i, ls) in lowers.iter().enumerate() {
+        chains.push((Some(i), None));
+        chains.extend(ls.iter().map(|&l| (Some(i), Some(l))));
+    }
+    let points =
+        |(u, l): (Option<usize>, Option<u32>)| u.map_or(0, |u| size(uppers[u])) + l.map_or(0, size);
+    let mut best = (0, [None; 4]);
+    for (x, &a) in chains.iter().enumerate() {
+        for &b in &chains[x..] {
+            let same_upper = a.0.is_some() && a.0 == b.0;
+            let same_lower = a.1.is_some() && a.1 == b.1;
+            if same_upper || same_lower {
+                continue;
+            }
+            let total = points(a) + points(b);
+            if total > best.0 {
+                // A filled chain goes in the first slot.
+                let (a, b) = if a.0.is_none() { (b, a) } else { (a, b) };
+                best = (
+                    total,
+                    [a.0.map(|u| uppers[u]), b.0.map(|u| uppers[u]), a.1, b.1],
+                );
+            }
+        }
+    }
+    best
 }
