@@ -110,40 +110,45 @@ pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> Graph
     }
 }
 
-/// Builds the inside / intersect edges from actual point gaps (`graph = "contact"`): A and
-/// B touch when some point of A lies within `contact_gap_m` of some point of B; A is inside
-/// B when A's bounding sphere lies inside B's (as in [`build_graph`]) *and* they touch. So a
-/// cluster whose sphere overlaps the body but whose points stay apart (a blob of the
-/// neighbour or of the robot, a hand held in front of the torso) gets no edge.
+/// Builds the inside / intersect edges from actual point gaps (`graph = "contact"`), not
+/// from bounding spheres: A and B *touch* (an intersect edge) when some point of A lies
+/// within `contact_gap_m` of some point of B; A lies *inside* B when they touch, A has no
+/// more points than B, and at least `inside_fraction` of A's points lie within
+/// `contact_gap_m` of a point of B. So a cluster whose sphere overlaps the body but whose
+/// points stay apart (a blob of the neighbour or of the robot, a hand held in front of the
+/// torso) gets no edge, and a cluster immersed in another one — the same surface seen with
+/// another label by another camera, which a sphere test misses when the spheres are alike —
+/// lies inside it. (`inside_tolerance` is a sphere slack and plays no part here.)
 ///
 /// Clustered points are bucketed in cells of side `contact_gap_m`, per (cell, cluster) with
 /// the bounding box of the bucket's points; only buckets of different clusters in
 /// neighbouring cells whose boxes come within the gap are compared point by point, and a
-/// pair stops at its first contact.
+/// point stops at its first neighbour within the gap.
 pub fn build_graph_contact(
     positions_m: &[Vec3],
     clustering: &Clustering,
     features: &[ClusterFeatures],
-    inside_tolerance: f32,
     contact_gap_m: f32,
+    inside_fraction: f32,
 ) -> Graph {
-    let touching = contact_pairs(positions_m, clustering, contact_gap_m);
+    let index = ContactIndex::new(positions_m, clustering, contact_gap_m);
+    let touching = index.touching_pairs();
+    let near = index.near_counts(&touching, features);
     let k = features.len();
     let mut containers = vec![Vec::new(); k];
     let mut adjacent = vec![Vec::new(); k];
     let mut pairs: Vec<(u32, u32)> = touching.into_iter().collect();
     pairs.sort_unstable();
     for (a, b) in pairs {
-        let (fa, fb) = (&features[a as usize], &features[b as usize]);
-        let d = bodyseg_core::math::dist(fa.centroid_m, fb.centroid_m);
-        if d + fa.radius_m <= fb.radius_m * (1.0 + inside_tolerance) {
-            containers[a as usize].push(b);
-        }
-        if d + fb.radius_m <= fa.radius_m * (1.0 + inside_tolerance) {
-            containers[b as usize].push(a);
-        }
         adjacent[a as usize].push(b);
         adjacent[b as usize].push(a);
+    }
+    let mut near: Vec<((u32, u32), usize)> = near.into_iter().collect();
+    near.sort_unstable();
+    for ((a, b), n) in near {
+        if n as f32 >= inside_fraction * features[a as usize].size as f32 {
+            containers[a as usize].push(b);
+        }
     }
     for v in containers.iter_mut().chain(adjacent.iter_mut()) {
         v.sort_unstable();
@@ -154,107 +159,113 @@ pub fn build_graph_contact(
     }
 }
 
-/// The pairs `(a, b)`, `a < b`, of clusters with two points at most `gap_m` apart.
-fn contact_pairs(
-    positions_m: &[Vec3],
-    clustering: &Clustering,
-    gap_m: f32,
-) -> FxHashSet<(u32, u32)> {
-    let inv = 1.0 / gap_m;
-    let cell = |p: Vec3| [0, 1, 2].map(|a| (p[a] * inv).floor() as i32);
-    // Clustered points sorted by (cell, cluster): runs are the buckets.
-    let mut pts: Vec<([i32; 3], u32, Vec3)> = positions_m
-        .iter()
-        .zip(&clustering.cluster_of)
-        .filter_map(|(&p, c)| c.map(|c| (cell(p), c, p)))
-        .collect();
-    pts.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
-    struct Bucket {
-        cluster: u32,
-        range: std::ops::Range<usize>,
-        lo: Vec3,
-        hi: Vec3,
+/// Clustered points bucketed by (cell of side `gap_m`, cluster), for the contact graph.
+struct ContactIndex {
+    gap2: f32,
+    /// Clustered positions sorted by (cell, cluster): buckets are runs of it.
+    pts: Vec<Vec3>,
+    buckets: Vec<Bucket>,
+    /// Per non-empty cell, the range of its buckets, sorted by cell.
+    cells: Vec<([i32; 3], std::ops::Range<usize>)>,
+    cell_of: FxHashMap<[i32; 3], usize>,
+}
+
+/// The points of one cluster in one cell, with their bounding box.
+struct Bucket {
+    cluster: u32,
+    range: std::ops::Range<usize>,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Bucket {
+    fn gap2(&self, o: &Bucket) -> f32 {
+        (0..3)
+            .map(|k| {
+                let g = (self.lo[k] - o.hi[k]).max(o.lo[k] - self.hi[k]).max(0.0);
+                g * g
+            })
+            .sum()
     }
-    let mut buckets: Vec<Bucket> = Vec::new();
-    // Per cell, the range of its buckets.
-    let mut cells: FxHashMap<[i32; 3], std::ops::Range<usize>> = FxHashMap::default();
-    let mut i = 0;
-    while i < pts.len() {
-        let (key, cluster) = (pts[i].0, pts[i].1);
-        let mut j = i;
-        let (mut lo, mut hi) = (pts[i].2, pts[i].2);
-        while j < pts.len() && pts[j].0 == key && pts[j].1 == cluster {
-            for a in 0..3 {
-                lo[a] = lo[a].min(pts[j].2[a]);
-                hi[a] = hi[a].max(pts[j].2[a]);
+    fn point_gap2(&self, p: Vec3) -> f32 {
+        (0..3)
+            .map(|k| {
+                let g = (self.lo[k] - p[k]).max(p[k] - self.hi[k]).max(0.0);
+                g * g
+            })
+            .sum()
+    }
+}
+
+impl ContactIndex {
+    fn new(positions_m: &[Vec3], clustering: &Clustering, gap_m: f32) -> Self {
+        let inv = 1.0 / gap_m;
+        let cell = |p: Vec3| [0, 1, 2].map(|a| (p[a] * inv).floor() as i32);
+        let mut sorted: Vec<([i32; 3], u32, Vec3)> = positions_m
+            .iter()
+            .zip(&clustering.cluster_of)
+            .filter_map(|(&p, c)| c.map(|c| (cell(p), c, p)))
+            .collect();
+        sorted.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
+        let mut buckets: Vec<Bucket> = Vec::new();
+        let mut cells: Vec<([i32; 3], std::ops::Range<usize>)> = Vec::new();
+        let mut i = 0;
+        while i < sorted.len() {
+            let (key, cluster) = (sorted[i].0, sorted[i].1);
+            let mut j = i;
+            let (mut lo, mut hi) = (sorted[i].2, sorted[i].2);
+            while j < sorted.len() && sorted[j].0 == key && sorted[j].1 == cluster {
+                for a in 0..3 {
+                    lo[a] = lo[a].min(sorted[j].2[a]);
+                    hi[a] = hi[a].max(sorted[j].2[a]);
+                }
+                j += 1;
             }
-            j += 1;
+            let b = buckets.len();
+            buckets.push(Bucket {
+                cluster,
+                range: i..j,
+                lo,
+                hi,
+            });
+            match cells.last_mut() {
+                Some((k, r)) if *k == key => r.end = b + 1,
+                _ => cells.push((key, b..b + 1)),
+            }
+            i = j;
         }
-        let b = buckets.len();
-        buckets.push(Bucket {
-            cluster,
-            range: i..j,
-            lo,
-            hi,
-        });
-        cells.entry(key).or_insert(b..b).end = b + 1;
-        i = j;
+        let cell_of = cells
+            .iter()
+            .enumerate()
+            .map(|(i, (k, _))| (*k, i))
+            .collect();
+        ContactIndex {
+            gap2: gap_m * gap_m,
+            pts: sorted.into_iter().map(|t| t.2).collect(),
+            buckets,
+            cells,
+            cell_of,
+        }
     }
-    let gap2 = gap_m * gap_m;
-    let box_gap2 = |a: &Bucket, b: &Bucket| -> f32 {
-        (0..3)
-            .map(|k| {
-                let g = (a.lo[k] - b.hi[k]).max(b.lo[k] - a.hi[k]).max(0.0);
-                g * g
-            })
-            .sum()
-    };
-    let point_box_gap2 = |p: Vec3, b: &Bucket| -> f32 {
-        (0..3)
-            .map(|k| {
-                let g = (b.lo[k] - p[k]).max(p[k] - b.hi[k]).max(0.0);
-                g * g
-            })
-            .sum()
-    };
-    let mut touching: FxHashSet<(u32, u32)> = FxHashSet::default();
-    let mut near_a: Vec<Vec3> = Vec::new();
-    let mut sorted_cells: Vec<(&[i32; 3], &std::ops::Range<usize>)> = cells.iter().collect();
-    sorted_cells.sort_unstable_by_key(|(k, _)| **k);
-    for (key, own) in sorted_cells {
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let Some(other) = cells.get(&[key[0] + dx, key[1] + dy, key[2] + dz]) else {
-                        continue;
-                    };
-                    for a in &buckets[own.clone()] {
-                        for b in &buckets[other.clone()] {
-                            // Each unordered bucket pair once: from the smaller cluster.
-                            if a.cluster >= b.cluster
-                                || touching.contains(&(a.cluster, b.cluster))
-                                || box_gap2(a, b) > gap2
-                            {
-                                continue;
-                            }
-                            near_a.clear();
-                            near_a.extend(
-                                pts[a.range.clone()]
-                                    .iter()
-                                    .map(|t| t.2)
-                                    .filter(|&p| point_box_gap2(p, b) <= gap2),
-                            );
-                            let hit = pts[b.range.clone()]
-                                .iter()
-                                .map(|t| t.2)
-                                .filter(|&q| point_box_gap2(q, a) <= gap2)
-                                .any(|q| {
-                                    near_a
-                                        .iter()
-                                        .any(|&p| bodyseg_core::math::dist2(p, q) <= gap2)
-                                });
-                            if hit {
-                                touching.insert((a.cluster, b.cluster));
+
+    /// Calls `f(a, b)` for every pair of buckets of different clusters in neighbouring
+    /// cells (the same cell included) whose boxes come within the gap, each ordered pair
+    /// once.
+    fn for_each_near_bucket_pair(&self, mut f: impl FnMut(usize, usize)) {
+        for (key, own) in &self.cells {
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let Some(&o) = self.cell_of.get(&[key[0] + dx, key[1] + dy, key[2] + dz])
+                        else {
+                            continue;
+                        };
+                        for ai in own.clone() {
+                            for bi in self.cells[o].1.clone() {
+                                let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
+                                if a.cluster != b.cluster && a.gap2(b) <= self.gap2 {
+                                    f(ai, bi);
+                                }
                             }
                         }
                     }
@@ -262,7 +273,64 @@ fn contact_pairs(
             }
         }
     }
-    touching
+
+    /// True when a point of bucket `b` lies within the gap of `p`.
+    fn near(&self, p: Vec3, b: &Bucket) -> bool {
+        b.point_gap2(p) <= self.gap2
+            && self.pts[b.range.clone()]
+                .iter()
+                .any(|&q| bodyseg_core::math::dist2(p, q) <= self.gap2)
+    }
+
+    /// The pairs `(a, b)`, `a < b`, of clusters with two points within the gap.
+    fn touching_pairs(&self) -> FxHashSet<(u32, u32)> {
+        let mut touching = FxHashSet::default();
+        self.for_each_near_bucket_pair(|ai, bi| {
+            let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
+            if a.cluster < b.cluster && !touching.contains(&(a.cluster, b.cluster)) {
+                let hit = self.pts[a.range.clone()].iter().any(|&p| self.near(p, b));
+                if hit {
+                    touching.insert((a.cluster, b.cluster));
+                }
+            }
+        });
+        touching
+    }
+
+    /// For touching clusters `a`, `b` with `a` no larger than `b`: how many points of `a`
+    /// have a point of `b` within the gap, keyed `(a, b)`.
+    fn near_counts(
+        &self,
+        touching: &FxHashSet<(u32, u32)>,
+        features: &[ClusterFeatures],
+    ) -> FxHashMap<(u32, u32), usize> {
+        let mut counts: FxHashMap<(u32, u32), usize> = FxHashMap::default();
+        // Per bucket of `a`: which of its points are near cluster `b`, over all of `b`'s
+        // buckets (a point near two of them counts once).
+        let mut flags: FxHashMap<(usize, u32), Vec<bool>> = FxHashMap::default();
+        self.for_each_near_bucket_pair(|ai, bi| {
+            let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
+            let (x, y) = (a.cluster.min(b.cluster), a.cluster.max(b.cluster));
+            if features[a.cluster as usize].size > features[b.cluster as usize].size
+                || !touching.contains(&(x, y))
+            {
+                return;
+            }
+            let f = flags
+                .entry((ai, b.cluster))
+                .or_insert_with(|| vec![false; a.range.len()]);
+            for (flag, &p) in f.iter_mut().zip(&self.pts[a.range.clone()]) {
+                if !*flag && self.near(p, b) {
+                    *flag = true;
+                }
+            }
+        });
+        for ((ai, b), f) in flags {
+            let a = self.buckets[ai].cluster;
+            *counts.entry((a, b)).or_default() += f.iter().filter(|&&x| x).count();
+        }
+        counts
+    }
 }
 
 /// A slot of the body template: its class, and the slot it hangs from.

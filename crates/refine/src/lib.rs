@@ -10,6 +10,13 @@
 //! clusters cut off from the body tree, N gives noise points the label of the nearest
 //! clustered point. [`fuse`] puts the people back into the whole cloud.
 //!
+//! Beside the paper's reading, each selectable in [`RefineConfig`] (defaults = the paper):
+//! `graph = "contact"` measures adjacency and containment on actual point gaps
+//! ([`build_graph_contact`]) instead of bounding spheres; `tree = "coverage"` searches the
+//! valid body tree covering the most points ([`best_tree_coverage`]) instead of filling
+//! slots greedily; `noise = "weighted"` relabels noise by a distance-weighted vote of its
+//! nearest clustered points and its own label ([`reassign_noise_weighted`]).
+//!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).
 //! - Cluster ids are dense, ordered by each cluster's smallest point index (within the
@@ -101,8 +108,8 @@ pub fn analyse_person(
             positions_m,
             &clustering,
             &features,
-            cfg.inside_tolerance,
             cfg.contact_gap_m,
+            cfg.contact_inside_fraction,
         ),
     };
     let tree = match cfg.tree {

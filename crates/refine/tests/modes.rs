@@ -88,12 +88,59 @@ fn contact_graph_keeps_m_from_merging_a_hand_held_in_front_of_the_torso() {
     let r = refine_person(&s.pos, &s.lab, &contact("M"));
     assert!(all(&s, &r.point_labels, hand, Class::LowerArms));
     assert!(all(&s, &r.point_labels, torso, Class::Torso));
-    // A patch that does touch the torso and lies inside its sphere is still merged.
+    // A patch lying on the torso's front face is still merged.
     let mut s = Scene::default();
     slab_body(&mut s);
-    let patch = s.add(ball([0.0, -0.12, 1.2], 0.04, 0.02, l(Class::LowerArms)));
+    let patch = s.add(cuboid(
+        [-0.05, -0.1, 1.15],
+        [0.05, -0.1, 1.25],
+        0.01,
+        l(Class::LowerArms),
+    ));
     let r = refine_person(&s.pos, &s.lab, &contact("M"));
     assert!(all(&s, &r.point_labels, patch, Class::Torso));
+}
+
+#[test]
+fn contact_graph_merges_one_cameras_other_label_for_a_surface_the_others_see() {
+    let mut s = Scene::default();
+    slab_body(&mut s);
+    // A forearm seen by two cameras as lower arm (a 2 cm lattice) and by a third as
+    // background (a missed part; the same cylinder sampled 1 cm off the others' points).
+    // The two clusters have alike spheres, so the sphere test puts neither inside the
+    // other; every background point lies within 1.8 cm of a lower-arm point.
+    let arm = s.add(cuboid(
+        [0.2, -0.04, 1.0],
+        [0.24, 0.0, 1.3],
+        0.02,
+        l(Class::LowerArms),
+    ));
+    let missed = s.add(cuboid(
+        [0.21, -0.03, 1.01],
+        [0.23, -0.01, 1.31],
+        0.02,
+        Label::BACKGROUND,
+    ));
+    let r = refine_person(&s.pos, &s.lab, &paper("M"));
+    assert!(all(&s, &r.point_labels, arm, Class::LowerArms));
+    assert!(
+        all(&s, &r.point_labels, missed, Class::Background),
+        "spheres: the missed view's points stay background"
+    );
+    let r = refine_person(&s.pos, &s.lab, &contact("M"));
+    assert!(all(&s, &r.point_labels, arm, Class::LowerArms));
+    assert!(
+        all(&s, &r.point_labels, missed, Class::LowerArms),
+        "contact: immersed in the lower arm, merged into it"
+    );
+    // With a fraction above what is immersed (all of it is), nothing changes.
+    let strict = RefineConfig {
+        contact_inside_fraction: 1.0,
+        contact_gap_m: 0.015,
+        ..contact("M")
+    };
+    let r = refine_person(&s.pos, &s.lab, &strict);
+    assert!(all(&s, &r.point_labels, missed, Class::Background));
 }
 
 /// A torso ball with both arms (upper arm, lower arm below it) against its sides, all
