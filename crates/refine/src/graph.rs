@@ -133,7 +133,7 @@ pub fn build_graph_contact(
 ) -> Graph {
     let index = ContactIndex::new(positions_m, clustering, contact_gap_m);
     let touching = index.touching_pairs();
-    let near = index.near_counts(&touching, features);
+    let near = index.near_counts(&touching, features, inside_fraction);
     let k = features.len();
     let mut containers = vec![Vec::new(); k];
     let mut adjacent = vec![Vec::new(); k];
@@ -297,34 +297,57 @@ impl ContactIndex {
         touching
     }
 
-    /// For touching clusters `a`, `b` with `a` no larger than `b`: how many points of `a`
-    /// have a point of `b` within the gap, keyed `(a, b)`.
+    /// For touching clusters `a`, `b` with `a` no larger than `b` and possibly immersed in
+    /// it: how many points of `a` have a point of `b` within the gap, keyed `(a, b)`. A
+    /// pair whose buckets near each other hold fewer than `fraction` of `a`'s points cannot
+    /// reach it and is skipped before any point is compared (most touching pairs: parts
+    /// that meet along a seam).
     fn near_counts(
         &self,
         touching: &FxHashSet<(u32, u32)>,
         features: &[ClusterFeatures],
+        fraction: f32,
     ) -> FxHashMap<(u32, u32), usize> {
-        let mut counts: FxHashMap<(u32, u32), usize> = FxHashMap::default();
+        let candidate = |ai: usize, bi: usize| -> Option<(u32, u32)> {
+            let (a, b) = (self.buckets[ai].cluster, self.buckets[bi].cluster);
+            let key = (a.min(b), a.max(b));
+            (features[a as usize].size <= features[b as usize].size && touching.contains(&key))
+                .then_some((a, b))
+        };
+        // Bound: the points of a's buckets near some bucket of b.
+        let mut near_buckets: FxHashSet<(usize, u32)> = FxHashSet::default();
+        self.for_each_near_bucket_pair(|ai, bi| {
+            if let Some((_, b)) = candidate(ai, bi) {
+                near_buckets.insert((ai, b));
+            }
+        });
+        let mut bound: FxHashMap<(u32, u32), usize> = FxHashMap::default();
+        for &(ai, b) in &near_buckets {
+            *bound.entry((self.buckets[ai].cluster, b)).or_default() +=
+                self.buckets[ai].range.len();
+        }
+        bound.retain(|&(a, _), n| *n as f32 >= fraction * features[a as usize].size as f32);
         // Per bucket of `a`: which of its points are near cluster `b`, over all of `b`'s
         // buckets (a point near two of them counts once).
         let mut flags: FxHashMap<(usize, u32), Vec<bool>> = FxHashMap::default();
         self.for_each_near_bucket_pair(|ai, bi| {
-            let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
-            let (x, y) = (a.cluster.min(b.cluster), a.cluster.max(b.cluster));
-            if features[a.cluster as usize].size > features[b.cluster as usize].size
-                || !touching.contains(&(x, y))
-            {
+            let Some(pair) = candidate(ai, bi) else {
+                return;
+            };
+            if !bound.contains_key(&pair) {
                 return;
             }
+            let a = &self.buckets[ai];
             let f = flags
-                .entry((ai, b.cluster))
+                .entry((ai, pair.1))
                 .or_insert_with(|| vec![false; a.range.len()]);
             for (flag, &p) in f.iter_mut().zip(&self.pts[a.range.clone()]) {
-                if !*flag && self.near(p, b) {
+                if !*flag && self.near(p, &self.buckets[bi]) {
                     *flag = true;
                 }
             }
         });
+        let mut counts: FxHashMap<(u32, u32), usize> = FxHashMap::default();
         for ((ai, b), f) in flags {
             let a = self.buckets[ai].cluster;
             *counts.entry((a, b)).or_default() += f.iter().filter(|&&x| x).count();

@@ -4,9 +4,7 @@
 mod common;
 
 use bodyseg_core::{Class, Label};
-use bodyseg_refine::{
-    GraphMode, NoiseMode, RefineConfig, Steps, TreeMode, refine, refine_person, refine_variants,
-};
+use bodyseg_refine::{GraphMode, NoiseMode, RefineConfig, TreeMode, refine, refine_person};
 use common::{Scene, ball, cuboid, l};
 
 /// The test scenes' DBSCAN (lattices of pitch 0.02–0.025 m) with the paper's modes.
@@ -335,30 +333,4 @@ fn weighted_noise_with_one_voter_and_no_own_vote_equals_nearest() {
     };
     let weighted = refine(&p.cloud, &boxes, &one).expect("valid");
     assert_eq!(nearest.cloud.labels, weighted.cloud.labels);
-}
-
-#[test]
-fn refine_variants_equal_one_refine_per_configuration_in_every_mode() {
-    let p = bodyseg_testkit::human_cloud(20_000, 5);
-    let boxes = [p.person_box.clone()];
-    let base = RefineConfig {
-        graph: GraphMode::Contact,
-        tree: TreeMode::Coverage,
-        noise: NoiseMode::Weighted,
-        ..Default::default()
-    };
-    let variants = refine_variants(&p.cloud, &boxes, &base, &Steps::PAPER).expect("valid");
-    for (steps, got) in Steps::PAPER.iter().zip(&variants.labels) {
-        let cfg = RefineConfig {
-            steps: *steps,
-            ..base.clone()
-        };
-        let want = refine(&p.cloud, &boxes, &cfg).expect("valid");
-        assert_eq!(*got, want.cloud.labels, "{steps}");
-    }
-    let paper = refine(&p.cloud, &boxes, &RefineConfig::default()).expect("valid");
-    assert_ne!(
-        variants.labels[4], paper.cloud.labels,
-        "the modes change the M-R-N result"
-    );
 }

@@ -366,22 +366,33 @@ fn refine_variants_equal_one_refine_per_configuration() {
     left.half_extents_m[0] *= 0.6;
     left.center_m[0] -= 0.4 * p.person_box.half_extents_m[0];
     let boxes = [p.person_box.clone(), left];
-    let base = RefineConfig::default();
-    let variants =
-        bodyseg_refine::refine_variants(&p.cloud, &boxes, &base, &Steps::PAPER).expect("valid");
-    assert_eq!(variants.labels.len(), Steps::PAPER.len());
-    let mut distinct = std::collections::HashSet::new();
-    for (steps, got) in Steps::PAPER.iter().zip(&variants.labels) {
-        let cfg = RefineConfig {
-            steps: *steps,
-            ..base.clone()
-        };
-        let want = refine(&p.cloud, &boxes, &cfg).expect("valid");
-        assert_eq!(*got, want.cloud.labels, "{steps}");
-        if *steps != Steps::Reference {
-            assert_eq!(variants.clusters, want.clusters, "{steps}");
+    // The paper's modes, and every mode beside them (issue 8).
+    let modes = RefineConfig {
+        graph: bodyseg_refine::GraphMode::Contact,
+        tree: bodyseg_refine::TreeMode::Coverage,
+        noise: bodyseg_refine::NoiseMode::Weighted,
+        ..Default::default()
+    };
+    let mut mrn = Vec::new();
+    for base in [RefineConfig::default(), modes] {
+        let variants =
+            bodyseg_refine::refine_variants(&p.cloud, &boxes, &base, &Steps::PAPER).expect("valid");
+        assert_eq!(variants.labels.len(), Steps::PAPER.len());
+        let mut distinct = std::collections::HashSet::new();
+        for (steps, got) in Steps::PAPER.iter().zip(&variants.labels) {
+            let cfg = RefineConfig {
+                steps: *steps,
+                ..base.clone()
+            };
+            let want = refine(&p.cloud, &boxes, &cfg).expect("valid");
+            assert_eq!(*got, want.cloud.labels, "{steps}");
+            if *steps != Steps::Reference {
+                assert_eq!(variants.clusters, want.clusters, "{steps}");
+            }
+            distinct.insert(got.clone());
         }
-        distinct.insert(got.clone());
+        assert!(distinct.len() >= 4, "the configurations differ");
+        mrn.push(variants.labels[4].clone());
     }
-    assert!(distinct.len() >= 4, "the configurations differ");
+    assert_ne!(mrn[0], mrn[1], "the modes change the M-R-N result");
 }
