@@ -217,7 +217,8 @@ pub struct RefineConfig {
     /// Distance added between points of different labels, metres. Default `inf`: labels
     /// never mix, DBSCAN runs per label.
     pub label_penalty_m: f32,
-    /// Slack of the "inside" test, a fraction of the container's radius. Default 0.
+    /// Slack of the "inside" test, a fraction of the container's radius (`graph =
+    /// "spheres"` only; the contact graph uses `contact_inside_fraction`). Default 0.
     pub inside_tolerance: f32,
     /// Best body tree search: `paper` (default) or `coverage`.
     pub tree: TreeMode,
