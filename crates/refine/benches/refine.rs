@@ -3,11 +3,13 @@
 //! seeded generator of `bodyseg-testkit`. Targets (issue 2, single-threaded at 100k): the
 //! whole refinement of one person under 20 ms; ratios against peers are printed by
 //! `scripts/bench_dbscan_peers.py`. Run single-threaded with
-//! `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`.
+//! `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`. `refine_modes` prices
+//! the modes beside the paper's (issue 8: contact graph, coverage tree, weighted noise,
+//! and all three) on the 100k cloud.
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
-use bodyseg_refine::{DbscanParams, RefineConfig, dbscan, refine};
+use bodyseg_refine::{DbscanParams, GraphMode, NoiseMode, RefineConfig, TreeMode, dbscan, refine};
 use bodyseg_testkit::human_cloud;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -58,9 +60,58 @@ fn bench_refine(c: &mut Criterion) {
     g.finish();
 }
 
+fn bench_refine_modes(c: &mut Criterion) {
+    let mut g = c.benchmark_group("refine_modes");
+    g.sample_size(20);
+    let n = 100_000;
+    let p = human_cloud(n, SEED);
+    let boxes = [p.person_box.clone()];
+    let paper = RefineConfig::default();
+    let modes = [
+        ("paper", paper.clone()),
+        (
+            "contact",
+            RefineConfig {
+                graph: GraphMode::Contact,
+                ..paper.clone()
+            },
+        ),
+        (
+            "coverage",
+            RefineConfig {
+                tree: TreeMode::Coverage,
+                ..paper.clone()
+            },
+        ),
+        (
+            "weighted",
+            RefineConfig {
+                noise: NoiseMode::Weighted,
+                ..paper.clone()
+            },
+        ),
+        (
+            "all",
+            RefineConfig {
+                graph: GraphMode::Contact,
+                tree: TreeMode::Coverage,
+                noise: NoiseMode::Weighted,
+                ..paper.clone()
+            },
+        ),
+    ];
+    g.throughput(Throughput::Elements(p.cloud.len() as u64));
+    for (name, cfg) in &modes {
+        g.bench_with_input(BenchmarkId::new(*name, n), &p, |b, p| {
+            b.iter(|| refine(black_box(&p.cloud), &boxes, cfg))
+        });
+    }
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default();
-    targets = bench_dbscan, bench_refine
+    targets = bench_dbscan, bench_refine, bench_refine_modes
 }
 criterion_main!(benches);

@@ -42,6 +42,39 @@ pub enum TreeMode {
     /// the largest adjacent unused cluster of the slot's label.
     #[default]
     Paper,
+    /// The valid tree that covers the most points: every torso cluster is tried as the
+    /// root, and the head, the two arm chains (upper arm, lower arm) and the two leg chains
+    /// are chosen together to maximise the points of the tree's nodes, instead of filling
+    /// the slots one by one with the largest cluster.
+    Coverage,
+}
+
+/// How the graph's *inside* and *intersect* edges are measured (ALGORITHM.md §5.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GraphMode {
+    /// The paper's bounding spheres (centroid and radius).
+    #[default]
+    Spheres,
+    /// Actual point gaps: two clusters touch when a point of one lies within
+    /// `contact_gap_m` of a point of the other; A lies inside B when they touch, A is no
+    /// larger and at least `contact_inside_fraction` of A's points lie within
+    /// `contact_gap_m` of B's.
+    Contact,
+}
+
+/// How the N step relabels noise points (ALGORITHM.md §5.6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseMode {
+    /// The paper: the label of the nearest clustered point.
+    #[default]
+    Nearest,
+    /// A vote of the `noise_k` nearest clustered points within `eps_m`, each weighted by
+    /// its distance, plus the point's own (parser) label weighted by `noise_self_weight`;
+    /// with no clustered point within `eps_m`, its own label (unknown: the nearest
+    /// clustered point's).
+    Weighted,
 }
 
 /// Which refinement steps run: the paper's five configurations and the rest of the
@@ -184,10 +217,34 @@ pub struct RefineConfig {
     /// Distance added between points of different labels, metres. Default `inf`: labels
     /// never mix, DBSCAN runs per label.
     pub label_penalty_m: f32,
-    /// Slack of the "inside" test, a fraction of the container's radius. Default 0.
+    /// Slack of the "inside" test, a fraction of the container's radius (`graph =
+    /// "spheres"` only; the contact graph uses `contact_inside_fraction`). Default 0.
     pub inside_tolerance: f32,
-    /// Best body tree search. Default `paper`.
+    /// Best body tree search: `paper` (default) or `coverage`.
     pub tree: TreeMode,
+    /// How clusters are judged adjacent / inside one another: `spheres` (default, the
+    /// paper) or `contact` (actual point gaps, `contact_gap_m`).
+    pub graph: GraphMode,
+    /// Contact mode: two clusters touch when their closest points are at most this far
+    /// apart, metres. Default 0.1 (twice the default `eps_m`: bands of unknown points along
+    /// depth edges separate touching parts by a few cm; 0.05 cut real hands off the body
+    /// on the tuning recording, handover seed 7).
+    pub contact_gap_m: f32,
+    /// Contact mode: cluster A lies inside a cluster B no smaller than A when at least this
+    /// fraction of A's points have a point of B within `contact_gap_m` (A is immersed in
+    /// B, e.g. one camera's other label for a surface the others see). In (0, 1].
+    /// Default 0.9.
+    pub contact_inside_fraction: f32,
+    /// How N relabels noise: `nearest` (default, the paper) or `weighted`.
+    pub noise: NoiseMode,
+    /// Weighted noise: the number of nearest clustered points that vote. Default 16.
+    pub noise_k: usize,
+    /// Weighted noise: weight of the point's own label, in voters lying on the point (a
+    /// voter at distance d weighs `1 / (1 + (d / eps_m)²)`); 0 = ignore it and give a point
+    /// with no voter the nearest clustered point's label, as the paper. Unknown never
+    /// votes. The cloud carries no parser probabilities, so every own label counts the
+    /// same. Default 1.0.
+    pub noise_self_weight: f32,
     /// Steps to run: `reference`, `M`, `N`, `M-N`, `M-R-N` (default) or any other mix.
     pub steps: Steps,
     /// Keep the labels of body points outside every box (default false: they are outliers
@@ -206,6 +263,12 @@ impl Default for RefineConfig {
             label_penalty_m: f32::INFINITY,
             inside_tolerance: 0.0,
             tree: TreeMode::Paper,
+            graph: GraphMode::Spheres,
+            contact_gap_m: 0.1,
+            contact_inside_fraction: 0.9,
+            noise: NoiseMode::Nearest,
+            noise_k: 16,
+            noise_self_weight: 1.0,
             steps: Steps::MRN,
             keep_outside_boxes: false,
             merge_into_background: false,
@@ -241,6 +304,30 @@ impl RefineConfig {
                 format!(
                     "must be a finite number >= 0, got {}",
                     self.inside_tolerance
+                ),
+            );
+        }
+        if !(self.contact_gap_m.is_finite() && self.contact_gap_m > 0.0) {
+            return bad(
+                "contact_gap_m",
+                format!("must be a finite number > 0, got {}", self.contact_gap_m),
+            );
+        }
+        if !(self.contact_inside_fraction > 0.0 && self.contact_inside_fraction <= 1.0) {
+            return bad(
+                "contact_inside_fraction",
+                format!("must be in (0, 1], got {}", self.contact_inside_fraction),
+            );
+        }
+        if self.noise_k < 1 {
+            return bad("noise_k", "must be >= 1, got 0".into());
+        }
+        if !(self.noise_self_weight.is_finite() && self.noise_self_weight >= 0.0) {
+            return bad(
+                "noise_self_weight",
+                format!(
+                    "must be a finite number >= 0, got {}",
+                    self.noise_self_weight
                 ),
             );
         }
@@ -289,6 +376,27 @@ mod tests {
             ..Default::default()
         };
         assert!(c.validate().is_err());
+        let message = |c: RefineConfig| {
+            c.validate()
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default()
+        };
+        let e = message(RefineConfig {
+            contact_gap_m: 0.0,
+            ..Default::default()
+        });
+        assert!(e.starts_with("refine.contact_gap_m must be"), "{e}");
+        let e = message(RefineConfig {
+            noise_k: 0,
+            ..Default::default()
+        });
+        assert!(e.starts_with("refine.noise_k must be"), "{e}");
+        let e = message(RefineConfig {
+            noise_self_weight: f32::NAN,
+            ..Default::default()
+        });
+        assert!(e.starts_with("refine.noise_self_weight must be"), "{e}");
         assert!(RefineConfig::default().validate().is_ok());
     }
 }

@@ -3,6 +3,7 @@
 use crate::dbscan::Clustering;
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label};
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// Features of one cluster (paper §3.2). Centroid and radius never change; the label may
 /// change in M and R, so it is kept outside, in a per-cluster label array.
@@ -106,6 +107,252 @@ pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> Graph
     Graph {
         containers,
         adjacent,
+    }
+}
+
+/// Builds the inside / intersect edges from actual point gaps (`graph = "contact"`), not
+/// from bounding spheres: A and B *touch* (an intersect edge) when some point of A lies
+/// within `contact_gap_m` of some point of B; A lies *inside* B when they touch, A has no
+/// more points than B, and at least `inside_fraction` of A's points lie within
+/// `contact_gap_m` of a point of B. So a cluster whose sphere overlaps the body but whose
+/// points stay apart (a blob of the neighbour or of the robot, a hand held in front of the
+/// torso) gets no edge, and a cluster immersed in another one — the same surface seen with
+/// another label by another camera, which a sphere test misses when the spheres are alike —
+/// lies inside it. (`inside_tolerance` is a sphere slack and plays no part here.)
+///
+/// Clustered points are bucketed in cells of side `contact_gap_m`, per (cell, cluster) with
+/// the bounding box of the bucket's points; only buckets of different clusters in
+/// neighbouring cells whose boxes come within the gap are compared point by point, and a
+/// point stops at its first neighbour within the gap.
+pub fn build_graph_contact(
+    positions_m: &[Vec3],
+    clustering: &Clustering,
+    features: &[ClusterFeatures],
+    contact_gap_m: f32,
+    inside_fraction: f32,
+) -> Graph {
+    let index = ContactIndex::new(positions_m, clustering, contact_gap_m);
+    let touching = index.touching_pairs();
+    let near = index.near_counts(&touching, features, inside_fraction);
+    let k = features.len();
+    let mut containers = vec![Vec::new(); k];
+    let mut adjacent = vec![Vec::new(); k];
+    let mut pairs: Vec<(u32, u32)> = touching.into_iter().collect();
+    pairs.sort_unstable();
+    for (a, b) in pairs {
+        adjacent[a as usize].push(b);
+        adjacent[b as usize].push(a);
+    }
+    let mut near: Vec<((u32, u32), usize)> = near.into_iter().collect();
+    near.sort_unstable();
+    for ((a, b), n) in near {
+        if n as f32 >= inside_fraction * features[a as usize].size as f32 {
+            containers[a as usize].push(b);
+        }
+    }
+    for v in containers.iter_mut().chain(adjacent.iter_mut()) {
+        v.sort_unstable();
+    }
+    Graph {
+        containers,
+        adjacent,
+    }
+}
+
+/// Clustered points bucketed by (cell of side `gap_m`, cluster), for the contact graph.
+struct ContactIndex {
+    gap2: f32,
+    /// Clustered positions sorted by (cell, cluster): buckets are runs of it.
+    pts: Vec<Vec3>,
+    buckets: Vec<Bucket>,
+    /// Per non-empty cell, the range of its buckets, sorted by cell.
+    cells: Vec<([i32; 3], std::ops::Range<usize>)>,
+    cell_of: FxHashMap<[i32; 3], usize>,
+}
+
+/// The points of one cluster in one cell, with their bounding box.
+struct Bucket {
+    cluster: u32,
+    range: std::ops::Range<usize>,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Bucket {
+    fn gap2(&self, o: &Bucket) -> f32 {
+        (0..3)
+            .map(|k| {
+                let g = (self.lo[k] - o.hi[k]).max(o.lo[k] - self.hi[k]).max(0.0);
+                g * g
+            })
+            .sum()
+    }
+    fn point_gap2(&self, p: Vec3) -> f32 {
+        (0..3)
+            .map(|k| {
+                let g = (self.lo[k] - p[k]).max(p[k] - self.hi[k]).max(0.0);
+                g * g
+            })
+            .sum()
+    }
+}
+
+impl ContactIndex {
+    fn new(positions_m: &[Vec3], clustering: &Clustering, gap_m: f32) -> Self {
+        let inv = 1.0 / gap_m;
+        let cell = |p: Vec3| [0, 1, 2].map(|a| (p[a] * inv).floor() as i32);
+        let mut sorted: Vec<([i32; 3], u32, Vec3)> = positions_m
+            .iter()
+            .zip(&clustering.cluster_of)
+            .filter_map(|(&p, c)| c.map(|c| (cell(p), c, p)))
+            .collect();
+        sorted.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
+        let mut buckets: Vec<Bucket> = Vec::new();
+        let mut cells: Vec<([i32; 3], std::ops::Range<usize>)> = Vec::new();
+        let mut i = 0;
+        while i < sorted.len() {
+            let (key, cluster) = (sorted[i].0, sorted[i].1);
+            let mut j = i;
+            let (mut lo, mut hi) = (sorted[i].2, sorted[i].2);
+            while j < sorted.len() && sorted[j].0 == key && sorted[j].1 == cluster {
+                for a in 0..3 {
+                    lo[a] = lo[a].min(sorted[j].2[a]);
+                    hi[a] = hi[a].max(sorted[j].2[a]);
+                }
+                j += 1;
+            }
+            let b = buckets.len();
+            buckets.push(Bucket {
+                cluster,
+                range: i..j,
+                lo,
+                hi,
+            });
+            match cells.last_mut() {
+                Some((k, r)) if *k == key => r.end = b + 1,
+                _ => cells.push((key, b..b + 1)),
+            }
+            i = j;
+        }
+        let cell_of = cells
+            .iter()
+            .enumerate()
+            .map(|(i, (k, _))| (*k, i))
+            .collect();
+        ContactIndex {
+            gap2: gap_m * gap_m,
+            pts: sorted.into_iter().map(|t| t.2).collect(),
+            buckets,
+            cells,
+            cell_of,
+        }
+    }
+
+    /// Calls `f(a, b)` for every pair of buckets of different clusters in neighbouring
+    /// cells (the same cell included) whose boxes come within the gap, each ordered pair
+    /// once.
+    fn for_each_near_bucket_pair(&self, mut f: impl FnMut(usize, usize)) {
+        for (key, own) in &self.cells {
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let Some(&o) = self.cell_of.get(&[key[0] + dx, key[1] + dy, key[2] + dz])
+                        else {
+                            continue;
+                        };
+                        for ai in own.clone() {
+                            for bi in self.cells[o].1.clone() {
+                                let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
+                                if a.cluster != b.cluster && a.gap2(b) <= self.gap2 {
+                                    f(ai, bi);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// True when a point of bucket `b` lies within the gap of `p`.
+    fn near(&self, p: Vec3, b: &Bucket) -> bool {
+        b.point_gap2(p) <= self.gap2
+            && self.pts[b.range.clone()]
+                .iter()
+                .any(|&q| bodyseg_core::math::dist2(p, q) <= self.gap2)
+    }
+
+    /// The pairs `(a, b)`, `a < b`, of clusters with two points within the gap.
+    fn touching_pairs(&self) -> FxHashSet<(u32, u32)> {
+        let mut touching = FxHashSet::default();
+        self.for_each_near_bucket_pair(|ai, bi| {
+            let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
+            if a.cluster < b.cluster && !touching.contains(&(a.cluster, b.cluster)) {
+                let hit = self.pts[a.range.clone()].iter().any(|&p| self.near(p, b));
+                if hit {
+                    touching.insert((a.cluster, b.cluster));
+                }
+            }
+        });
+        touching
+    }
+
+    /// For touching clusters `a`, `b` with `a` no larger than `b` and possibly immersed in
+    /// it: how many points of `a` have a point of `b` within the gap, keyed `(a, b)`. A
+    /// pair whose buckets near each other hold fewer than `fraction` of `a`'s points cannot
+    /// reach it and is skipped before any point is compared (most touching pairs: parts
+    /// that meet along a seam).
+    fn near_counts(
+        &self,
+        touching: &FxHashSet<(u32, u32)>,
+        features: &[ClusterFeatures],
+        fraction: f32,
+    ) -> FxHashMap<(u32, u32), usize> {
+        let candidate = |ai: usize, bi: usize| -> Option<(u32, u32)> {
+            let (a, b) = (self.buckets[ai].cluster, self.buckets[bi].cluster);
+            let key = (a.min(b), a.max(b));
+            (features[a as usize].size <= features[b as usize].size && touching.contains(&key))
+                .then_some((a, b))
+        };
+        // Bound: the points of a's buckets near some bucket of b.
+        let mut near_buckets: FxHashSet<(usize, u32)> = FxHashSet::default();
+        self.for_each_near_bucket_pair(|ai, bi| {
+            if let Some((_, b)) = candidate(ai, bi) {
+                near_buckets.insert((ai, b));
+            }
+        });
+        let mut bound: FxHashMap<(u32, u32), usize> = FxHashMap::default();
+        for &(ai, b) in &near_buckets {
+            *bound.entry((self.buckets[ai].cluster, b)).or_default() +=
+                self.buckets[ai].range.len();
+        }
+        bound.retain(|&(a, _), n| *n as f32 >= fraction * features[a as usize].size as f32);
+        // Per bucket of `a`: which of its points are near cluster `b`, over all of `b`'s
+        // buckets (a point near two of them counts once).
+        let mut flags: FxHashMap<(usize, u32), Vec<bool>> = FxHashMap::default();
+        self.for_each_near_bucket_pair(|ai, bi| {
+            let Some(pair) = candidate(ai, bi) else {
+                return;
+            };
+            if !bound.contains_key(&pair) {
+                return;
+            }
+            let a = &self.buckets[ai];
+            let f = flags
+                .entry((ai, pair.1))
+                .or_insert_with(|| vec![false; a.range.len()]);
+            for (flag, &p) in f.iter_mut().zip(&self.pts[a.range.clone()]) {
+                if !*flag && self.near(p, &self.buckets[bi]) {
+                    *flag = true;
+                }
+            }
+        });
+        let mut counts: FxHashMap<(u32, u32), usize> = FxHashMap::default();
+        for ((ai, b), f) in flags {
+            let a = self.buckets[ai].cluster;
+            *counts.entry((a, b)).or_default() += f.iter().filter(|&&x| x).count();
+        }
+        counts
     }
 }
 
@@ -249,4 +496,104 @@ pub fn best_tree_paper(features: &[ClusterFeatures], graph: &Graph) -> BodyTree 
         }
     }
     tree
+}
+
+/// The best tree covering the most points (`tree = "coverage"`): every torso cluster is
+/// tried as the root; for each, the head slot takes the largest adjacent head cluster and
+/// the two arm chains (upper arm adjacent to the root, lower arm adjacent to that upper
+/// arm) are chosen together — likewise the legs — so that the tree's nodes hold the most
+/// points. Slot order and template are [`TEMPLATE`]'s; a lower slot is filled only under a
+/// filled upper slot, as in the paper. Ties go to the first found in increasing ids.
+///
+/// Greedy slot filling ([`best_tree_paper`]) gives an upper-arm slot to the largest
+/// upper-arm cluster even when it carries no lower arm (a mislabelled patch on the torso),
+/// leaving a real arm and its forearm out of the tree; this search does not.
+pub fn best_tree_coverage(features: &[ClusterFeatures], graph: &Graph) -> BodyTree {
+    let size = |c: u32| features[c as usize].size;
+    let with_label = |cands: &[u32], class: Class| -> Vec<u32> {
+        let want = Label::from(class);
+        cands
+            .iter()
+            .copied()
+            .filter(|&c| features[c as usize].label == want)
+            .collect()
+    };
+    let torso = Label::from(Class::Torso);
+    let mut best: Option<(usize, BodyTree)> = None;
+    for root in (0..features.len() as u32).filter(|&c| features[c as usize].label == torso) {
+        let adjacent = &graph.adjacent[root as usize];
+        let mut tree = BodyTree {
+            root: Some(root),
+            slots: [None; 9],
+        };
+        let mut total = size(root);
+        // Head: the largest adjacent head cluster (ties: smaller id).
+        let head = with_label(adjacent, Class::Head)
+            .into_iter()
+            .fold(None, |b: Option<u32>, c| match b {
+                Some(b) if size(b) >= size(c) => Some(b),
+                _ => Some(c),
+            });
+        if let Some(h) = head {
+            tree.slots[0] = Some(h);
+            total += size(h);
+        }
+        for (upper, lower, slots) in [
+            (Class::UpperArms, Class::LowerArms, [1, 2, 5, 6]),
+            (Class::UpperLegs, Class::LowerLegs, [3, 4, 7, 8]),
+        ] {
+            let uppers = with_label(adjacent, upper);
+            let lowers: Vec<Vec<u32>> = uppers
+                .iter()
+                .map(|&u| with_label(&graph.adjacent[u as usize], lower))
+                .collect();
+            let (points, pick) = best_limb_pair(&uppers, &lowers, &size);
+            total += points;
+            for (slot, c) in slots.into_iter().zip(pick) {
+                tree.slots[slot] = c;
+            }
+        }
+        if best.as_ref().is_none_or(|(t, _)| total > *t) {
+            best = Some((total, tree));
+        }
+    }
+    best.map(|(_, t)| t).unwrap_or_default()
+}
+
+/// Two limb chains (upper, optional lower under it) with distinct clusters covering the
+/// most points: `[upper 1, upper 2, lower 1, lower 2]` and their points. `lowers[i]` are
+/// the lower clusters adjacent to `uppers[i]`.
+fn best_limb_pair(
+    uppers: &[u32],
+    lowers: &[Vec<u32>],
+    size: &dyn Fn(u32) -> usize,
+) -> (usize, [Option<u32>; 4]) {
+    // Chains: (upper index or none, lower or none).
+    let mut chains: Vec<(Option<usize>, Option<u32>)> = vec![(None, None)];
+    for (i, ls) in lowers.iter().enumerate() {
+        chains.push((Some(i), None));
+        chains.extend(ls.iter().map(|&l| (Some(i), Some(l))));
+    }
+    let points =
+        |(u, l): (Option<usize>, Option<u32>)| u.map_or(0, |u| size(uppers[u])) + l.map_or(0, size);
+    let mut best = (0, [None; 4]);
+    for (x, &a) in chains.iter().enumerate() {
+        for &b in &chains[x..] {
+            let same_upper = a.0.is_some() && a.0 == b.0;
+            let same_lower = a.1.is_some() && a.1 == b.1;
+            if same_upper || same_lower {
+                continue;
+            }
+            let total = points(a) + points(b);
+            if total > best.0 {
+                // A filled chain goes in the first slot.
+                let (a, b) = if a.0.is_none() { (b, a) } else { (a, b) };
+                best = (
+                    total,
+                    [a.0.map(|u| uppers[u]), b.0.map(|u| uppers[u]), a.1, b.1],
+                );
+            }
+        }
+    }
+    best
 }

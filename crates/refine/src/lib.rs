@@ -10,6 +10,13 @@
 //! clusters cut off from the body tree, N gives noise points the label of the nearest
 //! clustered point. [`fuse`] puts the people back into the whole cloud.
 //!
+//! Beside the paper's reading, each selectable in [`RefineConfig`] (defaults = the paper):
+//! `graph = "contact"` measures adjacency and containment on actual point gaps
+//! ([`build_graph_contact`]) instead of bounding spheres; `tree = "coverage"` searches the
+//! valid body tree covering the most points ([`best_tree_coverage`]) instead of filling
+//! slots greedily; `noise = "weighted"` relabels noise by a distance-weighted vote of its
+//! nearest clustered points and its own label ([`reassign_noise_weighted`]).
+//!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).
 //! - Cluster ids are dense, ordered by each cluster's smallest point index (within the
@@ -21,10 +28,13 @@ pub mod dbscan;
 pub mod graph;
 pub mod steps;
 
-pub use config::{RefineConfig, RefineError, Steps, TreeMode};
+pub use config::{GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode};
 pub use dbscan::{Clustering, DbscanParams, dbscan, dbscan_brute_force};
-pub use graph::{BodyTree, ClusterFeatures, Graph, best_tree_paper, build_graph, cluster_features};
-pub use steps::{merge_nodes, reassign_noise, remove_nodes};
+pub use graph::{
+    BodyTree, ClusterFeatures, Graph, best_tree_coverage, best_tree_paper, build_graph,
+    build_graph_contact, cluster_features,
+};
+pub use steps::{merge_nodes, reassign_noise, reassign_noise_weighted, remove_nodes};
 
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, LabeledCloud, PersonBox, RefinedCloud};
@@ -92,9 +102,19 @@ pub fn analyse_person(
 ) -> PersonStructure {
     let clustering = dbscan(positions_m, labels, &cfg.dbscan_params());
     let features = cluster_features(positions_m, &clustering);
-    let graph = build_graph(&features, cfg.inside_tolerance);
+    let graph = match cfg.graph {
+        GraphMode::Spheres => build_graph(&features, cfg.inside_tolerance),
+        GraphMode::Contact => build_graph_contact(
+            positions_m,
+            &clustering,
+            &features,
+            cfg.contact_gap_m,
+            cfg.contact_inside_fraction,
+        ),
+    };
     let tree = match cfg.tree {
         TreeMode::Paper => best_tree_paper(&features, &graph),
+        TreeMode::Coverage => best_tree_coverage(&features, &graph),
     };
     PersonStructure {
         clustering,
@@ -153,7 +173,17 @@ pub fn apply_steps(
         .collect();
     if noise {
         let is_noise: Vec<bool> = clustering.cluster_of.iter().map(Option::is_none).collect();
-        point_labels = reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m);
+        point_labels = match cfg.noise {
+            NoiseMode::Nearest => reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m),
+            NoiseMode::Weighted => reassign_noise_weighted(
+                positions_m,
+                &point_labels,
+                &is_noise,
+                cfg.eps_m,
+                cfg.noise_k,
+                cfg.noise_self_weight,
+            ),
+        };
     }
     // Nothing leaves refinement unknown: an unknown point nobody relabelled is background.
     for l in &mut point_labels {

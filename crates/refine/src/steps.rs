@@ -111,6 +111,77 @@ pub fn reassign_noise(
     out
 }
 
+/// N, weighted (`noise = "weighted"`): every point with `is_noise[i]` takes the label
+/// with the largest vote among the `k` nearest points with `!is_noise` within `eps_m`
+/// (ties between points: the smaller index), each voting for its label with weight
+/// `1 / (1 + (d / eps_m)²)` (1 on the point, ½ at `eps_m`), plus the point's own label —
+/// the parser's, unless unknown — with weight `self_weight` (as many voters lying on the
+/// point). Ties between labels go to the nearest voter's label. A noise point with no
+/// clustered point within `eps_m` has no neighbourhood to be corrected by: it keeps its own
+/// label, unless that is unknown or `self_weight` is 0 (then the nearest clustered point's
+/// label, as in [`reassign_noise`]).
+///
+/// What it fixes: 1-NN follows whichever single point is nearest — a thin strand of another
+/// label, a stray border point — where the surrounding surface says otherwise, and it
+/// overwrites whole parts too sparse to cluster (a hand far from the sensors) with the
+/// label of whatever cluster is nearest. The cloud carries no parser probabilities
+/// (`LabeledCloud` has labels only), so every own label has the same weight; a per-point
+/// probability would scale it.
+pub fn reassign_noise_weighted(
+    positions_m: &[Vec3],
+    labels: &[Label],
+    is_noise: &[bool],
+    eps_m: f32,
+    k: usize,
+    self_weight: f32,
+) -> Vec<Label> {
+    let clustered: Vec<u32> = (0..positions_m.len() as u32)
+        .filter(|&i| !is_noise[i as usize])
+        .collect();
+    if clustered.is_empty() {
+        return reassign_noise(positions_m, labels, is_noise, eps_m);
+    }
+    let mut out = labels.to_vec();
+    let index = NnIndex::new(positions_m, &clustered, eps_m);
+    let r2 = eps_m * eps_m;
+    let weight = |d2: f32| 1.0 / (1.0 + d2 / r2);
+    let (mut voters, mut cells) = (Vec::new(), Vec::new());
+    for i in 0..positions_m.len() {
+        if !is_noise[i] {
+            continue;
+        }
+        let q = positions_m[i];
+        index.knn_within(q, k.max(1), r2, &mut voters, &mut cells);
+        let Some(&(_, nearest)) = voters.first() else {
+            if (labels[i].is_unknown() || self_weight == 0.0)
+                && let Some(j) = index.nearest(q)
+            {
+                out[i] = labels[j as usize];
+            }
+            continue;
+        };
+        let mut votes = [0f32; bodyseg_core::NUM_CLASSES];
+        for &(d2, j) in &voters {
+            if let Some(c) = labels[j as usize].class() {
+                votes[usize::from(c.id())] += weight(d2);
+            }
+        }
+        if let Some(c) = labels[i].class() {
+            votes[usize::from(c.id())] += self_weight;
+        }
+        let mut best = labels[nearest as usize];
+        let mut best_vote = best.class().map_or(0.0, |c| votes[usize::from(c.id())]);
+        for (id, &v) in votes.iter().enumerate() {
+            if v > best_vote {
+                best_vote = v;
+                best = Label::from_id(id as u8).unwrap_or(best);
+            }
+        }
+        out[i] = best;
+    }
+    out
+}
+
 /// Fine cells per block edge in [`NnIndex`].
 const NN_BLOCK_CELLS: i32 = 4;
 
@@ -361,6 +432,62 @@ impl NnIndex {
         best.map(|(_, j)| j)
     }
 
+    /// The at most `k` indexed points nearest to `q` within squared distance `r2`, as
+    /// `(squared distance, id)` sorted by distance then id, into `out`. `r2` must not exceed
+    /// a cell's side squared (the index is built with cells of side >= eps): only the 3×3×3
+    /// cells around `q`'s are searched. `cells` is scratch.
+    fn knn_within(
+        &self,
+        q: Vec3,
+        k: usize,
+        r2: f32,
+        out: &mut Vec<(f32, u32)>,
+        cells: &mut Vec<(f32, u32)>,
+    ) {
+        out.clear();
+        cells.clear();
+        let kc = [0, 1, 2].map(|a| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32);
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let n = [kc[0] + dx, kc[1] + dy, kc[2] + dz];
+                    if (0..3).any(|a| n[a] < 0 || n[a] >= self.dims[a]) {
+                        continue;
+                    }
+                    let c = self.cell_of_grid
+                        [((n[2] * self.dims[1] + n[1]) * self.dims[0] + n[0]) as usize];
+                    if c == u32::MAX {
+                        continue;
+                    }
+                    let d = self.cell_box[c as usize].dist2(q);
+                    if d <= r2 {
+                        cells.push((d, c));
+                    }
+                }
+            }
+        }
+        cells.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(d, c) in cells.iter() {
+            if out.len() == k && out.last().is_some_and(|&(w, _)| d > w) {
+                break;
+            }
+            let r = self.cell_start[c as usize] as usize..self.cell_start[c as usize + 1] as usize;
+            for (&j, &p) in self.items[r.clone()].iter().zip(&self.pts[r]) {
+                let d2 = dist2(q, p);
+                if d2 > r2 {
+                    continue;
+                }
+                let beats = |&(w, wj): &(f32, u32)| d2 < w || (d2 == w && j < wj);
+                if out.len() == k && !out.last().is_some_and(beats) {
+                    continue;
+                }
+                let at = out.partition_point(|e| !beats(e));
+                out.insert(at, (d2, j));
+                out.truncate(k);
+            }
+        }
+    }
+
     /// Squared distance from `q` (in cell `k`) to the walls of the block of cells within
     /// `r` cells of `k`, shaved by a hair: no point outside that block is nearer.
     fn wall_dist2(&self, q: Vec3, k: [i32; 3], r: i32) -> f32 {
@@ -423,6 +550,37 @@ mod tests {
                         .then(a.cmp(&b))
                 });
                 assert_eq!(index.nearest(q), want, "case {case}");
+            }
+        }
+    }
+
+    #[test]
+    fn knn_within_equals_brute_force() {
+        let mut rng = bodyseg_testkit_free_rng(5);
+        for case in 0..40 {
+            let n = 1 + (case * 53) % 600;
+            let pos: Vec<Vec3> = (0..n)
+                .map(|_| [rng() * 0.5, rng() * 0.4, rng() * 0.3])
+                .collect();
+            let idx: Vec<u32> = (0..n as u32).filter(|i| i % 4 != 0).collect();
+            if idx.is_empty() {
+                continue;
+            }
+            let eps = 0.05;
+            let index = NnIndex::new(&pos, &idx, eps);
+            let (mut out, mut cells) = (Vec::new(), Vec::new());
+            for _ in 0..20 {
+                let q = [rng() * 0.7 - 0.1, rng() * 0.6 - 0.1, rng() * 0.5 - 0.1];
+                let k = 1 + case % 9;
+                index.knn_within(q, k, eps * eps, &mut out, &mut cells);
+                let mut want: Vec<(f32, u32)> = idx
+                    .iter()
+                    .map(|&j| (dist2(q, pos[j as usize]), j))
+                    .filter(|&(d2, _)| d2 <= eps * eps)
+                    .collect();
+                want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                want.truncate(k);
+                assert_eq!(out, want, "case {case}");
             }
         }
     }

@@ -1,67 +1,12 @@
 //! Each refinement step doing its job on small hand-built scenes (ALGORITHM.md §5).
 
-use bodyseg_core::math::Vec3;
-use bodyseg_core::{Class, Label, LabeledCloud, PersonBox, PointOrigin};
+mod common;
+
+use bodyseg_core::{Class, Label, PersonBox};
 use bodyseg_refine::{
     Clustering, PersonRefinement, RefineConfig, Steps, fuse, refine, refine_person,
 };
-
-fn l(c: Class) -> Label {
-    Label::from(c)
-}
-
-/// A dense ball of points on a lattice of pitch `pitch_m` (deterministic, DBSCAN-friendly).
-fn ball(center: Vec3, radius_m: f32, pitch_m: f32, label: Label) -> (Vec<Vec3>, Vec<Label>) {
-    let n = (radius_m / pitch_m).ceil() as i32;
-    let mut pos = Vec::new();
-    for i in -n..=n {
-        for j in -n..=n {
-            for k in -n..=n {
-                let d = [i as f32 * pitch_m, j as f32 * pitch_m, k as f32 * pitch_m];
-                if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= radius_m * radius_m {
-                    pos.push([center[0] + d[0], center[1] + d[1], center[2] + d[2]]);
-                }
-            }
-        }
-    }
-    let lab = vec![label; pos.len()];
-    (pos, lab)
-}
-
-/// A scene built from parts; remembers where each part's points start.
-#[derive(Default)]
-struct Scene {
-    pos: Vec<Vec3>,
-    lab: Vec<Label>,
-    parts: Vec<std::ops::Range<usize>>,
-}
-
-impl Scene {
-    fn add(&mut self, (pos, lab): (Vec<Vec3>, Vec<Label>)) -> usize {
-        let s = self.pos.len();
-        self.pos.extend(pos);
-        self.lab.extend(lab);
-        self.parts.push(s..self.pos.len());
-        self.parts.len() - 1
-    }
-    fn point(&mut self, p: Vec3, label: Label) -> usize {
-        self.add((vec![p], vec![label]));
-        self.pos.len() - 1
-    }
-    fn cloud(&self) -> LabeledCloud {
-        LabeledCloud {
-            positions_m: self.pos.clone(),
-            labels: self.lab.clone(),
-            colors: None,
-            origins: (0..self.pos.len() as u32)
-                .map(|pixel| PointOrigin { camera: 0, pixel })
-                .collect(),
-        }
-    }
-    fn labels_of(&self, out: &[Label], part: usize) -> Vec<Label> {
-        out[self.parts[part].clone()].to_vec()
-    }
-}
+use common::{Scene, ball, l};
 
 fn cfg(steps: &str) -> RefineConfig {
     RefineConfig {
@@ -421,22 +366,33 @@ fn refine_variants_equal_one_refine_per_configuration() {
     left.half_extents_m[0] *= 0.6;
     left.center_m[0] -= 0.4 * p.person_box.half_extents_m[0];
     let boxes = [p.person_box.clone(), left];
-    let base = RefineConfig::default();
-    let variants =
-        bodyseg_refine::refine_variants(&p.cloud, &boxes, &base, &Steps::PAPER).expect("valid");
-    assert_eq!(variants.labels.len(), Steps::PAPER.len());
-    let mut distinct = std::collections::HashSet::new();
-    for (steps, got) in Steps::PAPER.iter().zip(&variants.labels) {
-        let cfg = RefineConfig {
-            steps: *steps,
-            ..base.clone()
-        };
-        let want = refine(&p.cloud, &boxes, &cfg).expect("valid");
-        assert_eq!(*got, want.cloud.labels, "{steps}");
-        if *steps != Steps::Reference {
-            assert_eq!(variants.clusters, want.clusters, "{steps}");
+    // The paper's modes, and every mode beside them (issue 8).
+    let modes = RefineConfig {
+        graph: bodyseg_refine::GraphMode::Contact,
+        tree: bodyseg_refine::TreeMode::Coverage,
+        noise: bodyseg_refine::NoiseMode::Weighted,
+        ..Default::default()
+    };
+    let mut mrn = Vec::new();
+    for base in [RefineConfig::default(), modes] {
+        let variants =
+            bodyseg_refine::refine_variants(&p.cloud, &boxes, &base, &Steps::PAPER).expect("valid");
+        assert_eq!(variants.labels.len(), Steps::PAPER.len());
+        let mut distinct = std::collections::HashSet::new();
+        for (steps, got) in Steps::PAPER.iter().zip(&variants.labels) {
+            let cfg = RefineConfig {
+                steps: *steps,
+                ..base.clone()
+            };
+            let want = refine(&p.cloud, &boxes, &cfg).expect("valid");
+            assert_eq!(*got, want.cloud.labels, "{steps}");
+            if *steps != Steps::Reference {
+                assert_eq!(variants.clusters, want.clusters, "{steps}");
+            }
+            distinct.insert(got.clone());
         }
-        distinct.insert(got.clone());
+        assert!(distinct.len() >= 4, "the configurations differ");
+        mrn.push(variants.labels[4].clone());
     }
-    assert!(distinct.len() >= 4, "the configurations differ");
+    assert_ne!(mrn[0], mrn[1], "the modes change the M-R-N result");
 }
