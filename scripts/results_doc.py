@@ -98,7 +98,7 @@ def main():
     # Summary.
     w("## Summary")
     w("")
-    w("| 2D labels | projection | Reference BIoU | M-R-N BIoU | Δ BIoU | Δ lower arms | largest body-class gain | largest body-class loss |")
+    w("| 2D labels | projection | Reference BIoU | M-R-N BIoU | Δ BIoU | Δ lower arms | largest body-class change | smallest body-class change |")
     w("|---|---|---:|---:|---:|---:|---|---|")
     for (source, mode), rows in runs.items():
         d_biou, per_class = gains(rows)

@@ -32,7 +32,9 @@ fn subset() -> (Vec<(String, u64)>, usize) {
         .iter()
         .map(|g| {
             let preset = g["preset"].as_str().expect("preset").to_string();
-            let seed = g["seeds"].as_array().expect("seeds")[0].as_integer().expect("seed");
+            let seed = g["seeds"].as_array().expect("seeds")[0]
+                .as_integer()
+                .expect("seed");
             (preset, seed as u64)
         })
         .collect();
@@ -51,8 +53,17 @@ fn m_r_n_biou_on_the_regression_subset_matches_the_documented_figure() {
         let out = bodyseg(
             dir.path(),
             &[
-                "synth", "--preset", preset, "--seed", &seed.to_string(), "--frames",
-                &frames.to_string(), "--no-preview", "--out", &rec, "-q",
+                "synth",
+                "--preset",
+                preset,
+                "--seed",
+                &seed.to_string(),
+                "--frames",
+                &frames.to_string(),
+                "--no-preview",
+                "--out",
+                &rec,
+                "-q",
             ],
         );
         assert_ok(&out, "bodyseg synth");
@@ -60,8 +71,15 @@ fn m_r_n_biou_on_the_regression_subset_matches_the_documented_figure() {
         let out = bodyseg(
             dir.path(),
             &[
-                "run", "--recording", &rec, "--out", &run, "--figure", "none",
-                "--no-label-images", "-q",
+                "run",
+                "--recording",
+                &rec,
+                "--out",
+                &run,
+                "--figure",
+                "none",
+                "--no-label-images",
+                "-q",
             ],
         );
         assert_ok(&out, "bodyseg run");
