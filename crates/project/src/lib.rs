@@ -38,7 +38,7 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 
 use crate::color::{ColorProjection, Hits};
-use crate::dsa::{DepthLut, apply_dsa, check_images, depth_lut, naive_labels};
+use crate::dsa::{DepthLut, DsaScratch, apply_dsa, check_images, depth_lut, naive_labels};
 
 /// One camera's images of a frame: the raw depth image (depth sensor size) and the
 /// parser's label image (colour sensor size).
@@ -90,15 +90,15 @@ impl Clone for FrameProjector {
 struct Scratch {
     /// Where every point lands in its colour image (contents overwritten every frame).
     hits: Hits,
-    /// Per camera the z-buffer keys, all zero between frames (see `dsa::ZBuffer`).
-    zkeys: Vec<Vec<u32>>,
+    /// Per camera the DSA stage's buffers (z-buffer, edge map, labels per pixel).
+    dsa: Vec<DsaScratch>,
 }
 
 impl std::fmt::Debug for Scratch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Scratch")
             .field("points", &self.hits.u.len())
-            .field("zbuffers", &self.zkeys.len())
+            .field("cameras", &self.dsa.len())
             .finish()
     }
 }
@@ -340,14 +340,16 @@ impl FrameProjector {
                 label_parts.push(head);
                 rest = tail;
             }
-            scratch.zkeys.resize_with(self.cameras.len(), Vec::new);
+            scratch
+                .dsa
+                .resize_with(self.cameras.len(), DsaScratch::default);
             let hits = &scratch.hits;
             label_parts
                 .into_par_iter()
                 .zip(ranges.into_par_iter())
-                .zip(scratch.zkeys.par_iter_mut())
+                .zip(scratch.dsa.par_iter_mut())
                 .enumerate()
-                .for_each(|(c, ((labels_out, range), zkeys))| {
+                .for_each(|(c, ((labels_out, range), dsa_scratch))| {
                     let t = &self.cameras[c];
                     apply_dsa(
                         &t.camera,
@@ -358,7 +360,7 @@ impl FrameProjector {
                         images[c].labels,
                         cfg,
                         stride,
-                        zkeys,
+                        dsa_scratch,
                         labels_out,
                     );
                 });
