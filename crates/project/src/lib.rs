@@ -479,7 +479,7 @@ impl CameraTables {
         // a plain loop that vectorises.
         let (mut x, mut y, mut z) = (vec![0.0; w], vec![0.0; w], vec![0.0; w]);
         let mut cols = vec![0u32; w];
-        let mut hits = Hits::zeroed(w);
+        let mut hits = Hits::zeroed(if part.hits.is_some() { 0 } else { w });
         let mut k = 0;
         for v in rows.step_by(stride) {
             let row = v * w..(v + 1) * w;
@@ -518,14 +518,22 @@ impl CameraTables {
                     pixel: (v * w) as u32 + u,
                 };
             }
-            let (hu, hv, hz) = (&mut hits.u[..n], &mut hits.v[..n], &mut hits.z_color_m[..n]);
+            // Straight into the frame's hits when the DSA checks need them, else into
+            // this row's.
+            let (hu, hv, hz) = match part.hits.as_mut() {
+                Some(all) => (
+                    &mut all.u[out.clone()],
+                    &mut all.v[out.clone()],
+                    &mut all.z_color_m[out.clone()],
+                ),
+                None => (
+                    &mut hits.u[..n],
+                    &mut hits.v[..n],
+                    &mut hits.z_color_m[..n],
+                ),
+            };
             self.color.project_batch(x, y, z, hu, hv, hz);
-            naive_labels(hu, hv, images.labels, &mut part.labels[out.clone()]);
-            if let Some(all) = part.hits.as_mut() {
-                all.u[out.clone()].copy_from_slice(hu);
-                all.v[out.clone()].copy_from_slice(hv);
-                all.z_color_m[out].copy_from_slice(hz);
-            }
+            naive_labels(hu, hv, images.labels, &mut part.labels[out]);
         }
         debug_assert_eq!(k, part.labels.len());
     }
