@@ -601,18 +601,24 @@ fn any_row_in_square(
 }
 
 /// Nearest colour-frame depth per colour pixel over the splat squares of all points, on
-/// a buffer of the colour image's size plus a margin of `r` pixels on every side, so that
-/// a query never clips.
+/// a buffer of the colour image's size plus a margin of `r` pixels on every side (and one
+/// more column), so that neither a splat nor a query clips.
+///
+/// The square is split in two: each point is splatted into the `2r + 1` cells of its
+/// row centred on its pixel (for r = 1 one 4-wide SIMD min, the 4th lane +∞), and a query
+/// takes the nearest over the `2r + 1` cells of its column centred on its pixel: the
+/// nearest over the square, with `2r + 1` loads instead of `(2r + 1)²`.
 ///
 /// Depths are stored as f32 metres, +∞ for "no point". The buffer is borrowed all +∞
 /// and given back all +∞ (on drop, the splatted cells are reset): kept across frames, it
 /// is neither allocated nor cleared per frame.
 struct ZBuffer<'a> {
-    /// Row length of `z_m`: the image width plus 2r.
+    /// Row length of `z_m`: the image width plus 2r + 1.
     stride: usize,
     /// Splat radius.
     r: usize,
-    /// Per pixel the depth of the nearest point whose pixel this is (the splats' centres).
+    /// Per cell (row `v + r`, column `c`) the depth of the nearest point on row v whose
+    /// column is within r of `c - r`.
     z_m: &'a mut [f32],
     hits: HitsView<'a>,
 }
@@ -625,26 +631,39 @@ fn min_f32(a: f32, b: f32) -> f32 {
 }
 
 impl<'a> ZBuffer<'a> {
-    /// The nearest z per pixel; [`ZBuffer::at`] takes the nearest over the square of
-    /// radius `r` around a pixel, the same as splatting every point's square. The hits'
-    /// z are > 0 and finite (`ColorProjection` gives no hit otherwise). `buffer` is all
-    /// +∞ (any length).
+    /// Splats the hits; [`ZBuffer::at`] then takes the nearest over the square of radius
+    /// `r` around a pixel, the same as splatting every point's square. The hits' z are
+    /// > 0 and finite (`ColorProjection` gives no hit otherwise). `buffer` is all +∞ (any
+    /// length).
     fn splat(
         hits: HitsView<'a>,
         r: usize,
         color: &bodyseg_calib::Intrinsics,
         buffer: &'a mut Vec<f32>,
     ) -> Self {
-        let stride = color.width as usize + 2 * r;
+        let stride = color.width as usize + 2 * r + 1;
         let len = stride * (color.height as usize + 2 * r);
         if buffer.len() != len {
             buffer.clear();
             buffer.resize(len, f32::INFINITY);
         }
+        let side = 2 * r + 1;
         for ((&u, &v), &z) in hits.u.iter().zip(hits.v).zip(hits.z_color_m) {
             if u != NO_HIT {
-                let cell = &mut buffer[(v as usize + r) * stride + u as usize + r];
-                *cell = min_f32(*cell, z);
+                // Columns u - r ..= u + r of row v, in the padded buffer.
+                let start = (v as usize + r) * stride + u as usize;
+                if r == 1 {
+                    let cells: &mut [f32; 4] =
+                        (&mut buffer[start..start + 4]).try_into().expect("4 wide");
+                    let z4 = [z, z, z, f32::INFINITY];
+                    for (c, z) in cells.iter_mut().zip(z4) {
+                        *c = min_f32(*c, z);
+                    }
+                } else {
+                    for c in &mut buffer[start..start + side] {
+                        *c = min_f32(*c, z);
+                    }
+                }
             }
         }
         ZBuffer {
@@ -659,35 +678,36 @@ impl<'a> ZBuffer<'a> {
     /// holds at least that point, and the result is finite).
     #[inline]
     fn at(&self, u: u32, v: u32) -> f32 {
-        // Top-left corner of the square in the padded buffer.
-        let corner = v as usize * self.stride + u as usize;
+        // Column u of rows v - r ..= v + r, in the padded buffer.
+        let top = v as usize * self.stride + u as usize + self.r;
         if self.r == 1 {
-            // The default radius, unrolled.
-            let row = |dv: usize| -> [f32; 3] {
-                let start = corner + dv * self.stride;
-                self.z_m[start..start + 3].try_into().expect("3 wide")
-            };
-            let (a, b, c) = (row(0), row(1), row(2));
-            let m = [0, 1, 2].map(|k| min_f32(min_f32(a[k], b[k]), c[k]));
-            return min_f32(min_f32(m[0], m[1]), m[2]);
+            let s = self.stride;
+            return min_f32(
+                min_f32(self.z_m[top], self.z_m[top + s]),
+                self.z_m[top + 2 * s],
+            );
         }
-        let side = 2 * self.r + 1;
-        let mut best = f32::INFINITY;
-        for dv in 0..side {
-            let start = corner + dv * self.stride;
-            best = self.z_m[start..start + side]
-                .iter()
-                .fold(best, |b, &z| min_f32(b, z));
-        }
-        best
+        (0..=2 * self.r).fold(f32::INFINITY, |b, k| {
+            min_f32(b, self.z_m[top + k * self.stride])
+        })
     }
 }
 
 impl Drop for ZBuffer<'_> {
     fn drop(&mut self) {
+        let (r, stride) = (self.r, self.stride);
         for (&u, &v) in self.hits.u.iter().zip(self.hits.v) {
             if u != NO_HIT {
-                self.z_m[(v as usize + self.r) * self.stride + u as usize + self.r] = f32::INFINITY;
+                let start = (v as usize + r) * stride + u as usize;
+                if r == 1 {
+                    // All 4 lanes of the splat (the 4th is reset too, harmlessly).
+                    let cells: &mut [f32; 4] = (&mut self.z_m[start..start + 4])
+                        .try_into()
+                        .expect("4 wide");
+                    *cells = [f32::INFINITY; 4];
+                } else {
+                    self.z_m[start..start + 2 * r + 1].fill(f32::INFINITY);
+                }
             }
         }
     }

@@ -526,11 +526,7 @@ impl CameraTables {
                     &mut all.v[out.clone()],
                     &mut all.z_color_m[out.clone()],
                 ),
-                None => (
-                    &mut hits.u[..n],
-                    &mut hits.v[..n],
-                    &mut hits.z_color_m[..n],
-                ),
+                None => (&mut hits.u[..n], &mut hits.v[..n], &mut hits.z_color_m[..n]),
             };
             self.color.project_batch(x, y, z, hu, hv, hz);
             naive_labels(hu, hv, images.labels, &mut part.labels[out]);
