@@ -259,7 +259,6 @@ pub(crate) fn apply_dsa(
                 cands,
             );
         });
-    drop(zbuffer);
     if !vote_on {
         return;
     }
@@ -269,28 +268,34 @@ pub(crate) fn apply_dsa(
         }
     }
 
-    // Step 4 on the candidates, from the labels before the vote (`by_pixel`).
+    // Step 4 on the candidates, from the labels before the vote (`by_pixel`), while the
+    // z-buffer is reset (serial) beside it.
     let by_pixel = &by_pixel[..];
-    out.par_chunks_mut(chunk)
-        .zip(candidates.par_iter())
-        .enumerate()
-        .for_each(|(k, (out, cands))| {
-            let origins = &origins[k * chunk..];
-            for &i in cands {
-                let i = i as usize;
-                let own = out[i].class();
-                if let Some(best) = vote(
-                    origins[i].pixel as usize,
-                    by_pixel,
-                    (depth_raw, lut),
-                    (depth_w, depth_h, stride),
-                    cfg.edge_jump_ratio,
-                ) && Some(best) != own
-                {
-                    out[i] = Label::from(best);
-                }
-            }
-        });
+    rayon::join(
+        || drop(zbuffer),
+        || {
+            out.par_chunks_mut(chunk)
+                .zip(candidates.par_iter())
+                .enumerate()
+                .for_each(|(k, (out, cands))| {
+                    let origins = &origins[k * chunk..];
+                    for &i in cands {
+                        let i = i as usize;
+                        let own = out[i].class();
+                        if let Some(best) = vote(
+                            origins[i].pixel as usize,
+                            by_pixel,
+                            (depth_raw, lut),
+                            (depth_w, depth_h, stride),
+                            cfg.edge_jump_ratio,
+                        ) && Some(best) != own
+                        {
+                            out[i] = Label::from(best);
+                        }
+                    }
+                });
+        },
+    );
 }
 
 /// The per-point checks of [`apply_dsa`] (steps 1–3 and the vote's label-change test),
