@@ -233,7 +233,7 @@ pub(crate) fn apply_dsa(
     // already) and the vote's candidates.
     let checks = Checks {
         zbuffer: zbuffer.as_ref(),
-        on_edge: on_edge.as_deref(),
+        on_edge,
         probs,
         color_w,
         color_h,
@@ -638,8 +638,8 @@ fn min_f32(a: f32, b: f32) -> f32 {
 impl<'a> ZBuffer<'a> {
     /// Splats the hits; [`ZBuffer::at`] then takes the nearest over the square of radius
     /// `r` around a pixel, the same as splatting every point's square. The hits' z are
-    /// > 0 and finite (`ColorProjection` gives no hit otherwise). `buffer` is all +∞ (any
-    /// length).
+    /// positive and finite (`ColorProjection` gives no hit otherwise). `buffer` is all
+    /// +∞ (any length).
     fn splat(
         hits: HitsView<'a>,
         r: usize,
