@@ -259,14 +259,14 @@ impl FrameProjector {
 
         let total: usize = chunks.iter().map(|c| c.len).sum();
         // Every entry below `total` is overwritten by pass 2: a reused buffer is only
-        // truncated or grown, never cleared.
+        // truncated or grown, never cleared. Grown in parallel, so that a fresh cloud's
+        // ~12 MB (3 Kinect v2 cameras) are first touched, page faults included, on every
+        // thread rather than on this one.
         out.colors = None;
-        out.positions_m.truncate(total);
-        out.positions_m.resize(total, [0.0; 3]);
-        out.labels.truncate(total);
-        out.labels.resize(total, Label::UNKNOWN);
-        out.origins.truncate(total);
-        out.origins.resize(
+        grow_to(&mut out.positions_m, total, [0.0; 3]);
+        grow_to(&mut out.labels, total, Label::UNKNOWN);
+        grow_to(
+            &mut out.origins,
             total,
             PointOrigin {
                 camera: 0,
@@ -366,6 +366,15 @@ impl FrameProjector {
                 });
         }
         Ok(())
+    }
+}
+
+/// Truncates or grows `v` to `len` entries, new ones `fill`, written in parallel.
+fn grow_to<T: Clone + Send + Sync>(v: &mut Vec<T>, len: usize, fill: T) {
+    v.truncate(len);
+    let more = len - v.len();
+    if more > 0 {
+        v.par_extend(rayon::iter::repeat_n(fill, more));
     }
 }
 
