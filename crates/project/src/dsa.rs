@@ -919,7 +919,7 @@ mod tests {
     fn zbuffer_is_the_nearest_point_within_the_radius() {
         let mut rng = Rng(0x5EED_0001);
         // One buffer for both radii: it must come back all +∞.
-        let mut keys = Vec::new();
+        let mut buffer = Vec::new();
         for r in [1, 2] {
             let n = 400;
             let hits = Hits {
@@ -946,7 +946,7 @@ mod tests {
                 cy: 0.0,
                 distortion: [0.0; 5],
             };
-            let zb = ZBuffer::splat(hits.view(), r, &color, &mut keys);
+            let zb = ZBuffer::splat(hits.view(), r, &color, &mut buffer);
             for i in 0..n {
                 let (u, v) = (hits.u[i], hits.v[i]);
                 if u == NO_HIT {
@@ -964,7 +964,7 @@ mod tests {
             }
             drop(zb);
             assert!(
-                keys.iter().all(|&z| z == f32::INFINITY),
+                buffer.iter().all(|&z| z == f32::INFINITY),
                 "r {r}: buffer not reset"
             );
         }

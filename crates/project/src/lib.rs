@@ -161,8 +161,8 @@ impl FrameProjector {
 
     /// [`FrameProjector::project_frame`] into `out`, whose allocations are reused: a
     /// caller that projects frame after frame (one cloud per worker) skips the
-    /// allocation and first-touch page faults of ~12 MB per 3-camera frame (bench: DSA
-    /// 11.3 ms fresh, 10.0–10.2 ms reused on 2 threads). On error `out` is left empty.
+    /// allocation and first-touch page faults of ~12 MB per 3-camera frame (the
+    /// `_reused` cases of the `project` bench). On error `out` is left empty.
     pub fn project_frame_into(
         &self,
         images: &[CameraImages<'_>],
