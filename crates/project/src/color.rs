@@ -58,6 +58,16 @@ pub(crate) struct HitsView<'a> {
     pub z_color_m: &'a [f32],
 }
 
+impl<'a> HitsView<'a> {
+    pub(crate) fn slice(self, r: std::ops::Range<usize>) -> HitsView<'a> {
+        HitsView {
+            u: &self.u[r.clone()],
+            v: &self.v[r.clone()],
+            z_color_m: &self.z_color_m[r],
+        }
+    }
+}
+
 impl Hits {
     pub(crate) fn zeroed(n: usize) -> Self {
         Hits {
@@ -68,15 +78,15 @@ impl Hits {
     }
 
     pub(crate) fn view(&self) -> HitsView<'_> {
-        self.slice(0..self.u.len())
+        HitsView {
+            u: &self.u,
+            v: &self.v,
+            z_color_m: &self.z_color_m,
+        }
     }
 
     pub(crate) fn slice(&self, r: std::ops::Range<usize>) -> HitsView<'_> {
-        HitsView {
-            u: &self.u[r.clone()],
-            v: &self.v[r.clone()],
-            z_color_m: &self.z_color_m[r],
-        }
+        self.view().slice(r)
     }
 }
 

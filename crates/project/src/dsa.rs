@@ -81,7 +81,7 @@ pub fn project_labels(
             labels,
             cfg,
             1,
-            &mut Vec::new(),
+            &mut DsaScratch::default(),
             &mut out,
         );
     }
@@ -116,10 +116,30 @@ pub(crate) fn depth_lut(camera: &RgbdCamera) -> Box<DepthLut> {
         .expect("one entry per u16")
 }
 
+/// Buffers of [`apply_dsa`] for one camera, kept from one frame to the next by
+/// [`crate::FrameProjector`] so that they are neither allocated nor page-faulted per
+/// frame (a fresh one works too).
+#[derive(Debug, Default)]
+pub(crate) struct DsaScratch {
+    /// The z-buffer, all +∞ between calls (see [`ZBuffer`]).
+    zbuffer: Vec<f32>,
+    /// Depth-edge flags per depth pixel and the min/max filters behind them.
+    edge: EdgeScratch,
+    /// Labels before the vote, per depth pixel.
+    by_pixel: Vec<Label>,
+    /// Per chunk of points: the (chunk-local) indices of the points the vote looks at.
+    candidates: Vec<Vec<u32>>,
+}
+
 /// Turns the naive labels `out` of one camera's points into the DSA labels (steps 1–4 of
 /// [`project_labels`]); `hits` and `origins` are those points'. `lut` is
 /// [`depth_lut`] of `camera`; `stride` is the back-projection's (points on every
 /// `stride`-th pixel and row): the vote's neighbours are the points of that grid.
+///
+/// Steps 1–3 and the vote's label-change test run in one pass over the points, which
+/// also records the labels per depth pixel (in parallel when the origins' pixels are
+/// strictly increasing, as back-projection gives them) and the points the vote has to
+/// look at; the vote then visits only those.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn apply_dsa(
     camera: &RgbdCamera,
@@ -130,117 +150,243 @@ pub(crate) fn apply_dsa(
     labels: &LabelImage,
     cfg: &ProjectConfig,
     stride: usize,
-    zkeys: &mut Vec<u32>,
+    scratch: &mut DsaScratch,
     out: &mut [Label],
 ) {
+    let DsaScratch {
+        zbuffer,
+        edge,
+        by_pixel,
+        candidates,
+    } = scratch;
+    let n = out.len();
     let color_w = labels.width as usize;
-    let zbuffer = cfg
-        .occlusion
-        .then(|| ZBuffer::splat(hits, cfg.splat_radius_px as usize, &camera.color, zkeys));
+    let (color_h, image) = (labels.height as usize, &labels.labels[..]);
     let depth_w = camera.depth.width as usize;
     let depth_h = camera.depth.height as usize;
-    let on_edge = cfg.depth_edge.then(|| {
-        edge_map(
-            depth_raw,
-            lut,
-            depth_w,
-            depth_h,
-            cfg.edge_radius_px as usize,
-            cfg.edge_jump_ratio,
-        )
-    });
+    let vote_on = cfg.label_boundary;
+    let r_vote = cfg.boundary_radius_px as usize;
+
+    // The z-buffer (serial) and the per-image tables (parallel) at once.
+    let ((zbuffer, on_edge), blocks) = rayon::join(
+        || {
+            rayon::join(
+                || {
+                    cfg.occlusion.then(|| {
+                        ZBuffer::splat(hits, cfg.splat_radius_px as usize, &camera.color, zbuffer)
+                    })
+                },
+                || {
+                    cfg.depth_edge.then(|| {
+                        edge.compute(
+                            depth_raw,
+                            lut,
+                            (depth_w, depth_h),
+                            cfg.edge_radius_px as usize,
+                            cfg.edge_jump_ratio,
+                        )
+                    })
+                },
+            )
+        },
+        || vote_on.then(|| UniformBlocks::new(image, color_w, color_h)),
+    );
     let probs = labels
         .probs
         .as_deref()
         .filter(|_| cfg.min_probability > 0.0);
 
-    // Steps 1–3: they only ever make a label unknown. One tight pass per check that is
-    // on (points without a hit are unknown already).
+    // Chunks of points; with strictly increasing origins, chunk k's points own the depth
+    // pixels from its first point's up to the next chunk's first point's.
     let chunk = POINTS_PER_CHUNK;
-    if let Some(zb) = &zbuffer {
-        out.par_chunks_mut(chunk)
-            .zip(hits.u.par_chunks(chunk))
-            .zip(hits.v.par_chunks(chunk))
-            .zip(hits.z_color_m.par_chunks(chunk))
-            .for_each(|(((out, hu), hv), hz)| {
-                for (((label, &u), &v), &z) in out.iter_mut().zip(hu).zip(hv).zip(hz) {
-                    if u != NO_HIT && {
-                        let nearest = f64::from(zb.at(u, v));
-                        f64::from(z)
-                            > nearest + cfg.occlusion_tol_m + cfg.occlusion_tol_ratio * nearest
-                    } {
-                        *label = Label::UNKNOWN;
-                    }
-                }
-            });
+    let n_chunks = n.div_ceil(chunk);
+    let sorted = vote_on && origins.windows(2).all(|p| p[0].pixel < p[1].pixel);
+    if vote_on {
+        by_pixel.resize(depth_w * depth_h, Label::UNKNOWN);
+        if !sorted {
+            by_pixel.fill(Label::UNKNOWN);
+        }
     }
-    if let Some(edge) = &on_edge {
-        out.par_chunks_mut(chunk)
-            .zip(origins.par_chunks(chunk))
-            .for_each(|(out, origins)| {
-                for (label, o) in out.iter_mut().zip(origins) {
-                    if edge[o.pixel as usize] {
-                        *label = Label::UNKNOWN;
-                    }
-                }
-            });
-    }
-    if let Some(probs) = probs {
-        out.par_chunks_mut(chunk)
-            .zip(hits.u.par_chunks(chunk))
-            .zip(hits.v.par_chunks(chunk))
-            .for_each(|((out, hu), hv)| {
-                for ((label, &u), &v) in out.iter_mut().zip(hu).zip(hv) {
-                    if u != NO_HIT && probs[v as usize * color_w + u as usize] < cfg.min_probability
-                    {
-                        *label = Label::UNKNOWN;
-                    }
-                }
-            });
-    }
-    if !cfg.label_boundary {
-        return;
+    candidates.resize_with(n_chunks, Vec::new);
+    let mut pixel_parts: Vec<Option<(usize, &mut [Label])>> = Vec::with_capacity(n_chunks);
+    {
+        let mut rest = &mut by_pixel[..];
+        let mut base = 0;
+        for k in 0..n_chunks {
+            if !sorted {
+                pixel_parts.push(None);
+                continue;
+            }
+            let end = if k + 1 < n_chunks {
+                origins[(k + 1) * chunk].pixel as usize
+            } else {
+                depth_w * depth_h
+            };
+            let (head, tail) = rest.split_at_mut(end - base);
+            pixel_parts.push(Some((base, head)));
+            rest = tail;
+            base = end;
+        }
     }
 
-    // Labels before the vote, per depth pixel (unknown where no point).
-    let mut by_pixel = vec![Label::UNKNOWN; depth_w * depth_h];
-    for (o, &l) in origins.iter().zip(out.iter()) {
-        by_pixel[o.pixel as usize] = l;
-    }
-    let r = cfg.boundary_radius_px as usize;
-    let (color_h, image) = (labels.height as usize, &labels.labels[..]);
-    let blocks = UniformBlocks::new(image, color_w, color_h);
+    // Steps 1–3 (they only ever make a label unknown; points without a hit are unknown
+    // already) and the vote's candidates.
+    let checks = Checks {
+        zbuffer: zbuffer.as_ref(),
+        on_edge,
+        probs,
+        color_w,
+        color_h,
+        image,
+        blocks: blocks.as_ref(),
+        r_vote,
+        tol_m: cfg.occlusion_tol_m,
+        tol_ratio: cfg.occlusion_tol_ratio,
+        min_probability: cfg.min_probability,
+    };
     out.par_chunks_mut(chunk)
-        .zip(hits.u.par_chunks(chunk))
-        .zip(hits.v.par_chunks(chunk))
-        .zip(origins.par_chunks(chunk))
-        .for_each(|(((out, hu), hv), origins)| {
-            for (((label, &u), &v), o) in out.iter_mut().zip(hu).zip(hv).zip(origins) {
-                let own = *label;
-                let Some(own_class) = own.class() else {
-                    continue;
-                };
-                // `own` is the label at the hit pixel (steps 1–3 only make labels
-                // unknown), so "a different label within the radius" is "the square
-                // holds a label other than `own`".
-                let (u, v) = (u as usize, v as usize);
-                if !blocks.may_hold_other(u, v, r, own)
-                    || !square_holds_other(image, color_w, color_h, (u, v), r, own)
-                {
-                    continue;
-                }
-                if let Some(best) = vote(
-                    o.pixel as usize,
-                    &by_pixel,
-                    (depth_raw, lut),
-                    (depth_w, depth_h, stride),
-                    cfg.edge_jump_ratio,
-                ) && best != own_class
-                {
-                    *label = Label::from(best);
+        .zip(candidates.par_iter_mut())
+        .zip(pixel_parts.into_par_iter())
+        .enumerate()
+        .for_each(|(k, ((out, cands), pixels))| {
+            let range = k * chunk..k * chunk + out.len();
+            cands.clear();
+            checks.run(
+                hits.slice(range.clone()),
+                &origins[range],
+                out,
+                pixels,
+                cands,
+            );
+        });
+    if !vote_on {
+        return;
+    }
+    if !sorted {
+        for (o, &l) in origins.iter().zip(out.iter()) {
+            by_pixel[o.pixel as usize] = l;
+        }
+    }
+
+    // Step 4 on the candidates, from the labels before the vote (`by_pixel`), while the
+    // z-buffer is reset (serial) beside it.
+    let by_pixel = &by_pixel[..];
+    rayon::join(
+        || drop(zbuffer),
+        || {
+            out.par_chunks_mut(chunk)
+                .zip(candidates.par_iter())
+                .enumerate()
+                .for_each(|(k, (out, cands))| {
+                    let origins = &origins[k * chunk..];
+                    for &i in cands {
+                        let i = i as usize;
+                        let own = out[i].class();
+                        if let Some(best) = vote(
+                            origins[i].pixel as usize,
+                            by_pixel,
+                            (depth_raw, lut),
+                            (depth_w, depth_h, stride),
+                            cfg.edge_jump_ratio,
+                        ) && Some(best) != own
+                        {
+                            out[i] = Label::from(best);
+                        }
+                    }
+                });
+        },
+    );
+}
+
+/// The per-point checks of [`apply_dsa`] (steps 1–3 and the vote's label-change test),
+/// each `None` when switched off.
+struct Checks<'a> {
+    zbuffer: Option<&'a ZBuffer<'a>>,
+    on_edge: Option<&'a [bool]>,
+    probs: Option<&'a [f32]>,
+    color_w: usize,
+    color_h: usize,
+    image: &'a [Label],
+    blocks: Option<&'a UniformBlocks>,
+    r_vote: usize,
+    tol_m: f64,
+    tol_ratio: f64,
+    min_probability: f32,
+}
+
+impl Checks<'_> {
+    /// Steps 1–3 on one chunk of points; with `pixels = Some((first pixel, labels))`,
+    /// the labels after them per depth pixel of the chunk's pixel range (unknown where
+    /// no point); with the vote on, the chunk-local indices of the points whose colour
+    /// pixel has a label change within the vote's radius pushed to `candidates`.
+    fn run(
+        &self,
+        hits: HitsView<'_>,
+        origins: &[PointOrigin],
+        out: &mut [Label],
+        pixels: Option<(usize, &mut [Label])>,
+        candidates: &mut Vec<u32>,
+    ) {
+        let n = out.len();
+        let (hu, hv, hz, origins) = (
+            &hits.u[..n],
+            &hits.v[..n],
+            &hits.z_color_m[..n],
+            &origins[..n],
+        );
+        if let Some(edge) = self.on_edge {
+            for (label, o) in out.iter_mut().zip(origins) {
+                if edge[o.pixel as usize] {
+                    *label = Label::UNKNOWN;
                 }
             }
-        });
+        }
+        if let Some(zb) = self.zbuffer {
+            for i in 0..n {
+                if hu[i] != NO_HIT && {
+                    let nearest = f64::from(zb.at(hu[i], hv[i]));
+                    f64::from(hz[i]) > nearest + self.tol_m + self.tol_ratio * nearest
+                } {
+                    out[i] = Label::UNKNOWN;
+                }
+            }
+        }
+        if let Some(probs) = self.probs {
+            for i in 0..n {
+                if hu[i] != NO_HIT
+                    && probs[hv[i] as usize * self.color_w + hu[i] as usize] < self.min_probability
+                {
+                    out[i] = Label::UNKNOWN;
+                }
+            }
+        }
+        if let Some((base, pixels)) = pixels {
+            pixels.fill(Label::UNKNOWN);
+            for (o, &l) in origins.iter().zip(out.iter()) {
+                pixels[o.pixel as usize - base] = l;
+            }
+        }
+        let Some(blocks) = self.blocks else {
+            return;
+        };
+        let r = self.r_vote;
+        for i in 0..n {
+            let own = out[i];
+            if own.is_unknown() {
+                continue;
+            }
+            // `own` is the label at the hit pixel (steps 1–3 only make labels unknown),
+            // so "a different label within the radius" is "the square holds a label
+            // other than `own`".
+            let (u, v) = (hu[i] as usize, hv[i] as usize);
+            if blocks.may_hold_other(u, v, r, own)
+                && square_holds_other(self.image, self.color_w, self.color_h, (u, v), r, own)
+            {
+                // Fits: a chunk holds `POINTS_PER_CHUNK` points.
+                candidates.push(i as u32);
+            }
+        }
+    }
 }
 
 /// The label-boundary vote at depth pixel `pixel`: the class held by strictly more of its
@@ -282,13 +428,19 @@ fn vote(
     clear.then(|| Class::from_id(best as u8)).flatten()
 }
 
-/// Per 8×8 block of a label image: its label when all its pixels hold it, else `None`
+/// Per 8×8 block of a label image: its label when all its pixels hold it, else unknown
 /// (also for blocks cut by the image border). A cheap exact pre-test for the
 /// label-change square of the vote: most points lie inside uniform regions.
 struct UniformBlocks {
     /// Blocks per row.
     bw: usize,
-    labels: Vec<Option<Label>>,
+    /// Per block its label if uniform, else [`Label::UNKNOWN`] (which the tests below
+    /// never take for a point's own label).
+    labels: Vec<Label>,
+    /// Per block: its label when it and its (up to 8) neighbouring blocks are all
+    /// uniformly that label, else unknown. The square of radius ≤ [`UniformBlocks::SIDE`]
+    /// around any pixel of the block lies within those blocks: one look-up per point.
+    around: Vec<Label>,
 }
 
 impl UniformBlocks {
@@ -298,49 +450,81 @@ impl UniformBlocks {
     fn new(image: &[Label], w: usize, h: usize) -> Self {
         let s = Self::SIDE;
         let (bw, bh) = (w.div_ceil(s), h.div_ceil(s));
-        let mut labels = vec![None; bw * bh];
+        let mut labels = vec![Label::UNKNOWN; bw * bh];
+        // Per block, the label when its 3 blocks of the row (itself and the ones left
+        // and right of it, where they exist) are all uniformly that label.
+        let mut in_row = vec![Label::UNKNOWN; bw * bh];
         labels
             .par_chunks_mut(bw.max(1))
+            .zip(in_row.par_chunks_mut(bw.max(1)))
             .enumerate()
-            .for_each(|(by, out)| {
+            .for_each(|(by, (out, in_row))| {
                 if (by + 1) * s > h {
                     return;
                 }
                 // Whole blocks of this block row (a block cut by the right border stays
-                // `None`): OR over its 8 rows of (8 labels XOR its first label).
+                // unknown). Per column, the OR over the block row's rows of (label XOR
+                // the top row's label): a plain byte loop, which vectorises; then a
+                // block is uniform when its 8 columns are 0 there and its top row holds
+                // one label.
                 let rows = &image[by * s * w..(by + 1) * s * w];
-                let firsts: Vec<u64> = rows[..w]
-                    .chunks_exact(s)
-                    .map(|c| u64::from_le_bytes([c[0].id(); 8]))
-                    .collect();
-                let mut diff = vec![0u64; firsts.len()];
-                for row in rows.chunks_exact(w) {
-                    for ((d, &f), c) in diff.iter_mut().zip(&firsts).zip(row.chunks_exact(s)) {
-                        *d |= word(c) ^ f;
+                let top = &rows[..w];
+                let mut diff = vec![0u8; w];
+                for row in rows.chunks_exact(w).skip(1) {
+                    for ((d, &l), &t) in diff.iter_mut().zip(row).zip(top) {
+                        *d |= l.id() ^ t.id();
                     }
                 }
-                for ((out, &d), c) in out.iter_mut().zip(&diff).zip(rows[..w].chunks_exact(s)) {
-                    *out = (d == 0).then_some(c[0]);
+                for ((out, d), t) in out
+                    .iter_mut()
+                    .zip(diff.chunks_exact(s))
+                    .zip(top.chunks_exact(s))
+                {
+                    let first = u64::from_le_bytes([t[0].id(); 8]);
+                    let d = u64::from_le_bytes(d.try_into().expect("8 columns"));
+                    if d == 0 && word(t) == first {
+                        *out = t[0];
+                    }
+                }
+                for (bx, o) in in_row.iter_mut().enumerate() {
+                    let l = out[bx];
+                    let left = bx == 0 || out[bx - 1] == l;
+                    let right = bx + 1 == out.len() || out[bx + 1] == l;
+                    *o = if left && right { l } else { Label::UNKNOWN };
                 }
             });
-        UniformBlocks { bw, labels }
+        // Then the same along columns, over the rows' results.
+        let mut around = vec![Label::UNKNOWN; bw * bh];
+        around
+            .par_chunks_mut(bw.max(1))
+            .enumerate()
+            .for_each(|(by, out)| {
+                let row = |y: usize| &in_row[y * bw..(y + 1) * bw];
+                let here = row(by);
+                let above = row(by.saturating_sub(1));
+                let below = row((by + 1).min(bh - 1));
+                for (((o, &l), &a), &b) in out.iter_mut().zip(here).zip(above).zip(below) {
+                    *o = if a == l && b == l { l } else { Label::UNKNOWN };
+                }
+            });
+        UniformBlocks { bw, labels, around }
     }
 
     /// False when the square of radius `r` around `(u, v)` (inside the image) certainly
-    /// holds `own` only: every block it touches is uniformly `own`.
+    /// holds `own` (a class, not unknown) only: every block it touches is uniformly
+    /// `own`.
     #[inline]
     fn may_hold_other(&self, u: usize, v: usize, r: usize, own: Label) -> bool {
         let s = Self::SIDE;
+        if r <= s {
+            return self.around[(v / s) * self.bw + u / s] != own;
+        }
         let (bx0, bx1) = (u.saturating_sub(r) / s, (u + r) / s);
         let (by0, by1) = (v.saturating_sub(r) / s, (v + r) / s);
         if bx1 >= self.bw {
             return true;
         }
-        let other = |by: usize, bx: usize| self.labels.get(by * self.bw + bx) != Some(&Some(own));
-        if 2 * r < s {
-            // At most 2 × 2 blocks (the default radius 2): their corners are all.
-            return other(by0, bx0) || other(by0, bx1) || other(by1, bx0) || other(by1, bx1);
-        }
+        let other = |by: usize, bx: usize| self.labels.get(by * self.bw + bx) != Some(&own);
         (by0..=by1).any(|by| (bx0..=bx1).any(|bx| other(by, bx)))
     }
 }
@@ -422,86 +606,113 @@ fn any_row_in_square(
 }
 
 /// Nearest colour-frame depth per colour pixel over the splat squares of all points, on
-/// a buffer of the colour image's size plus a margin of `r` pixels on every side, so that
-/// a query never clips.
+/// a buffer of the colour image's size plus a margin of `r` pixels on every side (and one
+/// more column), so that neither a splat nor a query clips.
 ///
-/// Depths are stored as `!z.to_bits()`: for positive finite f32 the bit patterns order
-/// as the values, so the nearest depth is the largest key, and "no point" is key 0. The
-/// buffer is borrowed all zero and given back all zero (on drop, the splatted cells are
-/// reset): kept across frames, it is neither allocated nor cleared per frame.
+/// The square is split in two: each point is splatted into the `2r + 1` cells of its
+/// row centred on its pixel (for r = 1 one 4-wide SIMD min, the 4th lane +∞), and a query
+/// takes the nearest over the `2r + 1` cells of its column centred on its pixel: the
+/// nearest over the square, with `2r + 1` loads instead of `(2r + 1)²`.
+///
+/// Depths are stored as f32 metres, +∞ for "no point". The buffer is borrowed all +∞
+/// and given back all +∞ (on drop, the splatted cells are reset): kept across frames, it
+/// is neither allocated nor cleared per frame.
 struct ZBuffer<'a> {
-    /// Row length of `key`: the image width plus 2r.
+    /// Row length of `z_m`: the image width plus 2r + 1.
     stride: usize,
     /// Splat radius.
     r: usize,
-    /// Per pixel the key of the nearest point whose pixel this is (the splats' centres).
-    key: &'a mut [u32],
+    /// Per cell (row `v + r`, column `c`) the depth of the nearest point on row v whose
+    /// column is within r of `c - r`.
+    z_m: &'a mut [f32],
     hits: HitsView<'a>,
 }
 
+/// The smaller of `a` and `b` (`b` if equal): one `minss`, which `f32::min` is not (it
+/// handles NaN, which the z-buffer never holds).
+#[inline(always)]
+fn min_f32(a: f32, b: f32) -> f32 {
+    if b < a { b } else { a }
+}
+
 impl<'a> ZBuffer<'a> {
-    /// The nearest z per pixel; [`ZBuffer::at`] takes the nearest over the square of
-    /// radius `r` around a pixel, the same as splatting every point's square. The hits'
-    /// z are > 0 and finite (`ColorProjection` gives no hit otherwise). `keys` is all
-    /// zero (any length).
+    /// Splats the hits; [`ZBuffer::at`] then takes the nearest over the square of radius
+    /// `r` around a pixel, the same as splatting every point's square. The hits' z are
+    /// positive and finite (`ColorProjection` gives no hit otherwise). `buffer` is all
+    /// +∞ (any length).
     fn splat(
         hits: HitsView<'a>,
         r: usize,
         color: &bodyseg_calib::Intrinsics,
-        keys: &'a mut Vec<u32>,
+        buffer: &'a mut Vec<f32>,
     ) -> Self {
-        let stride = color.width as usize + 2 * r;
+        let stride = color.width as usize + 2 * r + 1;
         let len = stride * (color.height as usize + 2 * r);
-        if keys.len() != len {
-            keys.clear();
-            keys.resize(len, 0);
+        if buffer.len() != len {
+            buffer.clear();
+            buffer.resize(len, f32::INFINITY);
         }
+        let side = 2 * r + 1;
         for ((&u, &v), &z) in hits.u.iter().zip(hits.v).zip(hits.z_color_m) {
             if u != NO_HIT {
-                let cell = &mut keys[(v as usize + r) * stride + u as usize + r];
-                *cell = (*cell).max(!z.to_bits());
+                // Columns u - r ..= u + r of row v, in the padded buffer.
+                let start = (v as usize + r) * stride + u as usize;
+                if r == 1 {
+                    let cells: &mut [f32; 4] =
+                        (&mut buffer[start..start + 4]).try_into().expect("4 wide");
+                    let z4 = [z, z, z, f32::INFINITY];
+                    for (c, z) in cells.iter_mut().zip(z4) {
+                        *c = min_f32(*c, z);
+                    }
+                } else {
+                    for c in &mut buffer[start..start + side] {
+                        *c = min_f32(*c, z);
+                    }
+                }
             }
         }
         ZBuffer {
             stride,
             r,
-            key: keys,
+            z_m: buffer,
             hits,
         }
     }
 
     /// The z-buffer at colour pixel (u, v), one of the points' pixels (so the square
-    /// holds at least that point, and the key is not 0).
+    /// holds at least that point, and the result is finite).
     #[inline]
     fn at(&self, u: u32, v: u32) -> f32 {
-        // Top-left corner of the square in the padded buffer.
-        let corner = v as usize * self.stride + u as usize;
-        let side = 2 * self.r + 1;
-        let mut best = 0;
-        if side == 3 {
-            // The default radius 1, unrolled.
-            for dv in 0..3 {
-                let start = corner + dv * self.stride;
-                let row: &[u32; 3] = self.key[start..start + 3].try_into().expect("3 wide");
-                best = best.max(row[0]).max(row[1]).max(row[2]);
-            }
-        } else {
-            for dv in 0..side {
-                let start = corner + dv * self.stride;
-                best = self.key[start..start + side]
-                    .iter()
-                    .fold(best, |b, &k| b.max(k));
-            }
+        // Column u of rows v - r ..= v + r, in the padded buffer.
+        let top = v as usize * self.stride + u as usize + self.r;
+        if self.r == 1 {
+            let s = self.stride;
+            return min_f32(
+                min_f32(self.z_m[top], self.z_m[top + s]),
+                self.z_m[top + 2 * s],
+            );
         }
-        f32::from_bits(!best)
+        (0..=2 * self.r).fold(f32::INFINITY, |b, k| {
+            min_f32(b, self.z_m[top + k * self.stride])
+        })
     }
 }
 
 impl Drop for ZBuffer<'_> {
     fn drop(&mut self) {
+        let (r, stride) = (self.r, self.stride);
         for (&u, &v) in self.hits.u.iter().zip(self.hits.v) {
             if u != NO_HIT {
-                self.key[(v as usize + self.r) * self.stride + u as usize + self.r] = 0;
+                let start = (v as usize + r) * stride + u as usize;
+                if r == 1 {
+                    // All 4 lanes of the splat (the 4th is reset too, harmlessly).
+                    let cells: &mut [f32; 4] = (&mut self.z_m[start..start + 4])
+                        .try_into()
+                        .expect("4 wide");
+                    *cells = [f32::INFINITY; 4];
+                } else {
+                    self.z_m[start..start + 2 * r + 1].fill(f32::INFINITY);
+                }
             }
         }
     }
@@ -516,6 +727,7 @@ impl Drop for ZBuffer<'_> {
 /// function of the raw value (`lut`), so those are the depths of the window's largest
 /// and smallest raw values. The min/max filter (separable) therefore runs on the raw
 /// `u16`s, 8 to a SIMD register.
+#[cfg(test)]
 fn edge_map(
     depth_raw: &[u16],
     lut: &DepthLut,
@@ -524,62 +736,86 @@ fn edge_map(
     r: usize,
     ratio: f64,
 ) -> Vec<bool> {
-    if w == 0 || h == 0 {
-        return vec![false; w * h];
-    }
-    // Raw values with a depth are exactly those from the first one with a depth on
-    // (non-decreasing metres: once > 0, always > 0).
-    let first_valid = lut.iter().position(|z| !z.is_nan()).unwrap_or(lut.len()) as u32;
-    // Pixels without depth are skipped: u16::MAX for the minimum, 0 for the maximum (a
-    // pixel with depth is in its own window, so they never change its result).
-    let mut lo = vec![0u16; w * h];
-    let mut hi = vec![0u16; w * h];
-    lo.par_chunks_mut(w)
-        .zip(hi.par_chunks_mut(w))
-        .zip(depth_raw.par_chunks(w))
-        .for_each(|((lo, hi), src)| {
-            for ((l, h), &raw) in lo.iter_mut().zip(hi.iter_mut()).zip(src) {
-                let valid = u32::from(raw) >= first_valid;
-                *l = if valid { raw } else { u16::MAX };
-                *h = if valid { raw } else { 0 };
+    EdgeScratch::default()
+        .compute(depth_raw, lut, (w, h), r, ratio)
+        .to_vec()
+}
+
+/// The buffers of [`edge_map`]: its result and the min / max filters of the raw depths.
+#[derive(Debug, Default)]
+pub(crate) struct EdgeScratch {
+    lo: Vec<u16>,
+    hi: Vec<u16>,
+    on_edge: Vec<bool>,
+}
+
+impl EdgeScratch {
+    /// [`edge_map`] into these buffers (every entry overwritten).
+    fn compute(
+        &mut self,
+        depth_raw: &[u16],
+        lut: &DepthLut,
+        (w, h): (usize, usize),
+        r: usize,
+        ratio: f64,
+    ) -> &[bool] {
+        let EdgeScratch { lo, hi, on_edge } = self;
+        on_edge.resize(w * h, false);
+        if w == 0 || h == 0 {
+            return on_edge;
+        }
+        // Raw values with a depth are exactly those from the first one with a depth on
+        // (non-decreasing metres: once > 0, always > 0).
+        let first_valid = lut.iter().position(|z| !z.is_nan()).unwrap_or(lut.len()) as u32;
+        // Pixels without depth are skipped: u16::MAX for the minimum, 0 for the maximum
+        // (a pixel with depth is in its own window, so they never change its result).
+        lo.resize(w * h, 0);
+        hi.resize(w * h, 0);
+        lo.par_chunks_mut(w)
+            .zip(hi.par_chunks_mut(w))
+            .zip(depth_raw.par_chunks(w))
+            .for_each(|((lo, hi), src)| {
+                for ((l, h), &raw) in lo.iter_mut().zip(hi.iter_mut()).zip(src) {
+                    let valid = u32::from(raw) >= first_valid;
+                    *l = if valid { raw } else { u16::MAX };
+                    *h = if valid { raw } else { 0 };
+                }
+                let (l0, h0) = (lo.to_vec(), hi.to_vec());
+                for k in 1..=r.min(w - 1) {
+                    min_into(&mut lo[k..], &l0[..w - k]);
+                    min_into(&mut lo[..w - k], &l0[k..]);
+                    max_into(&mut hi[k..], &h0[..w - k]);
+                    max_into(&mut hi[..w - k], &h0[k..]);
+                }
+            });
+        let (lo, hi) = (&lo[..], &hi[..]);
+        on_edge.par_chunks_mut(w).enumerate().for_each(|(v, dst)| {
+            let (v0, v1) = (v.saturating_sub(r), (v + r).min(h - 1));
+            let mut a = lo[v0 * w..(v0 + 1) * w].to_vec();
+            let mut b = hi[v0 * w..(v0 + 1) * w].to_vec();
+            for vn in v0 + 1..=v1 {
+                min_into(&mut a, &lo[vn * w..(vn + 1) * w]);
+                max_into(&mut b, &hi[vn * w..(vn + 1) * w]);
             }
-            let (l0, h0) = (lo.to_vec(), hi.to_vec());
-            for k in 1..=r.min(w - 1) {
-                min_into(&mut lo[k..], &l0[..w - k]);
-                min_into(&mut lo[..w - k], &l0[k..]);
-                max_into(&mut hi[k..], &h0[..w - k]);
-                max_into(&mut hi[..w - k], &h0[k..]);
+            for (((d, &raw), &a), &b) in dst
+                .iter_mut()
+                .zip(&depth_raw[v * w..(v + 1) * w])
+                .zip(&a)
+                .zip(&b)
+            {
+                // a ≤ raw ≤ b, all with depth; the largest |zn − z| is zb − z or z − za.
+                let (z, za, zb) = (
+                    lut[usize::from(raw)],
+                    lut[usize::from(a)],
+                    lut[usize::from(b)],
+                );
+                let jump = ratio * z;
+                *d = u32::from(raw) >= first_valid
+                    && ((zb - z).abs() > jump || (za - z).abs() > jump);
             }
         });
-    let mut out = vec![false; w * h];
-    out.par_chunks_mut(w).enumerate().for_each(|(v, dst)| {
-        let (v0, v1) = (v.saturating_sub(r), (v + r).min(h - 1));
-        let mut a = lo[v0 * w..(v0 + 1) * w].to_vec();
-        let mut b = hi[v0 * w..(v0 + 1) * w].to_vec();
-        for vn in v0 + 1..=v1 {
-            min_into(&mut a, &lo[vn * w..(vn + 1) * w]);
-            max_into(&mut b, &hi[vn * w..(vn + 1) * w]);
-        }
-        for (((d, &raw), &a), &b) in dst
-            .iter_mut()
-            .zip(&depth_raw[v * w..(v + 1) * w])
-            .zip(&a)
-            .zip(&b)
-        {
-            if u32::from(raw) < first_valid {
-                continue;
-            }
-            // a ≤ raw ≤ b, all with depth; the largest |zn − z| is zb − z or z − za.
-            let (z, za, zb) = (
-                lut[usize::from(raw)],
-                lut[usize::from(a)],
-                lut[usize::from(b)],
-            );
-            let jump = ratio * z;
-            *d = (zb - z).abs() > jump || (za - z).abs() > jump;
-        }
-    });
-    out
+        on_edge
+    }
 }
 
 fn min_into(dst: &mut [u16], src: &[u16]) {
@@ -682,8 +918,8 @@ mod tests {
     #[test]
     fn zbuffer_is_the_nearest_point_within_the_radius() {
         let mut rng = Rng(0x5EED_0001);
-        // One buffer for both radii: it must come back all zero.
-        let mut keys = Vec::new();
+        // One buffer for both radii: it must come back all +∞.
+        let mut buffer = Vec::new();
         for r in [1, 2] {
             let n = 400;
             let hits = Hits {
@@ -710,7 +946,7 @@ mod tests {
                 cy: 0.0,
                 distortion: [0.0; 5],
             };
-            let zb = ZBuffer::splat(hits.view(), r, &color, &mut keys);
+            let zb = ZBuffer::splat(hits.view(), r, &color, &mut buffer);
             for i in 0..n {
                 let (u, v) = (hits.u[i], hits.v[i]);
                 if u == NO_HIT {
@@ -727,7 +963,10 @@ mod tests {
                 assert_eq!(zb.at(u, v), want, "({u}, {v}) r {r}");
             }
             drop(zb);
-            assert!(keys.iter().all(|&k| k == 0), "r {r}: buffer not reset");
+            assert!(
+                buffer.iter().all(|&z| z == f32::INFINITY),
+                "r {r}: buffer not reset"
+            );
         }
     }
 

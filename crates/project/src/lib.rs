@@ -38,7 +38,7 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 
 use crate::color::{ColorProjection, Hits};
-use crate::dsa::{DepthLut, apply_dsa, check_images, depth_lut, naive_labels};
+use crate::dsa::{DepthLut, DsaScratch, apply_dsa, check_images, depth_lut, naive_labels};
 
 /// One camera's images of a frame: the raw depth image (depth sensor size) and the
 /// parser's label image (colour sensor size).
@@ -90,15 +90,15 @@ impl Clone for FrameProjector {
 struct Scratch {
     /// Where every point lands in its colour image (contents overwritten every frame).
     hits: Hits,
-    /// Per camera the z-buffer keys, all zero between frames (see `dsa::ZBuffer`).
-    zkeys: Vec<Vec<u32>>,
+    /// Per camera the DSA stage's buffers (z-buffer, edge map, labels per pixel).
+    dsa: Vec<DsaScratch>,
 }
 
 impl std::fmt::Debug for Scratch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Scratch")
             .field("points", &self.hits.u.len())
-            .field("zbuffers", &self.zkeys.len())
+            .field("cameras", &self.dsa.len())
             .finish()
     }
 }
@@ -161,8 +161,8 @@ impl FrameProjector {
 
     /// [`FrameProjector::project_frame`] into `out`, whose allocations are reused: a
     /// caller that projects frame after frame (one cloud per worker) skips the
-    /// allocation and first-touch page faults of ~12 MB per 3-camera frame (bench: DSA
-    /// 11.3 ms fresh, 10.0–10.2 ms reused on 2 threads). On error `out` is left empty.
+    /// allocation and first-touch page faults of ~12 MB per 3-camera frame (the
+    /// `_reused` cases of the `project` bench). On error `out` is left empty.
     pub fn project_frame_into(
         &self,
         images: &[CameraImages<'_>],
@@ -259,14 +259,14 @@ impl FrameProjector {
 
         let total: usize = chunks.iter().map(|c| c.len).sum();
         // Every entry below `total` is overwritten by pass 2: a reused buffer is only
-        // truncated or grown, never cleared.
+        // truncated or grown, never cleared. Grown in parallel, so that a fresh cloud's
+        // ~12 MB (3 Kinect v2 cameras) are first touched, page faults included, on every
+        // thread rather than on this one.
         out.colors = None;
-        out.positions_m.truncate(total);
-        out.positions_m.resize(total, [0.0; 3]);
-        out.labels.truncate(total);
-        out.labels.resize(total, Label::UNKNOWN);
-        out.origins.truncate(total);
-        out.origins.resize(
+        grow_to(&mut out.positions_m, total, [0.0; 3]);
+        grow_to(&mut out.labels, total, Label::UNKNOWN);
+        grow_to(
+            &mut out.origins,
             total,
             PointOrigin {
                 camera: 0,
@@ -340,14 +340,16 @@ impl FrameProjector {
                 label_parts.push(head);
                 rest = tail;
             }
-            scratch.zkeys.resize_with(self.cameras.len(), Vec::new);
+            scratch
+                .dsa
+                .resize_with(self.cameras.len(), DsaScratch::default);
             let hits = &scratch.hits;
             label_parts
                 .into_par_iter()
                 .zip(ranges.into_par_iter())
-                .zip(scratch.zkeys.par_iter_mut())
+                .zip(scratch.dsa.par_iter_mut())
                 .enumerate()
-                .for_each(|(c, ((labels_out, range), zkeys))| {
+                .for_each(|(c, ((labels_out, range), dsa_scratch))| {
                     let t = &self.cameras[c];
                     apply_dsa(
                         &t.camera,
@@ -358,12 +360,21 @@ impl FrameProjector {
                         images[c].labels,
                         cfg,
                         stride,
-                        zkeys,
+                        dsa_scratch,
                         labels_out,
                     );
                 });
         }
         Ok(())
+    }
+}
+
+/// Truncates or grows `v` to `len` entries, new ones `fill`, written in parallel.
+fn grow_to<T: Clone + Send + Sync>(v: &mut Vec<T>, len: usize, fill: T) {
+    v.truncate(len);
+    let more = len - v.len();
+    if more > 0 {
+        v.par_extend(rayon::iter::repeat_n(fill, more));
     }
 }
 
@@ -477,7 +488,7 @@ impl CameraTables {
         // a plain loop that vectorises.
         let (mut x, mut y, mut z) = (vec![0.0; w], vec![0.0; w], vec![0.0; w]);
         let mut cols = vec![0u32; w];
-        let mut hits = Hits::zeroed(w);
+        let mut hits = Hits::zeroed(if part.hits.is_some() { 0 } else { w });
         let mut k = 0;
         for v in rows.step_by(stride) {
             let row = v * w..(v + 1) * w;
@@ -516,14 +527,18 @@ impl CameraTables {
                     pixel: (v * w) as u32 + u,
                 };
             }
-            let (hu, hv, hz) = (&mut hits.u[..n], &mut hits.v[..n], &mut hits.z_color_m[..n]);
+            // Straight into the frame's hits when the DSA checks need them, else into
+            // this row's.
+            let (hu, hv, hz) = match part.hits.as_mut() {
+                Some(all) => (
+                    &mut all.u[out.clone()],
+                    &mut all.v[out.clone()],
+                    &mut all.z_color_m[out.clone()],
+                ),
+                None => (&mut hits.u[..n], &mut hits.v[..n], &mut hits.z_color_m[..n]),
+            };
             self.color.project_batch(x, y, z, hu, hv, hz);
-            naive_labels(hu, hv, images.labels, &mut part.labels[out.clone()]);
-            if let Some(all) = part.hits.as_mut() {
-                all.u[out.clone()].copy_from_slice(hu);
-                all.v[out.clone()].copy_from_slice(hv);
-                all.z_color_m[out].copy_from_slice(hz);
-            }
+            naive_labels(hu, hv, images.labels, &mut part.labels[out]);
         }
         debug_assert_eq!(k, part.labels.len());
     }

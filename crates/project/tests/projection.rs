@@ -394,6 +394,32 @@ fn label_boundary_vote_repairs_bleeding() {
     assert!(naive > 0);
     assert_eq!(no_vote, naive, "no depth edge or occlusion on one plane");
     assert!(vote < no_vote);
+
+    // The same labels whatever the points' order: with origins not increasing, the
+    // labels per depth pixel that the vote reads are gathered another way.
+    let cfg = ProjectConfig::default();
+    let forward = project_labels(
+        &camera,
+        &cloud.points_m,
+        &cloud.origins,
+        &depth_raw,
+        &labels,
+        &cfg,
+    )
+    .expect("valid inputs");
+    let points_rev: Vec<_> = cloud.points_m.iter().rev().copied().collect();
+    let origins_rev: Vec<_> = cloud.origins.iter().rev().copied().collect();
+    let mut backward = project_labels(
+        &camera,
+        &points_rev,
+        &origins_rev,
+        &depth_raw,
+        &labels,
+        &cfg,
+    )
+    .expect("valid inputs");
+    backward.reverse();
+    assert_eq!(backward, forward);
 }
 
 #[test]
