@@ -3,26 +3,19 @@
 //! points from one fixed viewpoint, coloured by input labels, clusters, and each
 //! configuration's labels.
 
-use bodyseg_calib::{Intrinsics, Pose, RgbdCamera, Rig};
+use bodyseg_calib::{RgbdCamera, Rig};
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label, LabelImage, LabeledCloud, PersonBox, RgbImage};
+use bodyseg_project::ColorProjection;
 
 /// Draws a cloud's labels into one camera's colour image: each point of that camera goes
-/// through `colour_from_world` and the colour intrinsics (distortion included) and covers
-/// a small square (the colour image is denser than the depth image), the nearest point
-/// winning. In f32: a pixel is a few millimetres at these depths, far above f32's error,
-/// and this runs on every point of every frame.
+/// through `colour_from_world` and the colour intrinsics (bodyseg-project's f32
+/// [`ColorProjection`], distortion included) to its nearest colour pixel and covers a
+/// small square around it (the colour image is denser than the depth image), the nearest
+/// point winning.
 #[derive(Clone, Debug)]
 pub struct LabelView {
-    /// `colour_from_world` rotation (rows) and translation, metres.
-    rotation: [[f32; 3]; 3],
-    translation_m: [f32; 3],
-    /// fx, fy, cx, cy (pixels) of the colour sensor.
-    focal: [f32; 4],
-    /// k1 k2 p1 p2 k3 of the colour sensor.
-    distortion: [f32; 5],
-    width: u32,
-    height: u32,
+    projection: ColorProjection,
     splat_radius_px: i64,
 }
 
@@ -30,42 +23,17 @@ impl LabelView {
     /// The view of `camera`; `stride` is the back-projection stride (sparser points need
     /// larger squares).
     pub fn new(camera: &RgbdCamera, stride: u32) -> LabelView {
-        let color_from_world: Pose = camera
+        let color_from_world = camera
             .color_from_depth
             .compose(&camera.world_from_depth.inverse());
         // Spacing of neighbouring depth points in the colour image, pixels: the focal
         // length ratio times the stride. Squares of side 2r+1 >= spacing leave no holes.
         let spacing = camera.color.fx / camera.depth.fx.max(1e-9) * f64::from(stride.max(1));
         let splat_radius_px = (((spacing - 1.0) / 2.0).ceil() as i64).clamp(1, 8);
-        let c: &Intrinsics = &camera.color;
         LabelView {
-            rotation: color_from_world.rotation().map(|r| r.map(|v| v as f32)),
-            translation_m: color_from_world.translation_m().map(|v| v as f32),
-            focal: [c.fx, c.fy, c.cx, c.cy].map(|v| v as f32),
-            distortion: c.distortion.map(|v| v as f32),
-            width: c.width,
-            height: c.height,
+            projection: ColorProjection::from_pose(&color_from_world, &camera.color),
             splat_radius_px,
         }
-    }
-
-    /// The colour pixel (rounded) and depth of a world point; `None` behind the camera.
-    fn pixel(&self, p: Vec3) -> Option<(i64, i64, f32)> {
-        let r = &self.rotation;
-        let t = &self.translation_m;
-        let c = [0, 1, 2].map(|i| r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2] + t[i]);
-        if c[2].is_nan() || c[2] <= 0.0 {
-            return None;
-        }
-        let (x, y) = (c[0] / c[2], c[1] / c[2]);
-        let [k1, k2, p1, p2, k3] = self.distortion;
-        let r2 = x * x + y * y;
-        let radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-        let xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-        let yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-        let [fx, fy, cx, cy] = self.focal;
-        let (u, v) = (fx * xd + cx, fy * yd + cy);
-        (u.is_finite() && v.is_finite()).then(|| (u.round() as i64, v.round() as i64, c[2]))
     }
 
     /// The labels of `cloud`'s points from camera `camera` drawn into its colour image;
@@ -85,12 +53,13 @@ impl LabelView {
         z_buffer: &mut Vec<f32>,
         image: &mut LabelImage,
     ) {
-        let (w, h) = (i64::from(self.width), i64::from(self.height));
+        let (width, height) = self.projection.size_px();
+        let (w, h) = (i64::from(width), i64::from(height));
         let n = (w * h) as usize;
         z_buffer.clear();
         z_buffer.resize(n, f32::INFINITY);
-        image.width = self.width;
-        image.height = self.height;
+        image.width = width;
+        image.height = height;
         image.probs = None;
         let labels = &mut image.labels;
         labels.clear();
@@ -105,9 +74,10 @@ impl LabelView {
             if o.camera != camera {
                 continue;
             }
-            let Some((u, v, z)) = self.pixel(*p) else {
+            let Some((u, v, z)) = self.projection.nearest_pixel(*p) else {
                 continue;
             };
+            let (u, v) = (i64::from(u), i64::from(v));
             for y in (v - r).max(0)..=(v + r).min(h - 1) {
                 for x in (u - r).max(0)..=(u + r).min(w - 1) {
                     let i = (y * w + x) as usize;
@@ -423,6 +393,7 @@ fn draw_text(rgb: &mut [u8], width: u32, x0: u32, panel_width: u32, text: &str) 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use bodyseg_calib::Intrinsics;
     use bodyseg_core::PointOrigin;
 
     fn camera() -> RgbdCamera {

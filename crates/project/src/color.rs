@@ -12,7 +12,7 @@
 //! two pixels' labels differ. On the `project` bench frame (553 877 points) the labels
 //! are identical to the former f64 path in both modes.
 
-use bodyseg_calib::RgbdCamera;
+use bodyseg_calib::{Intrinsics, Pose, RgbdCamera};
 
 /// Largest difference, colour pixels, between [`ColorProjection`] and the f64
 /// [`bodyseg_calib::Intrinsics::project`] of the same depth point, over the image.
@@ -24,9 +24,11 @@ pub(crate) const F32_TOLERANCE_PX: f64 = 1e-3;
 /// `u` of a point that lands outside the colour image or behind the colour camera.
 pub(crate) const NO_HIT: u32 = u32::MAX;
 
-/// `color_from_depth` and the colour intrinsics of one camera, in f32.
+/// A pose into the colour frame (`color_from_depth` for the projection; any
+/// `color_from_x`, e.g. `color_from_world` to draw a world cloud back into a camera) and
+/// the colour intrinsics, in f32: where a point lands in the colour image.
 #[derive(Debug, Clone)]
-pub(crate) struct ColorProjection {
+pub struct ColorProjection {
     rotation: [[f32; 3]; 3],
     translation_m: [f32; 3],
     fx: f32,
@@ -91,9 +93,15 @@ impl Hits {
 }
 
 impl ColorProjection {
-    pub(crate) fn new(camera: &RgbdCamera) -> Self {
-        let c = &camera.color;
-        let pose = &camera.color_from_depth;
+    /// The projection of `camera`'s depth-frame points (`color_from_depth`).
+    pub fn new(camera: &RgbdCamera) -> Self {
+        Self::from_pose(&camera.color_from_depth, &camera.color)
+    }
+
+    /// The projection of points of frame `x` into the colour image described by
+    /// `color`, through `color_from_x`.
+    pub fn from_pose(color_from_x: &Pose, color: &Intrinsics) -> Self {
+        let (c, pose) = (color, color_from_x);
         ColorProjection {
             rotation: pose.rotation().map(|row| row.map(|x| x as f32)),
             translation_m: pose.translation_m().map(|x| x as f32),
@@ -125,21 +133,52 @@ impl ColorProjection {
         // Equal lengths up front so the loop below has no bounds checks and vectorises.
         let (y, z) = (&y[..n], &z[..n]);
         let (out_u, out_v, z_color_m) = (&mut out_u[..n], &mut out_v[..n], &mut z_color_m[..n]);
-        let u_end = self.width as f32 - 0.5;
-        let v_end = self.height as f32 - 0.5;
-        // Clamped to 2²³ (f32 pixel coordinates are whole numbers from there on: no camera
-        // is that wide) so that `round_index` stays exact.
-        let w_last = (self.width - 1).min(1 << 23) as f32;
-        let h_last = (self.height - 1).min(1 << 23) as f32;
+        let bounds = self.bounds();
         for i in 0..n {
-            let [u, v, zc] = self.uv_z([x[i], y[i], z[i]]);
-            // NaN and ±∞ (zc = 0, non-finite input) fail every comparison.
-            let inside = (zc > 0.0) & (u >= -0.5) & (v >= -0.5) & (u < u_end) & (v < v_end);
-            let (ui, vi) = (round_index(u, w_last), round_index(v, h_last));
-            out_u[i] = if inside { ui } else { NO_HIT };
-            out_v[i] = vi;
+            let (u, v, zc) = self.hit([x[i], y[i], z[i]], &bounds);
+            out_u[i] = u;
+            out_v[i] = v;
             z_color_m[i] = zc;
         }
+    }
+
+    /// The image bounds [`ColorProjection::hit`] tests against: `[u_end, v_end, w_last,
+    /// h_last]`.
+    #[inline(always)]
+    fn bounds(&self) -> [f32; 4] {
+        // Clamped to 2²³ (f32 pixel coordinates are whole numbers from there on: no camera
+        // is that wide) so that `round_index` stays exact.
+        [
+            self.width as f32 - 0.5,
+            self.height as f32 - 0.5,
+            (self.width - 1).min(1 << 23) as f32,
+            (self.height - 1).min(1 << 23) as f32,
+        ]
+    }
+
+    /// Nearest pixel (u = [`NO_HIT`] outside the image or behind the camera) and
+    /// colour-frame z of one point.
+    #[inline(always)]
+    fn hit(&self, p: [f32; 3], bounds: &[f32; 4]) -> (u32, u32, f32) {
+        let [u_end, v_end, w_last, h_last] = *bounds;
+        let [u, v, zc] = self.uv_z(p);
+        // NaN and ±∞ (zc = 0, non-finite input) fail every comparison.
+        let inside = (zc > 0.0) & (u >= -0.5) & (v >= -0.5) & (u < u_end) & (v < v_end);
+        let (ui, vi) = (round_index(u, w_last), round_index(v, h_last));
+        (if inside { ui } else { NO_HIT }, vi, zc)
+    }
+
+    /// The nearest colour pixel (column, row) of one point and its depth along the
+    /// colour camera's z, metres; `None` behind the camera or outside the image. The same
+    /// rule as the projection's batches.
+    pub fn nearest_pixel(&self, p: [f32; 3]) -> Option<(u32, u32, f32)> {
+        let (u, v, z) = self.hit(p, &self.bounds());
+        (u != NO_HIT).then_some((u, v, z))
+    }
+
+    /// Width and height of the colour image, pixels.
+    pub fn size_px(&self) -> (u32, u32) {
+        (self.width, self.height)
     }
 }
 

@@ -28,6 +28,7 @@ mod color;
 mod config;
 mod dsa;
 
+pub use color::ColorProjection;
 pub use config::{MAX_RADIUS_PX, ProjectConfig, ProjectError, ProjectMode};
 pub use dsa::project_labels;
 
@@ -37,7 +38,7 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use crate::color::{ColorProjection, Hits};
+use crate::color::Hits;
 use crate::dsa::{DepthLut, DsaScratch, apply_dsa, check_images, depth_lut, naive_labels};
 
 /// One camera's images of a frame: the raw depth image (depth sensor size) and the
