@@ -22,7 +22,6 @@ use bodyseg_pipeline::{
 };
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
-use std::collections::BTreeSet;
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -47,8 +46,7 @@ fn bench(c: &mut Criterion) {
     let out = dir.path().join("out");
     let mut options = RunOptions::new(&rec, PipelineConfig::default(), &out);
     options.figures = FigureChoice::Off;
-    let processor =
-        FrameProcessor::open(&options, BTreeSet::new()).unwrap_or_else(|e| panic!("{e:#}"));
+    let processor = FrameProcessor::open(&options).unwrap_or_else(|e| panic!("{e:#}"));
     let frames =
         bodyseg_pipeline::list_frames(&rec, processor.rig()).unwrap_or_else(|e| panic!("{e:#}"));
     let with_truth: Vec<FrameInputs> = frames

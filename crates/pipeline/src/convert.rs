@@ -23,7 +23,6 @@ use crate::threedpeople::{ThreeDPeopleCamera, list_3dpeople_views, read_3dpeople
 use anyhow::{Context, Result, bail};
 use bodyseg_eval::Report;
 use bodyseg_io::{PlyColors, PlyFormat, PlyWriteOptions};
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The dataset layouts `bodyseg convert` reads.
@@ -144,7 +143,7 @@ fn convert_recordings(
                 format!("{name}/")
             };
             let run = run_options(opts, path, &opts.out.join(name));
-            let processor = FrameProcessor::open(&run, BTreeSet::new())
+            let processor = FrameProcessor::open(&run)
                 .with_context(|| format!("recording {}", path.display()))?
                 .with_prefix(prefix.clone());
             let rig = processor.rig().clone();

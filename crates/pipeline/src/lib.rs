@@ -36,6 +36,7 @@ mod config;
 mod convert;
 mod eval;
 mod figure;
+mod frame_files;
 mod fs;
 mod parse;
 mod project;

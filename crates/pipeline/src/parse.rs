@@ -2,10 +2,11 @@
 //! label images (class ids) and palette previews, per camera.
 
 use crate::config::PipelineConfig;
+use crate::frame_files::read_color;
 use crate::fs::write_text;
 use crate::project::check_frame;
 use crate::stage::{Stage, plural, timed};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use bodyseg_core::{Class, LabelImage, RgbImage};
 use bodyseg_parsing::{
     ModelSpec, OnnxSegmenter, ParsedView, RecordedSegmenter, Segmenter, ViewInput, sidecar_path,
@@ -180,19 +181,7 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
         let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
         let mut images = Vec::with_capacity(rig.cameras.len());
         for camera in &rig.cameras {
-            let name = &camera.name;
-            let path = color_path(&opts.recording, name, &opts.frame);
-            let image =
-                bodyseg_io::read_rgb_image(&path).with_context(|| format!("camera {name}"))?;
-            let (want_w, want_h) = (camera.color.width, camera.color.height);
-            if (image.width, image.height) != (want_w, want_h) {
-                bail!(
-                    "camera {name}: {}: colour image is {}x{}, rig.toml says {want_w}x{want_h}",
-                    path.display(),
-                    image.width,
-                    image.height
-                );
-            }
+            let (image, _) = read_color(&opts.recording, camera, &opts.frame)?;
             images.push(image);
         }
         let names: Vec<String> = rig.cameras.iter().map(|c| c.name.clone()).collect();

@@ -2,6 +2,7 @@
 //! labelled world-frame PLY.
 
 use crate::config::PipelineConfig;
+use crate::frame_files::{read_depth, read_parsing};
 use crate::fs::write_text;
 use crate::refine::resolved_config_path;
 use crate::stage::{Stage, plural, timed};
@@ -78,29 +79,8 @@ fn read_camera(rig: &Rig, index: usize, opts: &ProjectOptions) -> Result<CameraF
     let name = &camera.name;
     bodyseg_io::require_folder(&opts.recording.join(name), "camera")
         .with_context(|| format!("camera {name} of rig.toml"))?;
-    let path = depth_path(&opts.recording, name, &opts.frame);
-    let depth = bodyseg_io::read_depth_png(&path).with_context(|| format!("camera {name}"))?;
-    let (want_w, want_h) = (camera.depth.width, camera.depth.height);
-    if (depth.width, depth.height) != (want_w, want_h) {
-        bail!(
-            "camera {name}: {}: depth image is {}x{}, rig.toml says {want_w}x{want_h}",
-            path.display(),
-            depth.width,
-            depth.height
-        );
-    }
-    let path = parsing_path(&opts.recording, name, &opts.frame);
-    let labels = bodyseg_io::read_label_png(&path).with_context(|| format!("camera {name}"))?;
-    let (want_w, want_h) = (camera.color.width, camera.color.height);
-    if (labels.width, labels.height) != (want_w, want_h) {
-        bail!(
-            "camera {name}: {}: label image is {}x{}, rig.toml says the colour sensor is \
-             {want_w}x{want_h}",
-            path.display(),
-            labels.width,
-            labels.height
-        );
-    }
+    let (depth, _) = read_depth(&opts.recording, camera, &opts.frame)?;
+    let (labels, _) = read_parsing(&opts.recording, camera, &opts.frame)?;
     Ok(CameraFiles { depth, labels })
 }
 

@@ -20,9 +20,10 @@ use crate::batch::{
 };
 use crate::config::PipelineConfig;
 use crate::figure::{FigurePanel, LabelView, figure_image, panel_view};
+use crate::frame_files::{read_color, read_depth, read_depth_labels, read_parsing};
 use crate::fs::write_text;
-use crate::parse::{color_path, load_segmenter, resolve_model};
-use crate::project::{check_frame, depth_path, parsing_path};
+use crate::parse::{load_segmenter, resolve_model};
+use crate::project::check_frame;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
@@ -216,12 +217,13 @@ impl std::fmt::Debug for FrameProcessor {
 
 impl FrameProcessor {
     /// Opens `opts.recording`: reads `rig.toml`, decides the parser (and loads the model),
-    /// builds the projection tables. `figure_frames` are the frames that get a figure.
+    /// builds the projection tables. No frame gets a figure until
+    /// [`FrameProcessor::with_figures`].
     ///
     /// # Errors
     /// `rig.toml` cannot be read or is invalid; the model or the ONNX Runtime library is
     /// missing; recorded predictions are asked for and the recording has none.
-    pub fn open(opts: &RunOptions, figure_frames: BTreeSet<String>) -> Result<FrameProcessor> {
+    pub fn open(opts: &RunOptions) -> Result<FrameProcessor> {
         let rig_path = opts.recording.join("rig.toml");
         let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
         let recorded_present = rig
@@ -269,10 +271,16 @@ impl FrameProcessor {
             has_truth,
             write_stages: opts.write_stages,
             label_images: opts.label_images,
-            figure_frames,
+            figure_frames: BTreeSet::new(),
             views,
             prefix: String::new(),
         })
+    }
+
+    /// Draws a figure for these frames (none by default).
+    pub fn with_figures(mut self, frames: BTreeSet<String>) -> FrameProcessor {
+        self.figure_frames = frames;
+        self
     }
 
     /// Writes this recording's files under `OUT/<prefix>` (`prefix` ends with `/`).
@@ -312,57 +320,22 @@ impl FrameProcessor {
             let mut colour = Vec::new();
             let mut truth = Vec::new();
             for camera in &self.rig.cameras {
-                let name = &camera.name;
-                note(&depth_path(rec, name, frame));
-                let d = bodyseg_io::read_depth_png(&depth_path(rec, name, frame))
-                    .with_context(|| format!("camera {name}"))?;
-                check_size(
-                    &depth_path(rec, name, frame),
-                    "depth image",
-                    (d.width, d.height),
-                    (camera.depth.width, camera.depth.height),
-                )?;
+                let (d, path) = read_depth(rec, camera, frame)?;
+                note(&path);
                 depth.push(d);
                 if self.segmenter.is_some() {
-                    let path = color_path(rec, name, frame);
+                    let (image, path) = read_color(rec, camera, frame)?;
                     note(&path);
-                    let image = bodyseg_io::read_rgb_image(&path)
-                        .with_context(|| format!("camera {name}"))?;
-                    check_size(
-                        &path,
-                        "colour image",
-                        (image.width, image.height),
-                        (camera.color.width, camera.color.height),
-                    )?;
                     colour.push(image);
                 } else {
-                    let path = parsing_path(rec, name, frame);
+                    let (labels, path) = read_parsing(rec, camera, frame)?;
                     note(&path);
-                    let l = bodyseg_io::read_label_png(&path)
-                        .with_context(|| format!("camera {name}"))?;
-                    check_size(
-                        &path,
-                        "label image",
-                        (l.width, l.height),
-                        (camera.color.width, camera.color.height),
-                    )?;
-                    recorded.push(l);
+                    recorded.push(labels);
                 }
                 if self.has_truth {
-                    let path = rec
-                        .join(name)
-                        .join("depth_labels")
-                        .join(format!("{frame}.png"));
+                    let (labels, path) = read_depth_labels(rec, camera, frame)?;
                     note(&path);
-                    let l = bodyseg_io::read_label_png(&path)
-                        .with_context(|| format!("camera {name}: ground truth"))?;
-                    check_size(
-                        &path,
-                        "ground-truth label image",
-                        (l.width, l.height),
-                        (camera.depth.width, camera.depth.height),
-                    )?;
-                    truth.push(l);
+                    truth.push(labels);
                 }
             }
             Ok((depth, recorded, colour, truth))
@@ -509,16 +482,18 @@ impl FrameProcessor {
             .position(|s| *s == cfg.refine.steps)
             .unwrap_or(steps.len() - 1);
 
-        let (scores, took) = timed(|| -> Result<Option<serde_json::Value>> {
+        // The truth of every point, once: scored here, drawn in the figure.
+        let ((gt, scores), took) = timed(|| -> Result<_> {
             let Some(truth) = &inputs.truth else {
-                return Ok(None);
+                return Ok((None, None));
             };
             let gt = truth_labels(cloud, truth)?;
             let mut report = Report::new();
             for (s, labels) in steps.iter().zip(&variants.labels) {
                 report.push(s.to_string(), bodyseg_eval::score_aligned(labels, &gt)?)?;
             }
-            Ok(Some(serde_json::from_str(&report.to_json()?)?))
+            let scores: serde_json::Value = serde_json::from_str(&report.to_json()?)?;
+            Ok((Some(gt), Some(scores)))
         })?;
         stages.push(Stage::new("eval", took, String::new()));
 
@@ -574,11 +549,7 @@ impl FrameProcessor {
 
         if figure {
             let ((), took) = timed(|| -> Result<()> {
-                let truth = match &inputs.truth {
-                    Some(t) => Some(truth_labels(cloud, t)?),
-                    None => None,
-                };
-                let image = self.figure(cloud, &boxes, &steps, &variants, truth.as_deref());
+                let image = self.figure(cloud, &boxes, &steps, &variants, gt.as_deref());
                 writer.write(&format!("{prefix}figures/{frame}.png"), |p| {
                     Ok(bodyseg_io::write_rgb_png(
                         p,
@@ -656,21 +627,6 @@ fn with_labels<T>(
     out
 }
 
-/// Fails with `path: WHAT is WxH, rig.toml says WxH` when the sizes differ.
-fn check_size(path: &Path, what: &str, got: (u32, u32), want: (u32, u32)) -> Result<()> {
-    if got != want {
-        bail!(
-            "{}: {what} is {}x{}, rig.toml says {}x{}",
-            path.display(),
-            got.0,
-            got.1,
-            want.0,
-            want.1
-        );
-    }
-    Ok(())
-}
-
 /// The ground-truth label of every point of `cloud`: its depth pixel's in `truth`.
 fn truth_labels(cloud: &LabeledCloud, truth: &[LabelImage]) -> Result<Vec<Label>> {
     cloud
@@ -741,8 +697,8 @@ pub fn run_recording(
 ) -> Result<RunSummary> {
     let (setup, took) = timed(|| -> Result<_> {
         bodyseg_io::require_folder(&opts.recording, "recording")?;
-        let rig = bodyseg_calib::read_rig_toml(&opts.recording.join("rig.toml"))?;
-        let all = list_frames(&opts.recording, &rig)?;
+        let processor = FrameProcessor::open(opts)?;
+        let all = list_frames(&opts.recording, processor.rig())?;
         let frames = match &opts.frames {
             None => all,
             Some(want) => {
@@ -770,7 +726,7 @@ pub fn run_recording(
             );
         }
         let figures = figure_frames(&opts.figures, &frames);
-        let processor = FrameProcessor::open(opts, figures.clone())?;
+        let processor = processor.with_figures(figures.clone());
         bodyseg_io::create_folder(&opts.out)?;
         if opts.shard == Shard::ALL {
             crate::batch::remove_stale_temporaries(&opts.out);
@@ -826,13 +782,7 @@ pub fn run_recording(
             .collect::<Vec<_>>()
             .join(", "),
     ));
-    let figures = outcome
-        .records
-        .iter()
-        .flat_map(|r| &r.outputs)
-        .filter(|o| o.path.starts_with("figures/"))
-        .map(|o| opts.out.join(&o.path))
-        .collect();
+    let figures = figure_outputs(&outcome).map(|f| opts.out.join(f)).collect();
     Ok(RunSummary {
         frames: opts.shard.share(frames.len()),
         outcome,
@@ -901,6 +851,16 @@ pub(crate) fn write_reports(
     Ok((report, written))
 }
 
+/// The figures among the frames' outputs (paths relative to the output folder).
+fn figure_outputs(outcome: &BatchOutcome) -> impl Iterator<Item = &str> {
+    outcome
+        .records
+        .iter()
+        .flat_map(|r| &r.outputs)
+        .map(|o| o.path.as_str())
+        .filter(|p| p.starts_with("figures/"))
+}
+
 /// `report.md`: what ran, the paper's table, the failed frames and the figures. No times
 /// (they are in `run.json`), so that a resumed run writes the same file.
 fn report_markdown(
@@ -937,13 +897,7 @@ fn report_markdown(
         }
         md.push('\n');
     }
-    let figures: Vec<&str> = outcome
-        .records
-        .iter()
-        .flat_map(|r| &r.outputs)
-        .filter(|o| o.path.starts_with("figures/"))
-        .map(|o| o.path.as_str())
-        .collect();
+    let figures: Vec<&str> = figure_outputs(outcome).collect();
     if !figures.is_empty() {
         md.push_str("## Figures\n\n");
         for f in figures {
