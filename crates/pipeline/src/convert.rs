@@ -146,8 +146,7 @@ fn convert_recordings(
             let processor = FrameProcessor::open(&run)
                 .with_context(|| format!("recording {}", path.display()))?
                 .with_prefix(prefix.clone());
-            let rig = processor.rig().clone();
-            for frame in list_frames(path, &rig)? {
+            for frame in list_frames(path, processor.rig())? {
                 jobs.push((format!("{prefix}{frame}"), (k, frame)));
             }
             processors.push(processor);
