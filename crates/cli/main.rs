@@ -30,6 +30,7 @@ use std::time::Instant;
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
+    bodyseg_pipeline::keep_freed_memory();
     let cli = Cli::parse();
     init_logging(cli.verbose);
     match run(&cli) {

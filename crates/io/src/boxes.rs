@@ -1,6 +1,6 @@
 //! Person boxes as JSON (FORMATS.md, "Person boxes").
 
-use crate::{IoError, write_atomic};
+use crate::{Durability, IoError, write_atomic_with};
 use bodyseg_core::PersonBoxes;
 use std::path::Path;
 
@@ -40,8 +40,20 @@ pub fn parse_boxes(bytes: &[u8], path_for_errors: &Path) -> Result<PersonBoxes, 
 /// [`IoError::InvalidBox`] when a box is unusable (nothing is written: such a file could
 /// not be read back), [`IoError::Write`] on I/O failure (the destination is untouched).
 pub fn write_boxes(path: &Path, boxes: &PersonBoxes) -> Result<(), IoError> {
+    write_boxes_with(path, boxes, Durability::Synced)
+}
+
+/// [`write_boxes`] with a choice of [`Durability`].
+///
+/// # Errors
+/// As [`write_boxes`].
+pub fn write_boxes_with(
+    path: &Path,
+    boxes: &PersonBoxes,
+    durability: Durability,
+) -> Result<(), IoError> {
     validate(boxes, path)?;
-    write_atomic(path, |w| {
+    write_atomic_with(path, durability, |w| {
         serde_json::to_writer_pretty(&mut *w, boxes)?;
         w.write_all(b"\n")
     })

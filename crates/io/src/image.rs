@@ -4,7 +4,7 @@
 //! 255 = not labelled). Colour images `<camera>/color/<stem>.png|.jpg` (8-bit RGB) are read
 //! with [`read_rgb_image`].
 
-use crate::{IoError, write_atomic};
+use crate::{Durability, IoError, write_atomic_with};
 use bodyseg_core::{Label, LabelImage, RgbImage};
 use image::codecs::png::PngEncoder;
 use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
@@ -160,6 +160,7 @@ fn write_png(
     width: u32,
     height: u32,
     color: ExtendedColorType,
+    durability: Durability,
 ) -> Result<(), IoError> {
     let mut encoded = Vec::new();
     PngEncoder::new(&mut encoded)
@@ -168,7 +169,7 @@ fn write_png(
             cause: e.to_string(),
             path: path.to_path_buf(),
         })?;
-    write_atomic(path, |w| w.write_all(&encoded))
+    write_atomic_with(path, durability, |w| w.write_all(&encoded))
 }
 
 /// Writes a depth image as a 16-bit grayscale PNG, atomically (see [`write_atomic`]).
@@ -189,6 +190,7 @@ pub fn write_depth_png(path: &Path, image: &DepthImage) -> Result<(), IoError> {
         image.width,
         image.height,
         ExtendedColorType::L16,
+        Durability::Synced,
     )
 }
 
@@ -198,6 +200,18 @@ pub fn write_depth_png(path: &Path, image: &DepthImage) -> Result<(), IoError> {
 /// # Errors
 /// As [`write_depth_png`].
 pub fn write_label_png(path: &Path, image: &LabelImage) -> Result<(), IoError> {
+    write_label_png_with(path, image, Durability::Synced)
+}
+
+/// [`write_label_png`] with a choice of [`Durability`].
+///
+/// # Errors
+/// As [`write_label_png`].
+pub fn write_label_png_with(
+    path: &Path,
+    image: &LabelImage,
+    durability: Durability,
+) -> Result<(), IoError> {
     check_size(path, image.width, image.height, image.labels.len())?;
     let bytes: Vec<u8> = image.labels.iter().map(|l| l.id()).collect();
     write_png(
@@ -206,6 +220,7 @@ pub fn write_label_png(path: &Path, image: &LabelImage) -> Result<(), IoError> {
         image.width,
         image.height,
         ExtendedColorType::L8,
+        durability,
     )
 }
 
@@ -221,7 +236,14 @@ pub fn write_rgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result
             path: path.to_path_buf(),
         });
     }
-    write_png(path, rgb, width, height, ExtendedColorType::Rgb8)
+    write_png(
+        path,
+        rgb,
+        width,
+        height,
+        ExtendedColorType::Rgb8,
+        Durability::Synced,
+    )
 }
 
 /// Writes 8-bit values (class ids, person ids) as an 8-bit grayscale PNG, atomically.
@@ -230,7 +252,14 @@ pub fn write_rgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result
 /// As [`write_depth_png`].
 pub fn write_gray8_png(path: &Path, width: u32, height: u32, values: &[u8]) -> Result<(), IoError> {
     check_size(path, width, height, values.len())?;
-    write_png(path, values, width, height, ExtendedColorType::L8)
+    write_png(
+        path,
+        values,
+        width,
+        height,
+        ExtendedColorType::L8,
+        Durability::Synced,
+    )
 }
 
 /// `len == width * height > 0`, else [`IoError::InvalidImage`].
@@ -361,7 +390,15 @@ mod tests {
         let path = dir.path().join("bad.png");
         let mut bytes = vec![0u8; 6];
         bytes[4] = 7; // (u 1, v 1) of a 3x2 image
-        write_png(&path, &bytes, 3, 2, ExtendedColorType::L8).expect("write");
+        write_png(
+            &path,
+            &bytes,
+            3,
+            2,
+            ExtendedColorType::L8,
+            Durability::Synced,
+        )
+        .expect("write");
         let e = read_label_png(&path).expect_err("id 7").to_string();
         assert!(
             e.contains("pixel (u 1, v 1): label id 7 is not a class id"),

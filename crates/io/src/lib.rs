@@ -31,7 +31,8 @@
 //!   orders.
 //! - Every write goes through [`write_atomic`]: a temporary file in the destination's
 //!   directory, fsynced, renamed over the destination. A failed write leaves the
-//!   destination untouched and no temporary behind.
+//!   destination untouched and no temporary behind. Batch outputs may skip the fsync
+//!   ([`Durability::Renamed`], then [`sync_file_system`] at the end).
 //! - Errors are [`IoError`]; each message starts with the file's path and includes the
 //!   underlying cause (an OS or JSON error), which is not repeated by `source()`: an
 //!   error chain prints each cause once. Bad input is an error, never a panic.
@@ -47,15 +48,17 @@ mod pcd;
 mod ply;
 mod text;
 
-pub use atomic::{write_atomic, write_bytes_atomic};
-pub use boxes::{parse_boxes, read_boxes, write_boxes};
+pub use atomic::{
+    Durability, sync_file_system, write_atomic, write_atomic_with, write_bytes_atomic,
+};
+pub use boxes::{parse_boxes, read_boxes, write_boxes, write_boxes_with};
 pub use error::IoError;
 pub use folder::{
     create_folder, discard_folder, image_files, publish_folder, require_folder, staging_folder,
 };
 pub use image::{
     DepthImage, read_depth_png, read_label_png, read_rgb_image, write_depth_png, write_gray8_png,
-    write_label_png, write_rgb_png,
+    write_label_png, write_label_png_with, write_rgb_png,
 };
 pub use listing::{FolderEntry, list_folder};
 pub use mat::{MatMatrix, read_mat_matrix, read_mat_variable_names};

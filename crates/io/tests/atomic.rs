@@ -2,7 +2,8 @@
 
 use bodyseg_core::{LabeledCloud, PersonBoxes};
 use bodyseg_io::{
-    IoError, PlyWriteOptions, write_atomic, write_boxes, write_bytes_atomic, write_ply,
+    Durability, IoError, PlyWriteOptions, sync_file_system, write_atomic, write_atomic_with,
+    write_boxes, write_bytes_atomic, write_ply,
 };
 use std::io::{self, Write};
 use std::path::Path;
@@ -32,6 +33,26 @@ fn successful_write_replaces_the_file_and_leaves_no_temporary() {
     write_bytes_atomic(&path, b"second, longer").expect("overwrite");
     assert_eq!(std::fs::read(&path).expect("read"), b"second, longer");
     assert_eq!(listing(dir.path()), ["out.bin"]);
+}
+
+#[test]
+fn unsynced_writes_are_atomic_too_and_a_bulk_sync_follows() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("out.bin");
+    std::fs::write(&path, b"previous result").expect("seed");
+    write_atomic_with(&path, Durability::Renamed, fail_midway).expect_err("must fail");
+    assert_eq!(std::fs::read(&path).expect("read"), b"previous result");
+    assert_eq!(listing(dir.path()), ["out.bin"]);
+    write_atomic_with(&path, Durability::Renamed, |w| w.write_all(b"new")).expect("write");
+    assert_eq!(std::fs::read(&path).expect("read"), b"new");
+    assert_eq!(listing(dir.path()), ["out.bin"]);
+    sync_file_system(dir.path()).expect("sync");
+    let missing = dir.path().join("missing");
+    let err = sync_file_system(&missing).expect_err("no such folder");
+    assert!(
+        err.to_string().starts_with(&missing.display().to_string()),
+        "{err}"
+    );
 }
 
 #[test]

@@ -26,6 +26,7 @@ fn round_trip(format: PlyFormat) {
     let opts = PlyWriteOptions {
         format,
         colors: PlyColors::Camera,
+        ..Default::default()
     };
     write_ply(&path, &cloud, &opts).expect("write");
     let back = read_ply(&path).expect("read");

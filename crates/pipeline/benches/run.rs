@@ -30,6 +30,8 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 const FRAMES: usize = 8;
 
 fn bench(c: &mut Criterion) {
+    // As the `bodyseg` binary does.
+    bodyseg_pipeline::keep_freed_memory();
     let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("temp dir: {e}"));
     let rec = dir.path().join("rec");
     let synth = SynthOptions {

@@ -281,6 +281,8 @@ fn convert_3dpeople(
     let ply = PlyWriteOptions {
         format: PlyFormat::BinaryLittleEndian,
         colors: PlyColors::Camera,
+        // The batch syncs once at its end.
+        durability: bodyseg_io::Durability::Renamed,
     };
     let outcome = run_batch(
         &jobs,

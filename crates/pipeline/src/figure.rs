@@ -6,7 +6,7 @@
 use bodyseg_calib::{RgbdCamera, Rig};
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label, LabelImage, LabeledCloud, PersonBox, RgbImage};
-use bodyseg_project::ColorProjection;
+use bodyseg_project::{ColorProjection, Hits, NO_HIT};
 
 /// Draws a cloud's labels into one camera's colour image: each point of that camera goes
 /// through `colour_from_world` and the colour intrinsics (bodyseg-project's f32
@@ -16,7 +16,7 @@ use bodyseg_project::ColorProjection;
 #[derive(Clone, Debug)]
 pub struct LabelView {
     projection: ColorProjection,
-    splat_radius_px: i64,
+    splat_radius_px: usize,
 }
 
 impl LabelView {
@@ -29,7 +29,7 @@ impl LabelView {
         // Spacing of neighbouring depth points in the colour image, pixels: the focal
         // length ratio times the stride. Squares of side 2r+1 >= spacing leave no holes.
         let spacing = camera.color.fx / camera.depth.fx.max(1e-9) * f64::from(stride.max(1));
-        let splat_radius_px = (((spacing - 1.0) / 2.0).ceil() as i64).clamp(1, 8);
+        let splat_radius_px = (((spacing - 1.0) / 2.0).ceil() as i64).clamp(1, 8) as usize;
         LabelView {
             projection: ColorProjection::from_pose(&color_from_world, &camera.color),
             splat_radius_px,
@@ -40,55 +40,110 @@ impl LabelView {
     /// pixels no point reaches are unknown (255).
     pub fn render(&self, cloud: &LabeledCloud, camera: u8) -> LabelImage {
         let mut image = LabelImage::filled(0, 0, Label::UNKNOWN);
-        self.render_into(cloud, camera, &mut Vec::new(), &mut image);
+        self.render_into(cloud, camera, None, &mut Vec::new(), &mut image);
         image
     }
 
-    /// [`LabelView::render`] into `image`, with `z_buffer` as working memory (both
-    /// reused from call to call: a worker drawing frame after frame allocates nothing).
+    /// [`LabelView::render`] into `image`, with `keys` as working memory (both reused
+    /// from call to call: a worker drawing frame after frame allocates nothing).
+    ///
+    /// `hits`, when given, must be where each of `cloud`'s points landed in its own
+    /// camera's colour image, in the cloud's order
+    /// ([`bodyseg_project::FrameProjector::project_frame_keeping_hits`] of this very
+    /// cloud, which is in projection order: cameras one after the other): the points are
+    /// then not projected again. Hits from `colour_from_depth` and this view's
+    /// `colour_from_world` are the same pixels up to f32 rounding (a point within ~1e-3 px
+    /// of a half-pixel boundary may take the neighbour). Without hits, or with hits of
+    /// another length, every point of the camera is projected here.
     pub fn render_into(
         &self,
         cloud: &LabeledCloud,
         camera: u8,
-        z_buffer: &mut Vec<f32>,
+        hits: Option<&Hits>,
+        keys: &mut Vec<u32>,
         image: &mut LabelImage,
     ) {
         let (width, height) = self.projection.size_px();
-        let (w, h) = (i64::from(width), i64::from(height));
-        let n = (w * h) as usize;
-        z_buffer.clear();
-        z_buffer.resize(n, f32::INFINITY);
-        image.width = width;
-        image.height = height;
-        image.probs = None;
-        let labels = &mut image.labels;
-        labels.clear();
-        labels.resize(n, Label::UNKNOWN);
         let r = self.splat_radius_px;
-        for ((p, l), o) in cloud
-            .positions_m
-            .iter()
-            .zip(&cloud.labels)
-            .zip(&cloud.origins)
-        {
-            if o.camera != camera {
-                continue;
+        // The key buffer has a border of r pixels on every side, so that a point's
+        // square never needs clipping: the inner loop has no branch.
+        let (pw, ph) = (width as usize + 2 * r, height as usize + 2 * r);
+        keys.clear();
+        keys.resize(pw * ph, EMPTY_KEY);
+        let mut splat = |u: u32, v: u32, z: f32, label: Label| {
+            let key = depth_key(z, label);
+            // (u, v) is the centre's pixel; in the bordered buffer the square's top-left.
+            let top_left = v as usize * pw + u as usize;
+            for row in keys[top_left..].chunks_mut(pw).take(2 * r + 1) {
+                for k in &mut row[..=2 * r] {
+                    *k = (*k).min(key);
+                }
             }
-            let Some((u, v, z)) = self.projection.nearest_pixel(*p) else {
-                continue;
-            };
-            let (u, v) = (i64::from(u), i64::from(v));
-            for y in (v - r).max(0)..=(v + r).min(h - 1) {
-                for x in (u - r).max(0)..=(u + r).min(w - 1) {
-                    let i = (y * w + x) as usize;
-                    if z < z_buffer[i] {
-                        z_buffer[i] = z;
-                        labels[i] = *l;
+        };
+        match hits.filter(|h| h.len() == cloud.len()) {
+            Some(hits) => {
+                // The camera's points: a contiguous range in projection order.
+                let first = cloud.origins.partition_point(|o| o.camera < camera);
+                let end = cloud.origins.partition_point(|o| o.camera <= camera);
+                let range = first..end;
+                let (us, vs, zs) = (
+                    &hits.columns()[range.clone()],
+                    &hits.rows()[range.clone()],
+                    &hits.z_color_m()[range.clone()],
+                );
+                for (((&u, &v), &z), &label) in us.iter().zip(vs).zip(zs).zip(&cloud.labels[range])
+                {
+                    if u != NO_HIT {
+                        splat(u, v, z, label);
+                    }
+                }
+            }
+            None => {
+                for ((p, &label), o) in cloud
+                    .positions_m
+                    .iter()
+                    .zip(&cloud.labels)
+                    .zip(&cloud.origins)
+                {
+                    if o.camera != camera {
+                        continue;
+                    }
+                    if let Some((u, v, z)) = self.projection.nearest_pixel(*p) {
+                        splat(u, v, z, label);
                     }
                 }
             }
         }
+        image.width = width;
+        image.height = height;
+        image.probs = None;
+        image.labels.clear();
+        image.labels.extend(
+            keys.chunks(pw)
+                .skip(r)
+                .take(height as usize)
+                .flat_map(|row| &row[r..r + width as usize])
+                .map(|&k| label_of_key(k)),
+        );
     }
+}
+
+/// A pixel no point reaches; its low byte is [`Label::UNKNOWN_ID`].
+const EMPTY_KEY: u32 = u32::MAX;
+
+/// A point's depth and label in one `u32` whose order is the depth's (nearest = smallest):
+/// a positive f32's bits order as the float does; the low 8 bits of the mantissa (a
+/// relative 2⁻¹⁵, 0.1 mm at 3 m) give way to the label id, so the splat is one `min` per
+/// pixel (points closer than that in depth: the smaller label id wins).
+#[inline(always)]
+fn depth_key(z_m: f32, label: Label) -> u32 {
+    (z_m.to_bits() & !0xFF) | u32::from(label.id())
+}
+
+/// The label of a key ([`EMPTY_KEY`] → unknown).
+#[inline(always)]
+fn label_of_key(key: u32) -> Label {
+    Label::from_id((key & 0xFF) as u8).unwrap_or(Label::UNKNOWN)
 }
 
 /// A fixed orthographic viewpoint for the panels: screen axes in the world and the part
@@ -440,5 +495,101 @@ mod tests {
         // Another camera's points are not drawn.
         let other = view.render(&cloud, 1);
         assert!(other.labels.iter().all(|l| l.is_unknown()));
+    }
+
+    #[test]
+    fn label_view_from_the_projections_hits_draws_what_projecting_again_draws() {
+        use bodyseg_calib::{BackProjectOptions, Pose, Rig};
+        use bodyseg_project::{CameraImages, FrameProjector, ProjectConfig, ProjectMode};
+        // Two cameras, the second 0.3 m to the side and turned a little: a slanted wall
+        // with a nearer block in front, labels in vertical stripes.
+        let mut second = camera();
+        second.name = "cam1".into();
+        second.world_from_depth =
+            Pose::from_quaternion_wxyz([0.996, 0.0, 0.087, 0.0], [0.3, 0.0, 0.0]).expect("pose");
+        let rig = Rig {
+            cameras: vec![camera(), second],
+        };
+        let depth: Vec<u16> = (0..48u32)
+            .flat_map(|v| {
+                (0..64u32).map(move |u| {
+                    if (20..36).contains(&u) && (14..30).contains(&v) {
+                        1000
+                    } else {
+                        1500 + 8 * u as u16 + 3 * v as u16
+                    }
+                })
+            })
+            .collect();
+        let stripes: Vec<Label> = (0..96u32)
+            .flat_map(|_| (0..128u32).map(|u| Label::from(Class::ALL[(u / 9) as usize % 7])))
+            .collect();
+        let labels = LabelImage::new(128, 96, stripes).expect("image");
+        let images = [
+            CameraImages {
+                depth_raw: &depth,
+                labels: &labels,
+            },
+            CameraImages {
+                depth_raw: &depth,
+                labels: &labels,
+            },
+        ];
+        let projector = FrameProjector::new(&rig).expect("rig");
+        for mode in [ProjectMode::Naive, ProjectMode::Dsa] {
+            let cfg = ProjectConfig {
+                mode,
+                ..Default::default()
+            };
+            let mut cloud = LabeledCloud::default();
+            let mut hits = Hits::default();
+            projector
+                .project_frame_keeping_hits(
+                    &images,
+                    &BackProjectOptions::default(),
+                    &cfg,
+                    &mut cloud,
+                    &mut hits,
+                )
+                .expect("project");
+            assert_eq!(hits.len(), cloud.len(), "{mode:?}");
+            for (c, camera) in rig.cameras.iter().enumerate() {
+                let view = LabelView::new(camera, 1);
+                let mut from_hits = LabelImage::filled(0, 0, Label::UNKNOWN);
+                view.render_into(
+                    &cloud,
+                    c as u8,
+                    Some(&hits),
+                    &mut Vec::new(),
+                    &mut from_hits,
+                );
+                let again = view.render(&cloud, c as u8);
+                assert_eq!((from_hits.width, from_hits.height), (128, 96));
+                let drawn = again.labels.iter().filter(|l| !l.is_unknown()).count();
+                assert!(drawn > 128 * 96 / 2, "{mode:?} camera {c}: {drawn} pixels");
+                // f32 rounding of two poses may move a point near a pixel boundary, or
+                // decide between two points at the same depth (the block's front face)
+                // the other way: a few pixels, against thousands for a wrong range.
+                let differ = from_hits
+                    .labels
+                    .iter()
+                    .zip(&again.labels)
+                    .filter(|(a, b)| a != b)
+                    .count();
+                assert!(
+                    differ * 100 <= drawn,
+                    "{mode:?} camera {c}: {differ} of {drawn} pixels differ"
+                );
+            }
+            // Hits of another length (another cloud) are not used.
+            let mut fewer = cloud.clone();
+            fewer.positions_m.pop();
+            fewer.labels.pop();
+            fewer.origins.pop();
+            let view = LabelView::new(&rig.cameras[0], 1);
+            let mut image = LabelImage::filled(0, 0, Label::UNKNOWN);
+            view.render_into(&fewer, 0, Some(&hits), &mut Vec::new(), &mut image);
+            assert_eq!(image, view.render(&fewer, 0));
+        }
     }
 }

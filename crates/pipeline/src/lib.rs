@@ -28,6 +28,7 @@
 //!   `configs/default.toml`) < configuration file < command-line flags.
 //! - Units are those of the stages: metres, radians; times are wall-clock.
 
+mod allocator;
 mod batch;
 mod boxes;
 mod boxes_study;
@@ -48,6 +49,7 @@ mod stage;
 mod synth;
 mod threedpeople;
 
+pub use allocator::keep_freed_memory;
 pub use batch::{
     BatchFrame, BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameWriter, InputFile,
     OutputFile, Shard, complete_record, record_path, run_batch,

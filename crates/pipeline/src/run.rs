@@ -29,10 +29,10 @@ use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
 use bodyseg_core::{Label, LabelImage, LabeledCloud, PersonBoxes};
 use bodyseg_eval::Report;
-use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
+use bodyseg_io::{DepthImage, Durability, PlyFormat, PlyWriteOptions};
 use bodyseg_parsing::{OnnxSegmenter, Segmenter, ViewInput};
 use bodyseg_people::BoxMode;
-use bodyseg_project::{CameraImages, FrameProjector};
+use bodyseg_project::{CameraImages, FrameProjector, Hits};
 use bodyseg_refine::{RefinedVariants, Steps};
 use serde::Serialize;
 use std::collections::BTreeSet;
@@ -200,7 +200,10 @@ pub struct FrameProcessor {
 struct Scratch {
     projector: FrameProjector,
     cloud: LabeledCloud,
-    z_buffer: Vec<f32>,
+    /// Where the cloud's points landed in their colour images (for the label images).
+    hits: Hits,
+    /// The label images' depth-and-label keys.
+    keys: Vec<u32>,
     label_image: LabelImage,
 }
 
@@ -402,7 +405,8 @@ impl FrameProcessor {
             .unwrap_or_else(|| Scratch {
                 projector: self.template.clone(),
                 cloud: LabeledCloud::default(),
-                z_buffer: Vec::new(),
+                hits: Hits::default(),
+                keys: Vec::new(),
                 label_image: LabelImage::filled(0, 0, Label::UNKNOWN),
             });
         let result = self.process_with(inputs, writer, stages, &mut scratch);
@@ -422,7 +426,8 @@ impl FrameProcessor {
         let Scratch {
             projector,
             cloud,
-            z_buffer,
+            hits,
+            keys,
             label_image,
         } = scratch;
         let frame = inputs.frame.as_str();
@@ -437,12 +442,23 @@ impl FrameProcessor {
                     labels: l,
                 })
                 .collect();
-            projector.project_frame_into(
-                &images,
-                &cfg.backproject.options(),
-                &cfg.project,
-                cloud,
-            )?;
+            if self.label_images {
+                // The label images reuse where the points landed.
+                projector.project_frame_keeping_hits(
+                    &images,
+                    &cfg.backproject.options(),
+                    &cfg.project,
+                    cloud,
+                    hits,
+                )?;
+            } else {
+                projector.project_frame_into(
+                    &images,
+                    &cfg.backproject.options(),
+                    &cfg.project,
+                    cloud,
+                )?;
+            }
             Ok(())
         })?;
         let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
@@ -473,7 +489,7 @@ impl FrameProcessor {
             steps.push(cfg.refine.steps);
         }
         let (mut variants, took) = timed(|| {
-            bodyseg_refine::refine_variants(cloud, &boxes.boxes, &cfg.refine, &steps)
+            bodyseg_refine::refine_variants(cloud, &boxes.boxes, &cfg.refine, &steps, figure)
                 .context("refinement")
         })?;
         stages.push(Stage::new("refine", took, String::new()));
@@ -499,8 +515,10 @@ impl FrameProcessor {
 
         let prefix = &self.prefix;
         let ((), took) = timed(|| -> Result<()> {
+            // Unsynced: the batch syncs once at its end (see the `batch` module).
             let ply = PlyWriteOptions {
                 format: PlyFormat::BinaryLittleEndian,
+                durability: Durability::Renamed,
                 ..Default::default()
             };
             if self.write_stages {
@@ -516,16 +534,26 @@ impl FrameProcessor {
                     Ok(bodyseg_io::write_ply(p, c, &ply)?)
                 })?;
                 writer.write(&format!("{prefix}boxes/{frame}.json"), |p| {
-                    Ok(bodyseg_io::write_boxes(p, &boxes)?)
+                    Ok(bodyseg_io::write_boxes_with(
+                        p,
+                        &boxes,
+                        Durability::Renamed,
+                    )?)
                 })?;
                 if self.label_images {
                     for (index, (camera, view)) in
                         self.rig.cameras.iter().zip(&self.views).enumerate()
                     {
-                        view.render_into(c, index as u8, z_buffer, label_image);
+                        view.render_into(c, index as u8, Some(hits), keys, label_image);
                         writer.write(
                             &format!("{prefix}labels/{}/{frame}.png", camera.name),
-                            |p| Ok(bodyseg_io::write_label_png(p, label_image)?),
+                            |p| {
+                                Ok(bodyseg_io::write_label_png_with(
+                                    p,
+                                    label_image,
+                                    Durability::Renamed,
+                                )?)
+                            },
                         )?;
                     }
                 }

@@ -22,7 +22,7 @@ use bodyseg_calib::{Intrinsics, Pose, RgbdCamera};
 pub(crate) const F32_TOLERANCE_PX: f64 = 1e-3;
 
 /// `u` of a point that lands outside the colour image or behind the colour camera.
-pub(crate) const NO_HIT: u32 = u32::MAX;
+pub const NO_HIT: u32 = u32::MAX;
 
 /// A pose into the colour frame (`color_from_depth` for the projection; any
 /// `color_from_x`, e.g. `color_from_world` to draw a world cloud back into a camera) and
@@ -41,15 +41,17 @@ pub struct ColorProjection {
     height: u32,
 }
 
-/// Where points land in the colour image, one entry per point (structure of arrays).
+/// Where points land in their camera's colour image, one entry per point (structure of
+/// arrays). [`crate::FrameProjector::project_frame_keeping_hits`] hands them out, so that
+/// a caller drawing the cloud back into the colour images does not project it again.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct Hits {
+pub struct Hits {
     /// Nearest colour pixel's column, or [`NO_HIT`].
-    pub u: Vec<u32>,
+    pub(crate) u: Vec<u32>,
     /// Nearest colour pixel's row (meaningless where `u` is [`NO_HIT`]).
-    pub v: Vec<u32>,
+    pub(crate) v: Vec<u32>,
     /// Depth along the colour camera's z, metres.
-    pub z_color_m: Vec<f32>,
+    pub(crate) z_color_m: Vec<f32>,
 }
 
 /// A borrowed range of [`Hits`].
@@ -71,6 +73,40 @@ impl<'a> HitsView<'a> {
 }
 
 impl Hits {
+    /// Points.
+    pub fn len(&self) -> usize {
+        self.u.len()
+    }
+
+    /// Whether there is no point.
+    pub fn is_empty(&self) -> bool {
+        self.u.is_empty()
+    }
+
+    /// Per point: the nearest colour pixel's column, or [`NO_HIT`] (outside the image
+    /// or behind the colour camera).
+    pub fn columns(&self) -> &[u32] {
+        &self.u
+    }
+
+    /// Per point: the nearest colour pixel's row (meaningless where the column is
+    /// [`NO_HIT`]).
+    pub fn rows(&self) -> &[u32] {
+        &self.v
+    }
+
+    /// Per point: its depth along the colour camera's z, metres.
+    pub fn z_color_m(&self) -> &[f32] {
+        &self.z_color_m
+    }
+
+    /// Forgets every point (keeps the allocations).
+    pub(crate) fn clear(&mut self) {
+        self.u.clear();
+        self.v.clear();
+        self.z_color_m.clear();
+    }
+
     pub(crate) fn zeroed(n: usize) -> Self {
         Hits {
             u: vec![0; n],

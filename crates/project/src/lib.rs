@@ -28,7 +28,7 @@ mod color;
 mod config;
 mod dsa;
 
-pub use color::ColorProjection;
+pub use color::{ColorProjection, Hits, NO_HIT};
 pub use config::{MAX_RADIUS_PX, ProjectConfig, ProjectError, ProjectMode};
 pub use dsa::project_labels;
 
@@ -38,7 +38,6 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use crate::color::Hits;
 use crate::dsa::{DepthLut, DsaScratch, apply_dsa, check_images, depth_lut, naive_labels};
 
 /// One camera's images of a frame: the raw depth image (depth sensor size) and the
@@ -171,9 +170,30 @@ impl FrameProjector {
         cfg: &ProjectConfig,
         out: &mut LabeledCloud,
     ) -> Result<(), ProjectError> {
-        let result = self.fill_frame(images, opts, cfg, out);
+        let result = self.fill_frame(images, opts, cfg, out, None);
         if result.is_err() {
             *out = LabeledCloud::default();
+        }
+        result
+    }
+
+    /// [`FrameProjector::project_frame_into`] that also hands out where every point of
+    /// `out` landed in its own camera's colour image (`hits`, one entry per point, in the
+    /// cloud's order; allocations reused): the projection computes them anyway, and a
+    /// caller that draws the labels back into the colour images then needs no second
+    /// projection. On error both `out` and `hits` are left empty.
+    pub fn project_frame_keeping_hits(
+        &self,
+        images: &[CameraImages<'_>],
+        opts: &BackProjectOptions,
+        cfg: &ProjectConfig,
+        out: &mut LabeledCloud,
+        hits: &mut Hits,
+    ) -> Result<(), ProjectError> {
+        let result = self.fill_frame(images, opts, cfg, out, Some(&mut *hits));
+        if result.is_err() {
+            *out = LabeledCloud::default();
+            hits.clear();
         }
         result
     }
@@ -184,6 +204,7 @@ impl FrameProjector {
         opts: &BackProjectOptions,
         cfg: &ProjectConfig,
         out: &mut LabeledCloud,
+        keep_hits: Option<&mut Hits>,
     ) -> Result<(), ProjectError> {
         cfg.validate()?;
         opts.validate()?;
@@ -282,8 +303,14 @@ impl FrameProjector {
             Some(s) => s,
             None => fresh.insert(Scratch::default()),
         };
-        let hits = &mut scratch.hits;
-        if dsa {
+        let Scratch {
+            hits: own_hits,
+            dsa: dsa_scratch,
+        } = scratch;
+        // The caller's hits when it keeps them (then stored in naive mode too), else ours.
+        let store = dsa || keep_hits.is_some();
+        let hits = keep_hits.unwrap_or(own_hits);
+        if store {
             // Every entry below `total` is overwritten by pass 2.
             hits.u.resize(total, 0);
             hits.v.resize(total, 0);
@@ -297,7 +324,7 @@ impl FrameProjector {
                 positions_m: &mut out.positions_m,
                 labels: &mut out.labels,
                 origins: &mut out.origins,
-                hits: dsa.then_some(HitsMut {
+                hits: store.then_some(HitsMut {
                     u: &mut hits.u,
                     v: &mut hits.v,
                     z_color_m: &mut hits.z_color_m,
@@ -341,14 +368,12 @@ impl FrameProjector {
                 label_parts.push(head);
                 rest = tail;
             }
-            scratch
-                .dsa
-                .resize_with(self.cameras.len(), DsaScratch::default);
-            let hits = &scratch.hits;
+            dsa_scratch.resize_with(self.cameras.len(), DsaScratch::default);
+            let hits = &*hits;
             label_parts
                 .into_par_iter()
                 .zip(ranges.into_par_iter())
-                .zip(scratch.dsa.par_iter_mut())
+                .zip(dsa_scratch.par_iter_mut())
                 .enumerate()
                 .for_each(|(c, ((labels_out, range), dsa_scratch))| {
                     let t = &self.cameras[c];

@@ -222,7 +222,7 @@ pub fn refine(
     boxes: &[PersonBox],
     cfg: &RefineConfig,
 ) -> Result<RefinedCloud, RefineError> {
-    let mut out = refine_variants(cloud, boxes, cfg, &[cfg.steps])?;
+    let mut out = refine_variants(cloud, boxes, cfg, &[cfg.steps], true)?;
     // One configuration asked, one returned.
     let labels = out.labels.swap_remove(0);
     Ok(RefinedCloud {
@@ -243,7 +243,7 @@ pub struct RefinedVariants {
     pub labels: Vec<Vec<Label>>,
     /// Per point, `(person index, cluster id)` as in [`RefinedCloud::clusters`]: the same
     /// for every configuration (they share the clustering); all `None` when only
-    /// `Reference` was asked.
+    /// `Reference` was asked; empty when not asked for (`with_clusters` false).
     pub clusters: Vec<Option<(u32, u32)>>,
 }
 
@@ -252,11 +252,14 @@ pub struct RefinedVariants {
 /// points). Each person is clustered once ([`analyse_person`]) and every configuration
 /// derived from that clustering, so the five configurations cost little more than one;
 /// each label list equals what [`refine`] gives with `cfg.steps` set to that entry.
+/// The clusters of every point (12 bytes each) are listed only `with_clusters` (a
+/// figure draws them; a plain run does not need them).
 pub fn refine_variants(
     cloud: &LabeledCloud,
     boxes: &[PersonBox],
     cfg: &RefineConfig,
     steps: &[Steps],
+    with_clusters: bool,
 ) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
     cloud.validate()?;
@@ -331,7 +334,7 @@ pub fn refine_variants(
             .map(|(idx, rs)| (idx.as_slice(), &rs[run_index]))
             .collect();
         // The clusters are the same for every configuration: collect them once.
-        let first = run_index == 0;
+        let first = run_index == 0 && with_clusters;
         let (labels, clusters) =
             fuse_labels(cloud, boxes, &per_person, cfg.keep_outside_boxes, first);
         out.labels.push(labels);
@@ -340,7 +343,7 @@ pub fn refine_variants(
         }
         run_index += 1;
     }
-    if out.clusters.is_empty() {
+    if with_clusters && out.clusters.is_empty() {
         out.clusters = vec![None; cloud.len()];
     }
     Ok(out)
@@ -376,9 +379,23 @@ fn fuse_labels(
     with_clusters: bool,
 ) -> (Vec<Label>, Vec<Option<(u32, u32)>>) {
     let n = cloud.len();
-    // Per point: the labels given by the people whose box holds it, as (person, label).
-    let mut first: Vec<Option<(u32, Label)>> = vec![None; n];
-    let mut disagree = vec![false; n];
+    // Points outside every box first (most of a room's points), then each person's
+    // points over them. Two bytes per point of working memory, no per-point `Option`s:
+    // this runs once per configuration on every frame.
+    let mut labels: Vec<Label> = cloud
+        .labels
+        .iter()
+        .map(|&original| match original {
+            o if keep_outside_boxes && !o.is_unknown() => o,
+            o if o.is_body() || o.is_unknown() => Label::BACKGROUND,
+            o => o,
+        })
+        .collect();
+    // Per point: how many people's boxes hold it, as far as the fuse cares.
+    const NONE: u8 = 0;
+    const AGREE: u8 = 1;
+    const DISAGREE: u8 = 2;
+    let mut seen = vec![NONE; n];
     let mut clusters = if with_clusters {
         vec![None; n]
     } else {
@@ -388,38 +405,41 @@ fn fuse_labels(
         for (k, &i) in idx.iter().enumerate() {
             let i = i as usize;
             let l = r.point_labels[k];
-            match first[i] {
-                None => {
-                    first[i] = Some((p as u32, l));
-                    if !with_clusters {
-                        continue;
+            match seen[i] {
+                NONE => {
+                    labels[i] = l;
+                    seen[i] = AGREE;
+                    if with_clusters {
+                        clusters[i] = r
+                            .clustering
+                            .cluster_of
+                            .get(k)
+                            .copied()
+                            .flatten()
+                            .map(|c| (p as u32, c));
                     }
-                    clusters[i] = r
-                        .clustering
-                        .cluster_of
-                        .get(k)
-                        .copied()
-                        .flatten()
-                        .map(|c| (p as u32, c));
                 }
-                Some((_, l0)) if l0 != l => disagree[i] = true,
-                Some(_) => {}
+                AGREE if labels[i] != l => seen[i] = DISAGREE,
+                _ => {}
             }
         }
     }
-    let labels = (0..n)
-        .map(|i| {
-            let original = cloud.labels[i];
-            match first[i] {
-                None if keep_outside_boxes && !original.is_unknown() => original,
-                None if original.is_body() || original.is_unknown() => Label::BACKGROUND,
-                None => original,
-                Some((_, l)) if !disagree[i] => l,
-                Some(_) if !original.is_unknown() => original,
-                Some(_) => nearest_box_label(cloud.positions_m[i], i as u32, boxes, people),
+    // People that disagree: the original label, or when unknown the nearest box's.
+    for (idx, _) in people {
+        for &i in *idx {
+            let iu = i as usize;
+            if seen[iu] != DISAGREE {
+                continue;
             }
-        })
-        .collect();
+            seen[iu] = AGREE; // Decided (a point is in several people's lists).
+            let original = cloud.labels[iu];
+            labels[iu] = if original.is_unknown() {
+                nearest_box_label(cloud.positions_m[iu], i, boxes, people)
+            } else {
+                original
+            };
+        }
+    }
     (labels, clusters)
 }
 

@@ -376,7 +376,8 @@ fn refine_variants_equal_one_refine_per_configuration() {
     let mut mrn = Vec::new();
     for base in [RefineConfig::default(), modes] {
         let variants =
-            bodyseg_refine::refine_variants(&p.cloud, &boxes, &base, &Steps::PAPER).expect("valid");
+            bodyseg_refine::refine_variants(&p.cloud, &boxes, &base, &Steps::PAPER, true)
+                .expect("valid");
         assert_eq!(variants.labels.len(), Steps::PAPER.len());
         let mut distinct = std::collections::HashSet::new();
         for (steps, got) in Steps::PAPER.iter().zip(&variants.labels) {

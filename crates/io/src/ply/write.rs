@@ -1,6 +1,6 @@
 //! PLY writer: FORMATS.md's exact vertex layout, binary little-endian or ASCII.
 
-use crate::{IoError, write_atomic};
+use crate::{Durability, IoError, write_atomic_with};
 use bodyseg_core::LabeledCloud;
 use std::io::{self, Write};
 use std::path::Path;
@@ -36,13 +36,15 @@ pub struct PlyWriteOptions {
     pub format: PlyFormat,
     /// Colour source.
     pub colors: PlyColors,
+    /// fsync or not (see [`Durability`]); synced by default.
+    pub durability: Durability,
 }
 
 /// Bytes per vertex in the binary encoding: 3 × f32, 3 × u8 colour, u8 label, u8
 /// camera, u32 pixel.
 const RECORD_BYTES: usize = 12 + 3 + 1 + 1 + 4;
 
-/// Writes `cloud` to `path` atomically (see [`write_atomic`]) in FORMATS.md's layout:
+/// Writes `cloud` to `path` atomically (see [`crate::write_atomic`]) in FORMATS.md's layout:
 /// one `vertex` element with `float x, y, z`, `uchar red, green, blue`, `uchar label`
 /// (255 = unknown), `uchar camera`, `uint pixel`, in the cloud's point order.
 ///
@@ -53,7 +55,7 @@ const RECORD_BYTES: usize = 12 + 3 + 1 + 1 + 4;
 /// written), [`IoError::Write`] on I/O failure (the destination is left untouched).
 pub fn write_ply(path: &Path, cloud: &LabeledCloud, opts: &PlyWriteOptions) -> Result<(), IoError> {
     check(cloud, opts, path)?;
-    write_atomic(path, |w| encode(cloud, opts, w))
+    write_atomic_with(path, opts.durability, |w| encode(cloud, opts, w))
 }
 
 /// The bytes [`write_ply`] would write; `path_for_errors` only names the destination in
