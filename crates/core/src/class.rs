@@ -97,7 +97,7 @@ impl Class {
     }
 
     /// Pascal-Person-Part palette colour (RGB).
-    pub fn color(self) -> [u8; 3] {
+    pub const fn color(self) -> [u8; 3] {
         match self {
             Class::Background => [0, 0, 0],
             Class::Head => [128, 0, 0],
@@ -143,6 +143,18 @@ impl Label {
         (usize::from(id) < NUM_CLASSES || id == Self::UNKNOWN_ID).then_some(Label(id))
     }
 
+    /// The label of an on-disk id, unknown for any id that names no class (no error:
+    /// for ids known to be valid, or where unknown is the right reading of a bad one).
+    #[inline]
+    pub const fn from_id_or_unknown(id: u8) -> Label {
+        // A select, not a branch: loops over whole images vectorise.
+        Label(if (id as usize) < NUM_CLASSES {
+            id
+        } else {
+            Self::UNKNOWN_ID
+        })
+    }
+
     /// The on-disk id (0..7, or 255 for unknown).
     pub fn id(self) -> u8 {
         self.0
@@ -164,10 +176,24 @@ impl Label {
     }
 
     /// Palette colour; unknown is drawn white so it stands out.
+    #[inline]
     pub fn color(self) -> [u8; 3] {
-        self.class().map_or([255, 255, 255], Class::color)
+        // A table rather than a match: PLY writing looks up every point's colour.
+        LABEL_COLORS[usize::from(self.0)]
     }
 }
+
+/// [`Label::color`] by label id: the class palette, white for unknown (and for ids no
+/// label has).
+const LABEL_COLORS: [[u8; 3]; 256] = {
+    let mut table = [[255u8; 3]; 256];
+    let mut i = 0;
+    while i < NUM_CLASSES {
+        table[i] = Class::ALL[i].color();
+        i += 1;
+    }
+    table
+};
 
 impl From<Class> for Label {
     fn from(c: Class) -> Label {
@@ -216,5 +242,21 @@ mod tests {
         let mut colors: Vec<_> = Class::ALL.iter().map(|c| c.color()).collect();
         colors.dedup();
         assert_eq!(colors.len(), NUM_CLASSES);
+        for c in Class::ALL {
+            assert_eq!(Label::from(c).color(), c.color());
+        }
+        assert_eq!(Label::UNKNOWN.color(), [255, 255, 255]);
+    }
+
+    #[test]
+    fn lossy_ids_are_unknown_outside_the_classes() {
+        for id in 0..=255u8 {
+            let want = Label::from_id(id).filter(|l| !l.is_unknown());
+            let got = Label::from_id_or_unknown(id);
+            match want {
+                Some(l) => assert_eq!(got, l, "{id}"),
+                None => assert!(got.is_unknown(), "{id}"),
+            }
+        }
     }
 }

@@ -74,9 +74,10 @@ impl BoxTest {
         // Rotate into the box frame by -yaw.
         let lx = self.cos * dx + self.sin * dy;
         let ly = -self.sin * dx + self.cos * dy;
-        lx.abs() <= self.half_extents_m[0]
-            && ly.abs() <= self.half_extents_m[1]
-            && dz.abs() <= self.half_extents_m[2]
+        // `&`, not `&&`: no branch per test (scans over whole clouds call this).
+        (lx.abs() <= self.half_extents_m[0])
+            & (ly.abs() <= self.half_extents_m[1])
+            & (dz.abs() <= self.half_extents_m[2])
     }
 }
 

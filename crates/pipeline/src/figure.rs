@@ -118,13 +118,12 @@ impl LabelView {
         image.height = height;
         image.probs = None;
         image.labels.clear();
-        image.labels.extend(
-            keys.chunks(pw)
-                .skip(r)
-                .take(height as usize)
-                .flat_map(|row| &row[r..r + width as usize])
-                .map(|&k| label_of_key(k)),
-        );
+        for row in keys.chunks(pw).skip(r).take(height as usize) {
+            // One row at a time: a plain map that vectorises.
+            image
+                .labels
+                .extend(row[r..r + width as usize].iter().map(|&k| label_of_key(k)));
+        }
     }
 }
 
@@ -143,7 +142,7 @@ fn depth_key(z_m: f32, label: Label) -> u32 {
 /// The label of a key ([`EMPTY_KEY`] → unknown).
 #[inline(always)]
 fn label_of_key(key: u32) -> Label {
-    Label::from_id((key & 0xFF) as u8).unwrap_or(Label::UNKNOWN)
+    Label::from_id_or_unknown((key & 0xFF) as u8)
 }
 
 /// A fixed orthographic viewpoint for the panels: screen axes in the world and the part

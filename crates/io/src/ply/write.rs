@@ -129,13 +129,16 @@ fn encode(cloud: &LabeledCloud, opts: &PlyWriteOptions, w: &mut dyn Write) -> io
             let o = cloud.origins[i];
             match opts.format {
                 PlyFormat::BinaryLittleEndian => {
-                    for c in p {
-                        buf.extend_from_slice(&c.to_le_bytes());
-                    }
-                    buf.extend_from_slice(&rgb);
-                    buf.push(label.id());
-                    buf.push(o.camera);
-                    buf.extend_from_slice(&o.pixel.to_le_bytes());
+                    // One fixed-size record, one copy: no capacity check per field.
+                    let mut record = [0u8; RECORD_BYTES];
+                    record[0..4].copy_from_slice(&p[0].to_le_bytes());
+                    record[4..8].copy_from_slice(&p[1].to_le_bytes());
+                    record[8..12].copy_from_slice(&p[2].to_le_bytes());
+                    record[12..15].copy_from_slice(&rgb);
+                    record[15] = label.id();
+                    record[16] = o.camera;
+                    record[17..21].copy_from_slice(&o.pixel.to_le_bytes());
+                    buf.extend_from_slice(&record);
                 }
                 PlyFormat::Ascii => {
                     // `{}` on f32 prints the shortest decimal that parses back exactly.
