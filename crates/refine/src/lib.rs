@@ -28,7 +28,7 @@ pub mod dbscan;
 pub mod graph;
 pub mod steps;
 
-pub use config::{GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode};
+pub use config::{GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode, VoteMode};
 pub use dbscan::{Clustering, DbscanParams, dbscan, dbscan_brute_force};
 pub use graph::{
     BodyTree, ClusterFeatures, Graph, best_tree_coverage, best_tree_paper, build_graph,
@@ -252,14 +252,47 @@ pub struct RefinedVariants {
 /// points). Each person is clustered once ([`analyse_person`]) and every configuration
 /// derived from that clustering, so the five configurations cost little more than one;
 /// each label list equals what [`refine`] gives with `cfg.steps` set to that entry.
+///
+/// With `cfg.vote = multi_view` this is an error (no vote labels): see
+/// [`refine_variants_voted`].
 pub fn refine_variants(
     cloud: &LabeledCloud,
     boxes: &[PersonBox],
     cfg: &RefineConfig,
     steps: &[Steps],
 ) -> Result<RefinedVariants, RefineError> {
+    refine_variants_voted(cloud, None, boxes, cfg, steps)
+}
+
+/// [`refine_variants`] with the labels of the projection's multi-view vote
+/// (`bodyseg_project::FrameProjector::vote_labels`, one per point of `cloud`). With
+/// `cfg.vote = multi_view` every configuration but Reference starts from `voted` instead
+/// of `cloud.labels` (clustering, steps, and the fuse's "original label"); Reference is
+/// `cloud.labels`, the projection, either way. With `cfg.vote = off`, `voted` is ignored.
+///
+/// # Errors
+/// As [`refine_variants`]; `cfg.vote = multi_view` and `voted` is `None` or not one label
+/// per point.
+pub fn refine_variants_voted(
+    cloud: &LabeledCloud,
+    voted: Option<&[Label]>,
+    boxes: &[PersonBox],
+    cfg: &RefineConfig,
+    steps: &[Steps],
+) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
     cloud.validate()?;
+    // The labels the configurations other than Reference start from.
+    let start: &[Label] = match (cfg.vote, voted) {
+        (VoteMode::Off, _) => &cloud.labels,
+        (VoteMode::MultiView, Some(v)) if v.len() == cloud.len() => v,
+        (VoteMode::MultiView, v) => {
+            return Err(RefineError::VoteLabels {
+                got: v.map_or(0, <[Label]>::len),
+                want: cloud.len(),
+            });
+        }
+    };
     if let Some(reason) = boxes.iter().find_map(PersonBox::invalid_reason) {
         return Err(RefineError::InvalidBox { reason });
     }
@@ -283,14 +316,14 @@ pub fn refine_variants(
                 // copy.
                 let copied;
                 let (pos, lab): (&[Vec3], &[Label]) = if idx.len() == cloud.len() {
-                    (&cloud.positions_m, &cloud.labels)
+                    (&cloud.positions_m, start)
                 } else {
                     copied = (
                         idx.iter()
                             .map(|&i| cloud.positions_m[i as usize])
                             .collect::<Vec<Vec3>>(),
                         idx.iter()
-                            .map(|&i| cloud.labels[i as usize])
+                            .map(|&i| start[i as usize])
                             .collect::<Vec<Label>>(),
                     );
                     (&copied.0, &copied.1)
@@ -332,8 +365,14 @@ pub fn refine_variants(
             .collect();
         // The clusters are the same for every configuration: collect them once.
         let first = run_index == 0;
-        let (labels, clusters) =
-            fuse_labels(cloud, boxes, &per_person, cfg.keep_outside_boxes, first);
+        let (labels, clusters) = fuse_labels(
+            cloud,
+            start,
+            boxes,
+            &per_person,
+            cfg.keep_outside_boxes,
+            first,
+        );
         out.labels.push(labels);
         if first {
             out.clusters = clusters;
@@ -359,17 +398,19 @@ pub fn fuse(
 ) -> RefinedCloud {
     let refs: Vec<(&[u32], &PersonRefinement)> =
         people.iter().map(|(idx, r)| (idx.as_slice(), r)).collect();
-    let (labels, clusters) = fuse_labels(cloud, boxes, &refs, keep_outside_boxes, true);
+    let (labels, clusters) =
+        fuse_labels(cloud, &cloud.labels, boxes, &refs, keep_outside_boxes, true);
     RefinedCloud {
         cloud: cloud.with_labels(labels),
         clusters,
     }
 }
 
-/// [`fuse`] on borrowed people: the labels, and the clusters when `with_clusters` (else
-/// an empty list).
+/// [`fuse`] on borrowed people, with `original` as the points' labels before refinement:
+/// the labels, and the clusters when `with_clusters` (else an empty list).
 fn fuse_labels(
     cloud: &LabeledCloud,
+    original: &[Label],
     boxes: &[PersonBox],
     people: &[(&[u32], &PersonRefinement)],
     keep_outside_boxes: bool,
@@ -409,7 +450,7 @@ fn fuse_labels(
     }
     let labels = (0..n)
         .map(|i| {
-            let original = cloud.labels[i];
+            let original = original[i];
             match first[i] {
                 None if keep_outside_boxes && !original.is_unknown() => original,
                 None if original.is_body() || original.is_unknown() => Label::BACKGROUND,
