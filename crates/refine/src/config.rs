@@ -88,7 +88,7 @@ pub enum NoiseMode {
 }
 
 /// Whether the multi-view consistency vote runs before the steps (the paper's "future
-/// work"; ALGORITHM.md §5.0).
+/// work"; ALGORITHM.md §3 "Multi-view" and §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum VoteMode {
