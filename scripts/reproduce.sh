@@ -4,12 +4,14 @@
 # runs the paper's five configurations (Reference, M, N, M-N, M-R-N) for both 2D prediction
 # sources (the synthetic parser errors recorded with the recording, and the bundled ONNX
 # model) and both projection modes (naive, DSA), then the improved refinement
-# (configs/benchmarks/improved.toml), the projection study, the figures and the regression
-# subset, and writes the tables and their reading into docs/results.md.
+# (configs/benchmarks/improved.toml) and the improved refinement with the multi-view vote
+# for both projections (configs/benchmarks/improved_vote.toml), the projection study, the
+# figures and the regression subset, and writes the tables and their reading into
+# docs/results.md.
 #
 #   scripts/reproduce.sh [WORK_DIR]        (default: target/reproduce; reused when run again)
 #
-# About 10 minutes on a 2-core machine. A second run reuses the rendered recordings (the
+# About 15 minutes on a 2-core machine. A second run reuses the rendered recordings (the
 # same seeds give the same bytes) but runs every configuration again: the code may have
 # changed since.
 set -euo pipefail
@@ -52,12 +54,17 @@ convert() {
     echo "==> $out"
     "$bodyseg" convert --input "$work/rec" --format recording --out "$work/runs/$out" -q "$@" \
         || [ $? -eq 3 ]
+    # Only the reports are read: the clouds and label images (~2 GB per run) go.
+    find "$work/runs/$out" \( -name '*.ply' -o -path '*/labels/*.png' \) -delete
 }
 for source in recorded model; do
     for mode in naive dsa; do
         convert "${source}_${mode}" --parser "$source" --mode "$mode"
     done
     convert "${source}_dsa_improved" --parser "$source" --mode dsa --config configs/benchmarks/improved.toml
+    for mode in naive dsa; do
+        convert "${source}_${mode}_vote" --parser "$source" --mode "$mode" --config configs/benchmarks/improved_vote.toml
+    done
 done
 
 echo "==> projection study (perfect parser: every wrong point is a DSA error)"

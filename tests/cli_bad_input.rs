@@ -210,3 +210,16 @@ fn output_in_a_missing_folder() {
     );
     assert_fails(&out, d, &before, &["no/such/dir/o.ply", "cannot write"]);
 }
+
+#[test]
+fn multi_view_vote_on_a_cloud_file() {
+    // The vote needs every camera's images: `bodyseg refine` on a cloud has none, and says
+    // so instead of silently refining the projected labels.
+    let dir = tempdir();
+    let d = dir.path();
+    write_scene(d);
+    std::fs::write(d.join("vote.toml"), "[refine]\nvote = \"multi_view\"\n").expect("write");
+    let before = files_in(d);
+    let out = refine(d, "in.ply", "boxes.json", &["--config", "vote.toml"]);
+    assert_fails(&out, d, &before, &["refine.vote", "bodyseg run"]);
+}

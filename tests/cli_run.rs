@@ -249,3 +249,57 @@ fn a_killed_run_finishes_when_started_again_with_identical_outputs() {
         );
     }
 }
+
+#[test]
+fn the_multi_view_vote_changes_the_steps_and_leaves_reference_alone() {
+    let rec = recording();
+    let dir = tempdir();
+    std::fs::write(
+        dir.path().join("vote.toml"),
+        "[refine]\nvote = \"multi_view\"\n",
+    )
+    .expect("write");
+    let run = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "run",
+            "--recording",
+            rec.to_str().expect("utf-8"),
+            "--out",
+            out,
+            "--limit",
+            "2",
+            "--figure",
+            "none",
+            "--no-label-images",
+            "-q",
+        ];
+        args.extend_from_slice(extra);
+        let o = bodyseg(dir.path(), &args);
+        assert_ok(&o, "bodyseg run");
+        let out = dir.path().join(out);
+        let report = bodyseg_eval::Report::from_json(
+            &std::fs::read_to_string(out.join("report.json")).expect("report.json"),
+        )
+        .expect("report parses");
+        let log = std::fs::read_to_string(out.join("run.json")).expect("run.json");
+        (report, log)
+    };
+    let (paper, paper_log) = run("paper", &[]);
+    let (vote, vote_log) = run("vote", &["--config", "vote.toml"]);
+    // Reference is the projection in both: the same confusion matrix, hence equal metrics.
+    assert_eq!(metrics(&paper, "Reference"), metrics(&vote, "Reference"));
+    // The vote runs (its own stage) only when asked for.
+    assert!(vote_log.contains("\"vote\""), "{vote_log}");
+    assert!(!paper_log.contains("\"vote\""), "{paper_log}");
+    // M alone starts from the voted labels: points DSA left unknown that another camera
+    // sees get that camera's label, so M scores higher than the paper's M (where they
+    // count as background).
+    let (m_paper, m_vote) = (
+        metrics(&paper, "M").biou.expect("BIoU"),
+        metrics(&vote, "M").biou.expect("BIoU"),
+    );
+    assert!(
+        m_vote > m_paper + 0.01,
+        "M BIoU: vote {m_vote:.4}, paper {m_paper:.4}"
+    );
+}

@@ -33,7 +33,7 @@ use bodyseg_io::{DepthImage, Durability, PlyFormat, PlyWriteOptions};
 use bodyseg_parsing::{OnnxSegmenter, Segmenter, ViewInput};
 use bodyseg_people::BoxMode;
 use bodyseg_project::{CameraImages, FrameProjector, Hits};
-use bodyseg_refine::{RefinedVariants, Steps};
+use bodyseg_refine::{RefinedVariants, Steps, VoteMode};
 use serde::Serialize;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -205,6 +205,8 @@ struct Scratch {
     /// The label images' depth-and-label keys.
     keys: Vec<u32>,
     label_image: LabelImage,
+    /// The multi-view vote's labels (`refine.vote = multi_view`; empty otherwise).
+    voted: Vec<Label>,
 }
 
 impl std::fmt::Debug for FrameProcessor {
@@ -408,6 +410,7 @@ impl FrameProcessor {
                 hits: Hits::default(),
                 keys: Vec::new(),
                 label_image: LabelImage::filled(0, 0, Label::UNKNOWN),
+                voted: Vec::new(),
             });
         let result = self.process_with(inputs, writer, stages, &mut scratch);
         if let Ok(mut p) = self.scratch.lock() {
@@ -429,19 +432,20 @@ impl FrameProcessor {
             hits,
             keys,
             label_image,
+            voted,
         } = scratch;
         let frame = inputs.frame.as_str();
         let cfg = &self.config;
+        let images: Vec<CameraImages<'_>> = inputs
+            .depth
+            .iter()
+            .zip(&inputs.labels)
+            .map(|(d, l)| CameraImages {
+                depth_raw: &d.depth_mm,
+                labels: l,
+            })
+            .collect();
         let ((), took) = timed(|| -> Result<()> {
-            let images: Vec<CameraImages<'_>> = inputs
-                .depth
-                .iter()
-                .zip(&inputs.labels)
-                .map(|(d, l)| CameraImages {
-                    depth_raw: &d.depth_mm,
-                    labels: l,
-                })
-                .collect();
             if self.label_images {
                 // The label images reuse where the points landed.
                 projector.project_frame_keeping_hits(
@@ -463,6 +467,22 @@ impl FrameProcessor {
         })?;
         let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
         stages.push(Stage::new("project", took, String::new()));
+        let vote = cfg.refine.vote == VoteMode::MultiView;
+        if vote {
+            let ((), took) = timed(|| -> Result<()> {
+                projector
+                    .vote_labels(
+                        &images,
+                        &cfg.backproject.options(),
+                        &cfg.project,
+                        cloud,
+                        voted,
+                    )
+                    .context("multi-view vote")?;
+                Ok(())
+            })?;
+            stages.push(Stage::new("vote", took, String::new()));
+        }
 
         let (boxes, took) = timed(|| -> Result<PersonBoxes> {
             let mut boxes = if cfg.boxes.mode == BoxMode::File {
@@ -489,8 +509,15 @@ impl FrameProcessor {
             steps.push(cfg.refine.steps);
         }
         let (mut variants, took) = timed(|| {
-            bodyseg_refine::refine_variants(cloud, &boxes.boxes, &cfg.refine, &steps, figure)
-                .context("refinement")
+            bodyseg_refine::refine_variants_voted(
+                cloud,
+                vote.then_some(voted.as_slice()),
+                &boxes.boxes,
+                &cfg.refine,
+                &steps,
+                figure,
+            )
+            .context("refinement")
         })?;
         stages.push(Stage::new("refine", took, String::new()));
         let main = steps

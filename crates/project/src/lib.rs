@@ -12,6 +12,10 @@
 //!   errors by an occlusion z-buffer, a depth-edge / flying-pixel test, a probability
 //!   threshold and a label-boundary vote, each switchable in [`ProjectConfig`].
 //!
+//! Beside the projected labels, and only when asked for,
+//! [`FrameProjector::vote_labels`] gives the multi-view consistency vote: a point seen
+//! by several cameras takes the label most of them agree on (module `vote`).
+//!
 //! # Conventions
 //! - Frames: depth points are given in the depth sensor's optical frame (metres);
 //!   `p_color = color_from_depth · p_depth` is projected with the colour intrinsics,
@@ -27,6 +31,7 @@
 mod color;
 mod config;
 mod dsa;
+mod vote;
 
 pub use color::{ColorProjection, Hits, NO_HIT};
 pub use config::{MAX_RADIUS_PX, ProjectConfig, ProjectError, ProjectMode};

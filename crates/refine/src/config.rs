@@ -26,6 +26,16 @@ pub enum RefineError {
         /// What is wrong with it.
         reason: String,
     },
+    /// `vote = "multi_view"` without the vote's labels, or with a list of another length.
+    #[error(
+        "refine.vote = \"multi_view\" needs the multi-view vote's labels, one per point ({got} for {want} points): only bodyseg run / convert, which have every camera's images, can run it"
+    )]
+    VoteLabels {
+        /// Labels given (0 when none).
+        got: usize,
+        /// Points of the cloud.
+        want: usize,
+    },
 }
 
 impl From<bodyseg_core::CloudError> for RefineError {
@@ -75,6 +85,21 @@ pub enum NoiseMode {
     /// with no clustered point within `eps_m`, its own label (unknown: the nearest
     /// clustered point's).
     Weighted,
+}
+
+/// Whether the multi-view consistency vote runs before the steps (the paper's "future
+/// work"; ALGORITHM.md §3 "Multi-view" and §5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VoteMode {
+    /// The paper: the steps start from the projected labels.
+    #[default]
+    Off,
+    /// Every configuration but Reference starts from the labels of the projection's
+    /// multi-view vote (a point seen by several colour cameras takes the label most of
+    /// them agree on; `bodyseg_project::FrameProjector::vote_labels`), which the caller
+    /// hands to [`crate::refine_variants_voted`]. Reference stays the projected labels.
+    MultiView,
 }
 
 /// Which refinement steps run: the paper's five configurations and the rest of the
@@ -245,6 +270,11 @@ pub struct RefineConfig {
     /// votes. The cloud carries no parser probabilities, so every own label counts the
     /// same. Default 1.0.
     pub noise_self_weight: f32,
+    /// `off` (default, the paper) or `multi_view`: the steps start from the labels of
+    /// the multi-view consistency vote instead of the projected ones (Reference is the
+    /// projected labels either way). Needs the projection's depth and label images, so
+    /// only `bodyseg run` / `convert` can run it, not `bodyseg refine` on a cloud file.
+    pub vote: VoteMode,
     /// Steps to run: `reference`, `M`, `N`, `M-N`, `M-R-N` (default) or any other mix.
     pub steps: Steps,
     /// Keep the labels of body points outside every box (default false: they are outliers
@@ -269,6 +299,7 @@ impl Default for RefineConfig {
             noise: NoiseMode::Nearest,
             noise_k: 16,
             noise_self_weight: 1.0,
+            vote: VoteMode::Off,
             steps: Steps::MRN,
             keep_outside_boxes: false,
             merge_into_background: false,

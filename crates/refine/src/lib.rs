@@ -28,7 +28,7 @@ pub mod dbscan;
 pub mod graph;
 pub mod steps;
 
-pub use config::{GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode};
+pub use config::{GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode, VoteMode};
 pub use dbscan::{Clustering, DbscanParams, dbscan, dbscan_brute_force};
 pub use graph::{
     BodyTree, ClusterFeatures, Graph, best_tree_coverage, best_tree_paper, build_graph,
@@ -254,6 +254,9 @@ pub struct RefinedVariants {
 /// each label list equals what [`refine`] gives with `cfg.steps` set to that entry.
 /// The clusters of every point (12 bytes each) are listed only `with_clusters` (a
 /// figure draws them; a plain run does not need them).
+///
+/// With `cfg.vote = multi_view` this is an error (no vote labels): see
+/// [`refine_variants_voted`].
 pub fn refine_variants(
     cloud: &LabeledCloud,
     boxes: &[PersonBox],
@@ -261,8 +264,39 @@ pub fn refine_variants(
     steps: &[Steps],
     with_clusters: bool,
 ) -> Result<RefinedVariants, RefineError> {
+    refine_variants_voted(cloud, None, boxes, cfg, steps, with_clusters)
+}
+
+/// [`refine_variants`] with the labels of the projection's multi-view vote
+/// (`bodyseg_project::FrameProjector::vote_labels`, one per point of `cloud`). With
+/// `cfg.vote = multi_view` every configuration but Reference starts from `voted` instead
+/// of `cloud.labels` (clustering, steps, and the fuse's "original label"); Reference is
+/// `cloud.labels`, the projection, either way. With `cfg.vote = off`, `voted` is ignored.
+///
+/// # Errors
+/// As [`refine_variants`]; `cfg.vote = multi_view` and `voted` is `None` or not one label
+/// per point.
+pub fn refine_variants_voted(
+    cloud: &LabeledCloud,
+    voted: Option<&[Label]>,
+    boxes: &[PersonBox],
+    cfg: &RefineConfig,
+    steps: &[Steps],
+    with_clusters: bool,
+) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
     cloud.validate()?;
+    // The labels the configurations other than Reference start from.
+    let start: &[Label] = match (cfg.vote, voted) {
+        (VoteMode::Off, _) => &cloud.labels,
+        (VoteMode::MultiView, Some(v)) if v.len() == cloud.len() => v,
+        (VoteMode::MultiView, v) => {
+            return Err(RefineError::VoteLabels {
+                got: v.map_or(0, <[Label]>::len),
+                want: cloud.len(),
+            });
+        }
+    };
     if let Some(reason) = boxes.iter().find_map(PersonBox::invalid_reason) {
         return Err(RefineError::InvalidBox { reason });
     }
@@ -286,14 +320,14 @@ pub fn refine_variants(
                 // copy.
                 let copied;
                 let (pos, lab): (&[Vec3], &[Label]) = if idx.len() == cloud.len() {
-                    (&cloud.positions_m, &cloud.labels)
+                    (&cloud.positions_m, start)
                 } else {
                     copied = (
                         idx.iter()
                             .map(|&i| cloud.positions_m[i as usize])
                             .collect::<Vec<Vec3>>(),
                         idx.iter()
-                            .map(|&i| cloud.labels[i as usize])
+                            .map(|&i| start[i as usize])
                             .collect::<Vec<Label>>(),
                     );
                     (&copied.0, &copied.1)
@@ -335,8 +369,14 @@ pub fn refine_variants(
             .collect();
         // The clusters are the same for every configuration: collect them once.
         let first = run_index == 0 && with_clusters;
-        let (labels, clusters) =
-            fuse_labels(cloud, boxes, &per_person, cfg.keep_outside_boxes, first);
+        let (labels, clusters) = fuse_labels(
+            cloud,
+            start,
+            boxes,
+            &per_person,
+            cfg.keep_outside_boxes,
+            first,
+        );
         out.labels.push(labels);
         if first {
             out.clusters = clusters;
@@ -362,17 +402,19 @@ pub fn fuse(
 ) -> RefinedCloud {
     let refs: Vec<(&[u32], &PersonRefinement)> =
         people.iter().map(|(idx, r)| (idx.as_slice(), r)).collect();
-    let (labels, clusters) = fuse_labels(cloud, boxes, &refs, keep_outside_boxes, true);
+    let (labels, clusters) =
+        fuse_labels(cloud, &cloud.labels, boxes, &refs, keep_outside_boxes, true);
     RefinedCloud {
         cloud: cloud.with_labels(labels),
         clusters,
     }
 }
 
-/// [`fuse`] on borrowed people: the labels, and the clusters when `with_clusters` (else
-/// an empty list).
+/// [`fuse`] on borrowed people, with `original` as the points' labels before refinement:
+/// the labels, and the clusters when `with_clusters` (else an empty list).
 fn fuse_labels(
     cloud: &LabeledCloud,
+    original: &[Label],
     boxes: &[PersonBox],
     people: &[(&[u32], &PersonRefinement)],
     keep_outside_boxes: bool,
@@ -382,8 +424,7 @@ fn fuse_labels(
     // Points outside every box first (most of a room's points), then each person's
     // points over them. Two bytes per point of working memory, no per-point `Option`s:
     // this runs once per configuration on every frame.
-    let mut labels: Vec<Label> = cloud
-        .labels
+    let mut labels: Vec<Label> = original
         .iter()
         .map(|&original| match original {
             o if keep_outside_boxes && !o.is_unknown() => o,
@@ -432,11 +473,11 @@ fn fuse_labels(
                 continue;
             }
             seen[iu] = AGREE; // Decided (a point is in several people's lists).
-            let original = cloud.labels[iu];
-            labels[iu] = if original.is_unknown() {
+            let own = original[iu];
+            labels[iu] = if own.is_unknown() {
                 nearest_box_label(cloud.positions_m[iu], i, boxes, people)
             } else {
-                original
+                own
             };
         }
     }

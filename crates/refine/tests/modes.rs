@@ -1,10 +1,14 @@
 //! The refinement modes beside the paper's (issue 8): each on a hand-built scene that the
-//! paper's mode gets wrong and the mode gets right (ALGORITHM.md §5.3, §5.6).
+//! paper's mode gets wrong and the mode gets right (ALGORITHM.md §5.3, §5.6; the
+//! multi-view vote's own case is in `bodyseg-project`'s tests, here its use by the steps).
 
 mod common;
 
-use bodyseg_core::{Class, Label};
-use bodyseg_refine::{GraphMode, NoiseMode, RefineConfig, TreeMode, refine, refine_person};
+use bodyseg_core::{Class, Label, PersonBox};
+use bodyseg_refine::{
+    GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode, VoteMode, refine,
+    refine_person, refine_variants, refine_variants_voted,
+};
 use common::{Scene, ball, cuboid, l};
 
 /// The test scenes' DBSCAN (lattices of pitch 0.02–0.025 m) with the paper's modes.
@@ -333,4 +337,65 @@ fn weighted_noise_with_one_voter_and_no_own_vote_equals_nearest() {
     };
     let weighted = refine(&p.cloud, &boxes, &one).expect("valid");
     assert_eq!(nearest.cloud.labels, weighted.cloud.labels);
+}
+
+#[test]
+fn vote_mode_starts_the_steps_from_the_voted_labels_and_leaves_reference_alone() {
+    let mut s = Scene::default();
+    slab_body(&mut s);
+    // A forearm that one camera's parser missed: its points (1 cm off the other views')
+    // are background in the projection. The multi-view vote (two views against one) gave
+    // them lower arm; here that vote is the `voted` list.
+    let arm = s.add(cuboid(
+        [0.2, -0.04, 1.0],
+        [0.24, 0.0, 1.3],
+        0.02,
+        l(Class::LowerArms),
+    ));
+    let missed = s.add(cuboid(
+        [0.21, -0.03, 1.01],
+        [0.23, -0.01, 1.31],
+        0.02,
+        Label::BACKGROUND,
+    ));
+    let cloud = s.cloud();
+    let mut voted = cloud.labels.clone();
+    for i in s.parts[missed].clone() {
+        voted[i] = l(Class::LowerArms);
+    }
+    let boxes = [PersonBox {
+        id: 0,
+        center_m: [0.0, 0.0, 1.0],
+        half_extents_m: [0.6, 0.6, 1.0],
+        yaw_rad: 0.0,
+    }];
+    let steps = [Steps::Reference, Steps::MRN];
+    let off = paper("M-R-N");
+    let on = RefineConfig {
+        vote: VoteMode::MultiView,
+        ..off.clone()
+    };
+    // The paper's M-R-N keeps the missed view's points background (spheres alike: neither
+    // inside the other).
+    let paper_out = refine_variants(&cloud, &boxes, &off, &steps, true).expect("valid");
+    assert!(all(&s, &paper_out.labels[1], missed, Class::Background));
+    let out =
+        refine_variants_voted(&cloud, Some(&voted), &boxes, &on, &steps, true).expect("valid");
+    // Reference is the projection, untouched by the vote; M-R-N starts from the vote.
+    assert_eq!(out.labels[0], cloud.labels);
+    assert!(all(&s, &out.labels[1], missed, Class::LowerArms));
+    assert!(all(&s, &out.labels[1], arm, Class::LowerArms));
+    // The vote off: `voted` is ignored.
+    let ignored =
+        refine_variants_voted(&cloud, Some(&voted), &boxes, &off, &steps, true).expect("valid");
+    assert_eq!(ignored, paper_out);
+    // The vote on without its labels, or with a list of another length: an error naming
+    // the key, never a silent fallback to the projection.
+    for v in [None, Some(&voted[1..])] {
+        let e = refine_variants_voted(&cloud, v, &boxes, &on, &steps, true)
+            .expect_err("no vote labels");
+        assert!(matches!(e, RefineError::VoteLabels { .. }), "{e}");
+        assert!(e.to_string().starts_with("refine.vote"), "{e}");
+    }
+    assert!(refine(&cloud, &boxes, &on).is_err());
 }
