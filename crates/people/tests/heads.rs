@@ -1,0 +1,130 @@
+//! Geometry mode's head test with a neighbour close by (issue 6): hand-made clouds of
+//! cylinder and sphere surfaces (as `robot_arm.rs`), a floor and two people side by side.
+//! A short person's head must stay a head when a taller neighbour's shoulder and arm are
+//! within `head_separation_m` of it at head height.
+
+use bodyseg_core::math::Vec3;
+use bodyseg_core::{Label, LabeledCloud, PersonBox, PointOrigin};
+use bodyseg_people::{BoxMode, BoxesConfig, box_iou, find_boxes};
+use bodyseg_synth::geometry::{frame_from_axis, norm, sub};
+
+/// Surface sample spacing, metres: ≈ 25 points per 5 cm voxel of surface, like a Kinect
+/// v2 frame at 2–3 m.
+const STEP_M: f32 = 0.01;
+
+/// Points on the side of the cylinder from `a` to `b`.
+fn cylinder(out: &mut Vec<Vec3>, a: Vec3, b: Vec3, radius: f32) {
+    let len = norm(sub(b, a));
+    let [u, v, w] = frame_from_axis(sub(b, a));
+    let rings = (len / STEP_M).ceil() as usize;
+    let around = (std::f32::consts::TAU * radius / STEP_M).ceil() as usize;
+    for i in 0..=rings {
+        let t = len * i as f32 / rings as f32;
+        for k in 0..around {
+            let (s, c) = (std::f32::consts::TAU * k as f32 / around as f32).sin_cos();
+            out.push(std::array::from_fn(|d| {
+                a[d] + w[d] * t + radius * (c * u[d] + s * v[d])
+            }));
+        }
+    }
+}
+
+/// Points on a sphere (Fibonacci lattice).
+fn sphere(out: &mut Vec<Vec3>, center: Vec3, radius: f32) {
+    let n = (4.0 * std::f32::consts::PI * radius * radius / (STEP_M * STEP_M)) as usize;
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    for i in 0..n {
+        let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+        let r = (1.0 - z * z).sqrt();
+        let (s, c) = (golden * i as f32).sin_cos();
+        out.push([
+            center[0] + radius * r * c,
+            center[1] + radius * r * s,
+            center[2] + radius * z,
+        ]);
+    }
+}
+
+/// A person `height_m` tall standing at (`x`, `y`), facing +y (shoulders along x): the
+/// 1.72 m body of `robot_arm.rs` scaled. Returns their true box (exact extent plus
+/// bodyseg-synth's 5 cm margin, from the floor up).
+fn person(out: &mut Vec<Vec3>, x: f32, y: f32, height_m: f32) -> PersonBox {
+    let s = height_m / 1.72;
+    let at = |dx: f32, dy: f32, z: f32| [x + s * dx, y + s * dy, s * z];
+    sphere(out, at(0.0, 0.0, 1.62), s * 0.1);
+    cylinder(out, at(0.0, 0.0, 1.44), at(0.0, 0.0, 1.54), s * 0.05);
+    cylinder(out, at(0.0, 0.0, 0.88), at(0.0, 0.0, 1.44), s * 0.16);
+    // Shoulders: joins the neck to the trunk and the arms (an open trunk's rim is
+    // farther than `person_gap_m` from a scaled-up neck).
+    cylinder(out, at(-0.22, 0.0, 1.42), at(0.22, 0.0, 1.42), s * 0.06);
+    for side in [-1.0, 1.0] {
+        cylinder(
+            out,
+            at(side * 0.09, 0.0, 0.0),
+            at(side * 0.09, 0.0, 0.9),
+            s * 0.07,
+        );
+        cylinder(
+            out,
+            at(side * 0.22, 0.0, 1.42),
+            at(side * 0.24, 0.0, 0.86),
+            s * 0.045,
+        );
+    }
+    // Extent: x ±0.285 (arms), y ±0.16 (torso), z 0–1.72, scaled; plus 0.05 on every
+    // side and on top.
+    PersonBox {
+        id: 0,
+        center_m: [x, y, (height_m + 0.05) / 2.0],
+        half_extents_m: [s * 0.285 + 0.05, s * 0.16 + 0.05, (height_m + 0.05) / 2.0],
+        yaw_rad: 0.0,
+    }
+}
+
+fn floor(out: &mut Vec<Vec3>) {
+    let n = (4.0 / 0.02) as i32;
+    for i in 0..n {
+        for j in 0..n {
+            out.push([-2.0 + 0.02 * i as f32, -2.0 + 0.02 * j as f32, 0.0]);
+        }
+    }
+}
+
+fn cloud(points: Vec<Vec3>) -> LabeledCloud {
+    let n = points.len();
+    LabeledCloud {
+        positions_m: points,
+        labels: vec![Label::UNKNOWN; n],
+        colors: None,
+        origins: (0..n as u32)
+            .map(|pixel| PointOrigin { camera: 0, pixel })
+            .collect(),
+    }
+}
+
+#[test]
+fn a_short_person_beside_a_tall_one_keeps_their_head() {
+    let mut points = Vec::new();
+    floor(&mut points);
+    let short = person(&mut points, 0.0, 0.0, 1.65);
+    // 0.6 m away (beyond head_separation_m): the tall neighbour's shoulder and upper
+    // arm, at 1.5–1.6 m, lie within 0.4 m of the short person's head and above their
+    // chin, without touching their head.
+    let tall = person(&mut points, 0.6, 0.0, 1.9);
+    let cfg = BoxesConfig {
+        mode: BoxMode::Geometry,
+        ..BoxesConfig::default()
+    };
+    let found = find_boxes(&cloud(points), &cfg).expect("boxes");
+    // Counting every voxel within 0.4 m below the top, the neighbour's arm made the short
+    // person's head "not compact" and they had no box.
+    assert_eq!(found.boxes.len(), 2, "{found:?}");
+    for truth in [&short, &tall] {
+        let hits = found
+            .boxes
+            .iter()
+            .filter(|b| box_iou(truth, b) >= 0.5)
+            .count();
+        assert_eq!(hits, 1, "{truth:?} vs {found:?}");
+    }
+}
