@@ -241,7 +241,15 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
             );
         }
         let groups = if seeds.len() >= 2 {
-            let owner = graph.split(&v.centers, &cluster, &seeds);
+            // Along bodies: a step between parts not joined in a body (a hand on someone's
+            // head) costs a contact penalty, so an arm reaching someone stays its owner's.
+            let owner = graph.split_with(&v.centers, &cluster, &seeds, |i, j| {
+                if adjacent_parts(v.labels[i as usize], v.labels[j as usize]) {
+                    0.0
+                } else {
+                    CONTACT_PENALTY_M
+                }
+            });
             let mut groups = vec![Vec::new(); seeds.len()];
             for (&i, &g) in cluster.iter().zip(&owner) {
                 groups[g].push(i);
@@ -268,6 +276,29 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
     }
     tracing::debug!(boxes = boxes.len(), voxels = v.centers.len(), "labels mode");
     boxes
+}
+
+/// Extra length of a voxel-graph edge between body parts that are not joined in a body
+/// (a hand touching someone's head or trunk), metres: more than an arm's length
+/// (≈ 0.7 m), so a hand touching another person stays nearer its own shoulder along the
+/// graph than that person's head (labels mode's split).
+const CONTACT_PENALTY_M: f32 = 1.0;
+
+/// Whether class ids `a` and `b` may touch within one body: the same part, or parts
+/// joined in the Pascal-Person-Part tree (head, upper arms and upper legs on the torso;
+/// lower arm on upper arm, lower leg on upper leg).
+fn adjacent_parts(a: u8, b: u8) -> bool {
+    let joints = [
+        (Class::Head, Class::Torso),
+        (Class::Torso, Class::UpperArms),
+        (Class::Torso, Class::UpperLegs),
+        (Class::UpperArms, Class::LowerArms),
+        (Class::UpperLegs, Class::LowerLegs),
+    ];
+    a == b
+        || joints
+            .iter()
+            .any(|&(p, q)| (p.id(), q.id()) == (a, b) || (q.id(), p.id()) == (a, b))
 }
 
 /// splitmix64: a small deterministic generator for RANSAC.
@@ -667,6 +698,18 @@ mod tests {
             .expect("voxels");
         let all: Vec<u32> = (0..centers.len() as u32).collect();
         column_fill(&all, centers, &heights, top, &BoxesConfig::default())
+    }
+
+    #[test]
+    fn parts_joined_in_a_body_are_adjacent_others_touch() {
+        let id = Class::id;
+        assert!(adjacent_parts(id(Class::Head), id(Class::Torso)));
+        assert!(adjacent_parts(id(Class::LowerArms), id(Class::UpperArms)));
+        assert!(adjacent_parts(id(Class::Torso), id(Class::Torso)));
+        // A hand on a head or a trunk is a contact, not a joint.
+        assert!(!adjacent_parts(id(Class::LowerArms), id(Class::Head)));
+        assert!(!adjacent_parts(id(Class::Torso), id(Class::LowerArms)));
+        assert!(!adjacent_parts(id(Class::Head), id(Class::UpperArms)));
     }
 
     #[test]

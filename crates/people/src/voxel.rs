@@ -244,6 +244,18 @@ impl Graph {
     /// group k. Returns per member (same order) its group; unreachable members get the
     /// group whose seed is nearest in a straight line.
     pub fn split(&self, centers: &[Vec3], members: &[u32], seeds: &[Vec<u32>]) -> Vec<usize> {
+        self.split_with(centers, members, seeds, |_, _| 0.0)
+    }
+
+    /// [`Graph::split`] with `penalty(i, j)` metres added to the length of every edge
+    /// from `i` to `j` (an edge that crosses between people rather than along a body).
+    pub fn split_with(
+        &self,
+        centers: &[Vec3],
+        members: &[u32],
+        seeds: &[Vec<u32>],
+        penalty: impl Fn(u32, u32) -> f32,
+    ) -> Vec<usize> {
         use std::cmp::Reverse;
         use std::collections::BinaryHeap;
         let mut local = vec![u32::MAX; self.order.len()];
@@ -274,7 +286,7 @@ impl Graph {
                 if kj >= members.len() {
                     continue;
                 }
-                let nd = d + d2.sqrt();
+                let nd = d + d2.sqrt() + penalty(members[k], j);
                 if nd < best[kj].0 {
                     best[kj] = (nd, g);
                     heap.push(Reverse((OrdF32(nd), kj, g)));
