@@ -533,6 +533,9 @@ const LEG_RADIUS_M: f32 = 0.4;
 const TALL_TOP_M: f32 = 1.5;
 /// Extra head radius allowed to such tall tops, metres (hair, a tilted head).
 const TALL_HEAD_SLACK_M: f32 = 0.05;
+/// Two heads' tops are at least this far apart horizontally, metres (a head is ≈ 0.2 m
+/// wide): a higher top closer than this always hides a lower one.
+const MIN_HEAD_GAP_M: f32 = 0.25;
 /// Cell of the top-view height map heads are searched in, metres.
 const HEIGHT_MAP_CELL_M: f32 = 0.08;
 /// Height of the slices of the column test, metres.
@@ -578,35 +581,45 @@ fn find_heads(
     let mut heads = Vec::new();
     for (c, v) in tops {
         let p = centers[v as usize];
-        let mut is_max = true;
+        // A higher top within `head_separation_m` hides this one unless it is a separate
+        // peak: at least MIN_HEAD_GAP_M away and not joined to anything higher within a
+        // head's height below this top (two heads leaning together, not a shoulder).
+        let mut hidden = false;
+        let mut higher_near = false;
         'scan: for dx in -r..=r {
             for dy in -r..=r {
                 if let Some(&o) = map.get(&[c[0] + dx, c[1] + dy])
                     && o != v
                     && higher(o, v)
-                    && xy_dist(centers[o as usize], p) < cfg.head_separation_m
                 {
-                    is_max = false;
-                    break 'scan;
+                    let d = xy_dist(centers[o as usize], p);
+                    if d < MIN_HEAD_GAP_M {
+                        hidden = true;
+                        break 'scan;
+                    }
+                    higher_near |= d < cfg.head_separation_m;
                 }
             }
         }
-        if !is_max {
+        if hidden {
             continue;
         }
         let h = heights[v as usize];
+        // Only what is connected to the top within the head's height belongs to this
+        // head: a neighbour's head or a raised arm beside it (touching it only through
+        // the shoulders, lower down) does not.
+        let band = h - HEAD_HEIGHT_M;
+        let blob = graph.grow(centers, v, |j| {
+            keep[j as usize]
+                && heights[j as usize] >= band
+                && xy_dist(centers[j as usize], p) < cfg.head_separation_m
+        });
+        if higher_near && blob.iter().any(|&j| heights[j as usize] > h) {
+            continue;
+        }
         // Head test: a head is a compact top. A robot arm's or a shelf's top continues
         // sideways (cylinders sloping down from a joint).
-        // Only what is connected to the top within the head's height counts: a
-        // neighbour's head or a raised arm beside the head (touching it only through the
-        // shoulders, lower down) is not part of this head.
-        let band = h - HEAD_HEIGHT_M;
-        let mut near_top: Vec<f32> = graph
-            .grow(centers, v, |j| {
-                keep[j as usize]
-                    && heights[j as usize] >= band
-                    && xy_dist(centers[j as usize], p) < cfg.head_separation_m
-            })
+        let mut near_top: Vec<f32> = blob
             .iter()
             .map(|&j| xy_dist(centers[j as usize], p))
             .collect();

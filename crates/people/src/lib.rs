@@ -14,7 +14,8 @@
 //!   too small, too low, too tall, floating or too wide are dropped.
 //! - **geometry** (no labels): a RANSAC ground plane (Fischler & Bolles 1981) is removed
 //!   with sparse voxels (flying pixels), the rest clustered; heads are maxima of the
-//!   top-view height map at least `head_separation_m` apart that are compact (a head, not
+//!   top-view height map at least `head_separation_m` apart (closer, down to 0.25 m, when
+//!   the lower one is a separate peak: two heads leaning together) that are compact (a head, not
 //!   a robot arm's joint; only what is connected to the top within a head's height
 //!   counts, so a neighbour's shoulder or hand beside the head does not) and have a
 //!   continuous column of points below them down to the ground (the lower legs within a

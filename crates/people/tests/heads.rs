@@ -64,16 +64,23 @@ fn sphere(out: &mut Scene, center: Vec3, radius: f32, class: Class) {
 /// 1.72 m body of `robot_arm.rs` scaled. Returns their true box (exact extent plus
 /// bodyseg-synth's 5 cm margin, from the floor up).
 fn person(out: &mut Scene, x: f32, y: f32, height_m: f32, arms: bool) -> PersonBox {
+    leaning_person(out, x, y, height_m, arms, 0.0)
+}
+
+/// [`person`] with the head leaning `lean_y_m` along y (the returned box ignores it).
+fn leaning_person(
+    out: &mut Scene,
+    x: f32,
+    y: f32,
+    height_m: f32,
+    arms: bool,
+    lean_y_m: f32,
+) -> PersonBox {
     let s = height_m / 1.72;
     let at = |dx: f32, dy: f32, z: f32| [x + s * dx, y + s * dy, s * z];
-    sphere(out, at(0.0, 0.0, 1.62), s * 0.1, Class::Head);
-    cylinder(
-        out,
-        at(0.0, 0.0, 1.44),
-        at(0.0, 0.0, 1.54),
-        s * 0.05,
-        Class::Head,
-    );
+    sphere(out, at(0.0, lean_y_m / s, 1.62), s * 0.1, Class::Head);
+    let neck_top = at(0.0, 0.6 * lean_y_m / s, 1.54);
+    cylinder(out, at(0.0, 0.0, 1.44), neck_top, s * 0.05, Class::Head);
     cylinder(
         out,
         at(0.0, 0.0, 0.88),
@@ -192,4 +199,30 @@ fn an_arm_touching_someone_else_s_head_stays_its_owner_s() {
     assert!(!mine[0].contains(elbow), "{found:?}");
     assert!(theirs[0].contains(elbow), "{found:?}");
     assert!(theirs[0].contains([0.2, 0.0, 1.68]), "{found:?}");
+}
+
+#[test]
+fn two_heads_leaning_together_are_two_people() {
+    let mut scene = Scene::default();
+    floor(&mut scene);
+    // Standing 0.6 m apart (facing each other along y), heads leaning 0.12 m towards
+    // each other: tops 0.36 m apart, closer than head_separation_m, with a dip of more
+    // than a head's height between them.
+    leaning_person(&mut scene, 0.0, 0.0, 1.65, true, 0.12);
+    leaning_person(&mut scene, 0.0, 0.6, 1.85, true, -0.12);
+    // Their right forearms meet at chest height (a hand-over): one cluster.
+    let (a, b) = ([0.22, 0.0, 1.1], [0.25, 0.6, 1.1]);
+    cylinder(&mut scene, a, b, 0.045, Class::LowerArms);
+    let cfg = BoxesConfig {
+        mode: BoxMode::Geometry,
+        ..BoxesConfig::default()
+    };
+    let found = find_boxes(&cloud(scene, false), &cfg).expect("boxes");
+    // The higher top hid every lower one within head_separation_m: one person.
+    assert_eq!(found.boxes.len(), 2, "{found:?}");
+    let heads = [[0.0, 0.12, 1.55], [0.0, 0.48, 1.75]];
+    for (k, head) in heads.iter().enumerate() {
+        let holders: Vec<usize> = (0..2).filter(|&b| found.boxes[b].contains(*head)).collect();
+        assert_eq!(holders.len(), 1, "head {k}: {found:?}");
+    }
 }
