@@ -90,7 +90,9 @@ pub struct BoxesConfig {
     pub max_width_m: f32,
     /// Two heads (or torsos) whose centres are closer than this horizontally are one,
     /// metres: below the head distance of two people passing an object (≈ 0.6 m), above
-    /// a head-to-hand distance when hands are on the hips. Must be > 0. Default 0.4.
+    /// a head-to-hand distance when hands are on the hips. Geometry mode keeps a lower
+    /// top closer than this (down to 0.25 m) when nothing higher joins it within a
+    /// head's height: two heads leaning together. Must be > 0. Default 0.4.
     pub head_separation_m: f32,
     /// Labels mode: a head holds at least this many voxels (half a head's surface,
     /// ≈ 0.06 m², is ≈ 25 voxels at 5 cm); smaller head-labelled patches are parser noise.

@@ -241,7 +241,15 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
             );
         }
         let groups = if seeds.len() >= 2 {
-            let owner = graph.split(&v.centers, &cluster, &seeds);
+            // Along bodies: a step between parts not joined in a body (a hand on someone's
+            // head) costs a contact penalty, so an arm reaching someone stays its owner's.
+            let owner = graph.split_with(&v.centers, &cluster, &seeds, |i, j| {
+                if adjacent_parts(v.labels[i as usize], v.labels[j as usize]) {
+                    0.0
+                } else {
+                    CONTACT_PENALTY_M
+                }
+            });
             let mut groups = vec![Vec::new(); seeds.len()];
             for (&i, &g) in cluster.iter().zip(&owner) {
                 groups[g].push(i);
@@ -268,6 +276,29 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
     }
     tracing::debug!(boxes = boxes.len(), voxels = v.centers.len(), "labels mode");
     boxes
+}
+
+/// Extra length of a voxel-graph edge between body parts that are not joined in a body
+/// (a hand touching someone's head or trunk), metres: more than an arm's length
+/// (≈ 0.7 m), so a hand touching another person stays nearer its own shoulder along the
+/// graph than that person's head (labels mode's split).
+const CONTACT_PENALTY_M: f32 = 1.0;
+
+/// Whether class ids `a` and `b` may touch within one body: the same part, or parts
+/// joined in the Pascal-Person-Part tree (head, upper arms and upper legs on the torso;
+/// lower arm on upper arm, lower leg on upper leg).
+fn adjacent_parts(a: u8, b: u8) -> bool {
+    let joints = [
+        (Class::Head, Class::Torso),
+        (Class::Torso, Class::UpperArms),
+        (Class::Torso, Class::UpperLegs),
+        (Class::UpperArms, Class::LowerArms),
+        (Class::UpperLegs, Class::LowerLegs),
+    ];
+    a == b
+        || joints
+            .iter()
+            .any(|&(p, q)| (p.id(), q.id()) == (a, b) || (q.id(), p.id()) == (a, b))
 }
 
 /// splitmix64: a small deterministic generator for RANSAC.
@@ -373,7 +404,7 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
         if cluster.len() < cfg.min_voxels {
             continue;
         }
-        let heads = find_heads(&cluster, &all.centers, &heights, cfg);
+        let heads = find_heads(&graph, &keep, &cluster, &all.centers, &heights, cfg);
         if heads.is_empty() {
             continue;
         }
@@ -502,6 +533,9 @@ const LEG_RADIUS_M: f32 = 0.4;
 const TALL_TOP_M: f32 = 1.5;
 /// Extra head radius allowed to such tall tops, metres (hair, a tilted head).
 const TALL_HEAD_SLACK_M: f32 = 0.05;
+/// Two heads' tops are at least this far apart horizontally, metres (a head is ≈ 0.2 m
+/// wide): a higher top closer than this always hides a lower one.
+const MIN_HEAD_GAP_M: f32 = 0.25;
 /// Cell of the top-view height map heads are searched in, metres.
 const HEIGHT_MAP_CELL_M: f32 = 0.08;
 /// Height of the slices of the column test, metres.
@@ -511,7 +545,14 @@ const COLUMN_SLICE_M: f32 = 0.1;
 /// the highest within `head_separation_m`, at least `min_height_m` high, with a column of
 /// points below them (`column_radius_m`, `min_column_fill`) reaching down to
 /// `max_bottom_m`. Returns one voxel per head (its top), highest first.
-fn find_heads(cluster: &[u32], centers: &[Vec3], heights: &[f32], cfg: &BoxesConfig) -> Vec<u32> {
+fn find_heads(
+    graph: &Graph,
+    keep: &[bool],
+    cluster: &[u32],
+    centers: &[Vec3],
+    heights: &[f32],
+    cfg: &BoxesConfig,
+) -> Vec<u32> {
     let inv = 1.0 / HEIGHT_MAP_CELL_M;
     let cell = |p: Vec3| [(p[0] * inv).floor() as i32, (p[1] * inv).floor() as i32];
     let mut map: FxHashMap<[i32; 2], u32> = FxHashMap::default();
@@ -540,65 +581,172 @@ fn find_heads(cluster: &[u32], centers: &[Vec3], heights: &[f32], cfg: &BoxesCon
     let mut heads = Vec::new();
     for (c, v) in tops {
         let p = centers[v as usize];
-        let mut is_max = true;
+        // A higher top within `head_separation_m` hides this one unless it is a separate
+        // peak: at least MIN_HEAD_GAP_M away and not joined to anything higher within a
+        // head's height below this top (two heads leaning together, not a shoulder).
+        let mut hidden = false;
+        let mut higher_near = false;
         'scan: for dx in -r..=r {
             for dy in -r..=r {
                 if let Some(&o) = map.get(&[c[0] + dx, c[1] + dy])
                     && o != v
                     && higher(o, v)
-                    && xy_dist(centers[o as usize], p) < cfg.head_separation_m
                 {
-                    is_max = false;
-                    break 'scan;
+                    let d = xy_dist(centers[o as usize], p);
+                    if d < MIN_HEAD_GAP_M {
+                        hidden = true;
+                        break 'scan;
+                    }
+                    higher_near |= d < cfg.head_separation_m;
                 }
             }
         }
-        if !is_max {
+        if hidden {
             continue;
         }
         let h = heights[v as usize];
-        // Head test: a head is a compact top. A robot arm's or a shelf's top continues
-        // sideways (cylinders sloping down from a joint).
-        let mut near_top: Vec<f32> = cluster
-            .iter()
-            .filter(|&&j| heights[j as usize] >= h - HEAD_HEIGHT_M)
-            .map(|&j| xy_dist(centers[j as usize], p))
-            .filter(|&d| d < cfg.head_separation_m)
-            .collect();
-        near_top.sort_by(f32::total_cmp);
-        // The 90th percentile: a hand raised to the face or a stray voxel does not count.
-        let spread = near_top
-            .get(near_top.len() * 9 / 10)
-            .copied()
-            .unwrap_or(0.0);
-        let limit = if h >= TALL_TOP_M {
-            cfg.max_head_radius_m + TALL_HEAD_SLACK_M
-        } else {
-            cfg.max_head_radius_m
-        };
-        if spread > limit {
-            tracing::trace!(h, spread, "head candidate dropped: not compact");
+        // Only what is connected to the top within the head's height belongs to this
+        // head: a neighbour's head or a raised arm beside it (touching it only through
+        // the shoulders, lower down) does not.
+        let band = h - HEAD_HEIGHT_M;
+        let blob = graph.grow(centers, v, |j| {
+            keep[j as usize]
+                && heights[j as usize] >= band
+                && xy_dist(centers[j as usize], p) < cfg.head_separation_m
+        });
+        if higher_near && blob.iter().any(|&j| heights[j as usize] > h) {
             continue;
         }
-        // Column test: the slices between the ground and the head holding a voxel.
-        let slices = ((h - cfg.ground_tol_m) / COLUMN_SLICE_M).ceil().max(1.0) as usize;
-        let mut filled = vec![false; slices];
-        let mut lowest = f32::INFINITY;
-        for &j in cluster {
-            if xy_dist(centers[j as usize], p) <= cfg.column_radius_m {
-                let hj = heights[j as usize];
-                lowest = lowest.min(hj);
-                let s = ((hj - cfg.ground_tol_m) / COLUMN_SLICE_M).floor().max(0.0) as usize;
-                if let Some(f) = filled.get_mut(s) {
-                    *f = true;
-                }
-            }
+        // Head test: a head is a compact top. A robot arm's or a shelf's top continues
+        // sideways (cylinders sloping down from a joint).
+        let mut near_top: Vec<f32> = blob
+            .iter()
+            .map(|&j| xy_dist(centers[j as usize], p))
+            .collect();
+        near_top.sort_by(f32::total_cmp);
+        // A percentile, so that a hand raised to the face or a stray voxel does not count:
+        // the 90th below TALL_TOP_M; above it (only people reach there) the 75th, as a
+        // neighbour's hand or pointing arm touching the head may cover a quarter of it.
+        let (percent, limit) = if h >= TALL_TOP_M {
+            (75, cfg.max_head_radius_m + TALL_HEAD_SLACK_M)
+        } else {
+            (90, cfg.max_head_radius_m)
+        };
+        let spread = near_top
+            .get(near_top.len() * percent / 100)
+            .copied()
+            .unwrap_or(0.0);
+        if spread > limit {
+            tracing::trace!(
+                x = p[0],
+                y = p[1],
+                h,
+                spread,
+                "head candidate dropped: not compact"
+            );
+            continue;
         }
-        let fill = filled.iter().filter(|&&f| f).count() as f32 / slices as f32;
-        tracing::trace!(h, fill, lowest, "head candidate");
+        let (fill, lowest) = column_fill(cluster, centers, heights, v, cfg);
+        tracing::trace!(x = p[0], y = p[1], h, fill, lowest, "head candidate");
         if fill >= cfg.min_column_fill && lowest <= cfg.max_bottom_m {
             heads.push(v);
         }
     }
     heads
+}
+
+/// The column test of the head candidate `top` (geometry mode): the fraction of the
+/// [`COLUMN_SLICE_M`] slices between the ground and the top that hold a voxel of `cluster`
+/// within `column_radius_m` of the top's vertical (below [`LOW_LEG_FRACTION`] of the
+/// top's height: within [`LEG_RADIUS_M`]), and the lowest such voxel's height.
+fn column_fill(
+    cluster: &[u32],
+    centers: &[Vec3],
+    heights: &[f32],
+    top: u32,
+    cfg: &BoxesConfig,
+) -> (f32, f32) {
+    let p = centers[top as usize];
+    let h = heights[top as usize];
+    let slices = ((h - cfg.ground_tol_m) / COLUMN_SLICE_M).ceil().max(1.0) as usize;
+    let mut filled = vec![false; slices];
+    let mut lowest = f32::INFINITY;
+    // The lower legs may stand farther out: a crouch puts the feet ≈ 0.3 m behind the
+    // head, a stride ahead of it; only the column above them must be narrow.
+    let legs_below = LOW_LEG_FRACTION * h;
+    for &j in cluster {
+        let hj = heights[j as usize];
+        let radius = if hj < legs_below {
+            LEG_RADIUS_M.max(cfg.column_radius_m)
+        } else {
+            cfg.column_radius_m
+        };
+        let q = centers[j as usize];
+        if (q[0] - p[0]).hypot(q[1] - p[1]) <= radius {
+            lowest = lowest.min(hj);
+            let s = ((hj - cfg.ground_tol_m) / COLUMN_SLICE_M).floor().max(0.0) as usize;
+            if let Some(f) = filled.get_mut(s) {
+                *f = true;
+            }
+        }
+    }
+    let fill = filled.iter().filter(|&&f| f).count() as f32 / slices as f32;
+    (fill, lowest)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Voxel centres at (`x`, 0, z) for every z in `z_m`.
+    fn line(out: &mut Vec<Vec3>, x: f32, z_m: &[f32]) {
+        out.extend(z_m.iter().map(|&z| [x, 0.0, z]));
+    }
+
+    /// `column_fill` of the highest of `centers` (heights: z), over all of them.
+    fn fill_of(centers: &[Vec3]) -> (f32, f32) {
+        let heights: Vec<f32> = centers.iter().map(|p| p[2]).collect();
+        let top = (0..centers.len() as u32)
+            .max_by(|&a, &b| heights[a as usize].total_cmp(&heights[b as usize]))
+            .expect("voxels");
+        let all: Vec<u32> = (0..centers.len() as u32).collect();
+        column_fill(&all, centers, &heights, top, &BoxesConfig::default())
+    }
+
+    #[test]
+    fn parts_joined_in_a_body_are_adjacent_others_touch() {
+        let id = Class::id;
+        assert!(adjacent_parts(id(Class::Head), id(Class::Torso)));
+        assert!(adjacent_parts(id(Class::LowerArms), id(Class::UpperArms)));
+        assert!(adjacent_parts(id(Class::Torso), id(Class::Torso)));
+        // A hand on a head or a trunk is a contact, not a joint.
+        assert!(!adjacent_parts(id(Class::LowerArms), id(Class::Head)));
+        assert!(!adjacent_parts(id(Class::Torso), id(Class::LowerArms)));
+        assert!(!adjacent_parts(id(Class::Head), id(Class::UpperArms)));
+    }
+
+    #[test]
+    fn column_counts_feet_beside_the_head_but_not_a_trunk_beside_it() {
+        // Heights at the middle of the 10 cm slices above ground_tol_m (0.05 m), the top
+        // at 1.22 m: 12 slices. A crouch: head and trunk above the knees at x = 0
+        // (0.5–1.22 m: 8 slices), the lower legs 0.3 m behind (0.1–0.3 m: 3 slices),
+        // beyond `column_radius_m`, within a leg's reach.
+        let trunk = [0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.22];
+        let mut centers = Vec::new();
+        line(&mut centers, 0.0, &trunk);
+        line(&mut centers, 0.3, &[0.1, 0.2, 0.3]);
+        let (fill, lowest) = fill_of(&centers);
+        // Counting only the column within 0.2 m: 8 of 12 slices (0.67 < min_column_fill),
+        // lowest 0.5 m (> max_bottom_m): the crouching person had no head.
+        assert_eq!(fill, 11.0 / 12.0);
+        assert_eq!(lowest, 0.1);
+        // Something 0.3 m beside the top above the legs' height (a neighbour's trunk)
+        // does not fill the column.
+        let mut centers = Vec::new();
+        line(&mut centers, 0.0, &[1.1, 1.2, 1.22]);
+        line(&mut centers, 0.3, &[0.5, 0.6, 0.7, 0.8, 0.9, 1.0]);
+        let (fill, lowest) = fill_of(&centers);
+        assert_eq!(fill, 2.0 / 12.0);
+        assert_eq!(lowest, 1.1);
+    }
 }

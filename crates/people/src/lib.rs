@@ -8,13 +8,18 @@
 //!   parser's feet bleed onto it), are averaged into voxels (`voxel_m`; voxels with
 //!   fewer than `min_voxel_points` points are dropped) and clustered (Euclidean, gap `person_gap_m`); a cluster holding two or
 //!   more separate heads (or, failing that, torsos) is split between them along the voxel
-//!   graph (multi-source Dijkstra), so two people touching hands get two boxes; clusters
+//!   graph (multi-source Dijkstra; a step between parts not joined in a body, such as a
+//!   hand on someone's head, costs an arm's length more), so two people touching hands
+//!   get two boxes and an arm reaching someone stays its owner's; clusters
 //!   too small, too low, too tall, floating or too wide are dropped.
 //! - **geometry** (no labels): a RANSAC ground plane (Fischler & Bolles 1981) is removed
 //!   with sparse voxels (flying pixels), the rest clustered; heads are maxima of the
-//!   top-view height map at least `head_separation_m` apart that are compact (a head, not
-//!   a robot arm's joint) and have a continuous column of points below them down to the
-//!   ground, in the spirit of the ground-based people detector of Munaro et al. (ICRA
+//!   top-view height map at least `head_separation_m` apart (closer, down to 0.25 m, when
+//!   the lower one is a separate peak: two heads leaning together) that are compact (a head, not
+//!   a robot arm's joint; only what is connected to the top within a head's height
+//!   counts, so a neighbour's shoulder or hand beside the head does not) and have a
+//!   continuous column of points below them down to the ground (the lower legs within a
+//!   leg's reach: a crouch), in the spirit of the ground-based people detector of Munaro et al. (ICRA
 //!   2012, "Tracking people within groups with RGB-D data", without its HOG classifier);
 //!   a cluster is split along the voxel graph (multi-source Dijkstra) between its heads
 //!   and what no person can own (voxels beyond arm's reach of every head, or low and

@@ -1,7 +1,7 @@
 //! Voxel downsampling, the voxel neighbour graph and Euclidean clustering on it.
 
 use bodyseg_core::math::{Vec3, dist2};
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// Points averaged into voxels. Voxels are numbered in order of their first point.
 pub(crate) struct Voxels {
@@ -220,11 +220,42 @@ impl Graph {
         out
     }
 
+    /// The points reachable from `start` along the graph through points where `keep` is
+    /// true (`start` included whatever `keep` says), in the order they were reached.
+    pub fn grow(&self, centers: &[Vec3], start: u32, keep: impl Fn(u32) -> bool) -> Vec<u32> {
+        let mut seen = FxHashSet::default();
+        seen.insert(start);
+        let mut out = vec![start];
+        let mut k = 0;
+        while k < out.len() {
+            let i = out[k] as usize;
+            k += 1;
+            self.for_neighbors(i, centers[i], |j, _| {
+                if keep(j) && seen.insert(j) {
+                    out.push(j);
+                }
+            });
+        }
+        out
+    }
+
     /// Multi-source Dijkstra (Euclidean edge lengths) inside `members`: each member goes
     /// to the seed group it is closest to along the graph. `seeds[k]` are the nodes of
     /// group k. Returns per member (same order) its group; unreachable members get the
     /// group whose seed is nearest in a straight line.
     pub fn split(&self, centers: &[Vec3], members: &[u32], seeds: &[Vec<u32>]) -> Vec<usize> {
+        self.split_with(centers, members, seeds, |_, _| 0.0)
+    }
+
+    /// [`Graph::split`] with `penalty(i, j)` metres added to the length of every edge
+    /// from `i` to `j` (an edge that crosses between people rather than along a body).
+    pub fn split_with(
+        &self,
+        centers: &[Vec3],
+        members: &[u32],
+        seeds: &[Vec<u32>],
+        penalty: impl Fn(u32, u32) -> f32,
+    ) -> Vec<usize> {
         use std::cmp::Reverse;
         use std::collections::BinaryHeap;
         let mut local = vec![u32::MAX; self.order.len()];
@@ -255,7 +286,7 @@ impl Graph {
                 if kj >= members.len() {
                     continue;
                 }
-                let nd = d + d2.sqrt();
+                let nd = d + d2.sqrt() + penalty(members[k], j);
                 if nd < best[kj].0 {
                     best[kj] = (nd, g);
                     heap.push(Reverse((OrdF32(nd), kj, g)));
@@ -328,6 +359,10 @@ mod tests {
             .sum();
         let got: usize = (0..pts.len()).map(|i| g.neighbors(i, pts[i]).len()).sum();
         assert_eq!(got, brute);
+        // Grown from point 0 through points left of x = 0.18: the first four of its row.
+        let mut grown = g.grow(&pts, 0, |j| pts[j as usize][0] < 0.18);
+        grown.sort_unstable();
+        assert_eq!(grown, [0, 2, 4, 6]);
         let groups = g.split(&pts, &comps[0], &[vec![0], vec![18]]);
         assert_eq!(groups[..5], [0; 5]);
         assert_eq!(groups[5..], [1; 5]);

@@ -1,0 +1,87 @@
+//! Describes the boxes of single synthetic frames (issue 6's failures, one at a time): the
+//! true boxes, each mode's found boxes and their IoU with the truth.
+//!
+//! `cargo run --release -p bodyseg-pipeline --example boxes_frame PRESET SEED FRAME...`
+//! (`RUST_LOG=bodyseg_people=trace` for the finder's reasons).
+
+use bodyseg_calib::BackProjectOptions;
+use bodyseg_core::PersonBox;
+use bodyseg_people::{BoxMode, BoxesConfig, box_iou, find_boxes};
+use bodyseg_pipeline::{camera_images, match_boxes, parsing_images};
+use bodyseg_project::{FrameProjector, ProjectConfig};
+use bodyseg_synth::{Synth, preset};
+
+fn describe(b: &PersonBox) -> String {
+    format!(
+        "#{} c=({:.2},{:.2},{:.2}) size=({:.2},{:.2},{:.2}) yaw={:.2} top={:.2}",
+        b.id,
+        b.center_m[0],
+        b.center_m[1],
+        b.center_m[2],
+        2.0 * b.half_extents_m[0],
+        2.0 * b.half_extents_m[1],
+        2.0 * b.half_extents_m[2],
+        b.yaw_rad,
+        b.center_m[2] + b.half_extents_m[2],
+    )
+}
+
+fn main() -> anyhow::Result<()> {
+    // `RUST_LOG=bodyseg_people=trace` shows the head candidates and why each was dropped.
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .without_time()
+        .with_ansi(false)
+        .init();
+    let mut args = std::env::args().skip(1);
+    let name = args.next().unwrap_or_else(|| "handover".into());
+    let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(100);
+    let frames: Vec<usize> = args.filter_map(|s| s.parse().ok()).collect();
+    let synth = Synth::new(preset(&name)?, seed)?;
+    let rig = synth.written_rig();
+    let projector = FrameProjector::new(rig)?;
+    for p in synth.people() {
+        println!("person pose {}", p.pose().name());
+    }
+    for index in frames {
+        let frame = synth.frame(index);
+        let labels = parsing_images(rig, &frame);
+        let images = camera_images(&frame, &labels);
+        let cloud = projector.project_frame(
+            &images,
+            &BackProjectOptions::default(),
+            &ProjectConfig::default(),
+        )?;
+        println!("== {name} seed {seed} frame {index}");
+        for t in &frame.boxes.boxes {
+            println!("  true  {}", describe(t));
+        }
+        for mode in [BoxMode::Labels, BoxMode::Geometry] {
+            let cfg = BoxesConfig {
+                mode,
+                ..BoxesConfig::default()
+            };
+            let found = find_boxes(&cloud, &cfg)?;
+            let m = match_boxes(&frame.boxes.boxes, &found.boxes);
+            println!(
+                "  {} good={} matched {}/{} found {}",
+                mode.name(),
+                m.is_good(),
+                m.matched,
+                m.people,
+                m.found
+            );
+            for f in &found.boxes {
+                let ious: Vec<String> = frame
+                    .boxes
+                    .boxes
+                    .iter()
+                    .map(|t| format!("{:.2}", box_iou(t, f)))
+                    .collect();
+                println!("    found {} iou [{}]", describe(f), ious.join(" "));
+            }
+        }
+    }
+    Ok(())
+}
