@@ -20,7 +20,9 @@ use bodyseg_pipeline::{
     FigureChoice, FrameInputs, FrameProcessor, FrameWriter, PipelineConfig, RunOptions,
     SceneSource, SynthOptions, synth_recording,
 };
-use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{
+    BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
+};
 use rayon::prelude::*;
 
 #[global_allocator]
@@ -46,6 +48,7 @@ fn bench(c: &mut Criterion) {
     };
     synth_recording(&synth, &|_| {}).unwrap_or_else(|e| panic!("synth: {e:#}"));
     let out = dir.path().join("out");
+    std::fs::create_dir_all(&out).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
     let mut options = RunOptions::new(&rec, PipelineConfig::default(), &out);
     options.figures = FigureChoice::Off;
     let processor = FrameProcessor::open(&options).unwrap_or_else(|e| panic!("{e:#}"));
@@ -77,16 +80,25 @@ fn bench(c: &mut Criterion) {
     group.throughput(Throughput::Elements(FRAMES as u64));
     for (name, inputs) in [("production", &without_truth), ("with_eval", &with_truth)] {
         group.bench_function(BenchmarkId::new(name, "2_threads"), |b| {
-            b.iter(|| {
-                two.install(|| {
-                    inputs.par_iter().with_max_len(1).for_each(|f| {
-                        let mut writer = FrameWriter::new(&out);
-                        processor
-                            .process(f, &mut writer, &mut Vec::new())
-                            .unwrap_or_else(|e| panic!("{e:#}"));
+            // Each iteration writes into a fresh folder, as `bodyseg run` does: no output
+            // replaces an earlier file (on ext4 a rename over an existing file flushes and
+            // evicts the old one, work a run never does). Criterion drops the folder, so
+            // its removal, outside the timing.
+            b.iter_batched(
+                || tempfile::tempdir_in(&out).unwrap_or_else(|e| panic!("temp dir: {e}")),
+                |folder| {
+                    two.install(|| {
+                        inputs.par_iter().with_max_len(1).for_each(|f| {
+                            let mut writer = FrameWriter::new(folder.path());
+                            processor
+                                .process(f, &mut writer, &mut Vec::new())
+                                .unwrap_or_else(|e| panic!("{e:#}"));
+                        });
                     });
-                });
-            });
+                    folder
+                },
+                BatchSize::PerIteration,
+            );
         });
     }
     group.finish();

@@ -5,8 +5,8 @@
 //! `cargo run --release -p bodyseg-pipeline --example cpu_per_frame [ROUNDS] [eval]`
 //!
 //! The bench's setup (8 synthetic `handover` frames decoded in memory, a 2-thread pool,
-//! mimalloc keeping freed memory); ROUNDS (default 6) passes over the 8 frames after one
-//! warm-up pass. `PURGE=1` leaves mimalloc's default (freed memory handed back to the OS)
+//! mimalloc keeping freed memory, a fresh output folder per pass); ROUNDS (default 6)
+//! passes over the 8 frames after one warm-up pass. `PURGE=1` leaves mimalloc's default (freed memory handed back to the OS)
 //! for comparison. Linux only (reads `/proc/self/stat`).
 #![allow(missing_docs)]
 
@@ -78,26 +78,34 @@ fn main() -> Result<()> {
         })
         .collect::<Result<Vec<FrameInputs>>>()?;
     let two = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
-    let pass = || -> Result<()> {
+    // Each pass writes into a fresh folder, as `bodyseg run` does (no file replaced);
+    // the folders are removed after the timing.
+    std::fs::create_dir_all(&out)?;
+    let pass = || -> Result<tempfile::TempDir> {
+        let folder = tempfile::tempdir_in(&out)?;
         two.install(|| {
             inputs.par_iter().with_max_len(1).try_for_each(|f| {
-                let mut writer = FrameWriter::new(&out);
+                let mut writer = FrameWriter::new(folder.path());
                 processor.process(f, &mut writer, &mut Vec::new())?;
-                Ok(())
+                anyhow::Ok(())
             })
-        })
+        })?;
+        Ok(folder)
     };
-    pass()?;
+    drop(pass()?);
+    let mut written = Vec::with_capacity(rounds);
     let (cpu0, t0) = (cpu_s()?, Instant::now());
     for _ in 0..rounds {
-        pass()?;
+        written.push(pass()?);
     }
-    let n = (rounds * inputs.len()) as f64;
     let wall = t0.elapsed().as_secs_f64();
+    let cpu = cpu_s()? - cpu0;
+    drop(written);
+    let n = (rounds * inputs.len()) as f64;
     println!(
         "{}: cpu {:.1} ms/frame, wall {:.1} ms/frame ({:.1} frames/s), {n} frames",
         if eval { "with_eval" } else { "production" },
-        (cpu_s()? - cpu0) * 1e3 / n,
+        cpu * 1e3 / n,
         wall * 1e3 / n,
         n / wall
     );
