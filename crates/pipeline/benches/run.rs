@@ -20,9 +20,7 @@ use bodyseg_pipeline::{
     FigureChoice, FrameInputs, FrameProcessor, FrameWriter, PipelineConfig, RunOptions,
     SceneSource, SynthOptions, synth_recording,
 };
-use criterion::{
-    BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
-};
+use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
 
 #[global_allocator]

@@ -333,10 +333,15 @@ pub fn refine_variants_voted(
                     (&copied.0, &copied.1)
                 };
                 let structure = analyse_person(pos, lab, cfg);
-                let refinements: Vec<PersonRefinement> = runs
-                    .iter()
-                    .map(|&s| apply_steps(structure.clone(), pos, lab, s, cfg))
-                    .collect();
+                // Every run but the last works on a copy; the last (the only one of a
+                // plain run) takes the structure itself.
+                let mut refinements: Vec<PersonRefinement> = Vec::with_capacity(runs.len());
+                if let Some((&last, rest)) = runs.split_last() {
+                    for &s in rest {
+                        refinements.push(apply_steps(structure.clone(), pos, lab, s, cfg));
+                    }
+                    refinements.push(apply_steps(structure, pos, lab, last, cfg));
+                }
                 if let Some(r) = refinements.last() {
                     tracing::debug!(
                         person = b.id,
