@@ -4,61 +4,11 @@
 //! `head_separation_m` of it at head height. Labels mode: an arm whose hand touches
 //! someone else's head stays in its owner's box.
 
-use bodyseg_core::math::Vec3;
-use bodyseg_core::{Class, Label, LabeledCloud, PersonBox, PointOrigin};
+mod common;
+
+use bodyseg_core::{Class, PersonBox};
 use bodyseg_people::{BoxMode, BoxesConfig, box_iou, find_boxes};
-use bodyseg_synth::geometry::{frame_from_axis, norm, sub};
-
-/// Surface sample spacing, metres: ≈ 25 points per 5 cm voxel of surface, like a Kinect
-/// v2 frame at 2–3 m.
-const STEP_M: f32 = 0.01;
-
-/// Labelled surface points; new points take `label`.
-#[derive(Default)]
-struct Scene {
-    points: Vec<Vec3>,
-    labels: Vec<Label>,
-}
-
-impl Scene {
-    fn push(&mut self, p: Vec3, label: Label) {
-        self.points.push(p);
-        self.labels.push(label);
-    }
-}
-
-/// Points on the side of the cylinder from `a` to `b`, labelled `class`.
-fn cylinder(out: &mut Scene, a: Vec3, b: Vec3, radius: f32, class: Class) {
-    let len = norm(sub(b, a));
-    let [u, v, w] = frame_from_axis(sub(b, a));
-    let rings = (len / STEP_M).ceil() as usize;
-    let around = (std::f32::consts::TAU * radius / STEP_M).ceil() as usize;
-    for i in 0..=rings {
-        let t = len * i as f32 / rings as f32;
-        for k in 0..around {
-            let (s, c) = (std::f32::consts::TAU * k as f32 / around as f32).sin_cos();
-            let p = std::array::from_fn(|d| a[d] + w[d] * t + radius * (c * u[d] + s * v[d]));
-            out.push(p, class.into());
-        }
-    }
-}
-
-/// Points on a sphere (Fibonacci lattice), labelled `class`.
-fn sphere(out: &mut Scene, center: Vec3, radius: f32, class: Class) {
-    let n = (4.0 * std::f32::consts::PI * radius * radius / (STEP_M * STEP_M)) as usize;
-    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-    for i in 0..n {
-        let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
-        let r = (1.0 - z * z).sqrt();
-        let (s, c) = (golden * i as f32).sin_cos();
-        let p = [
-            center[0] + radius * r * c,
-            center[1] + radius * r * s,
-            center[2] + radius * z,
-        ];
-        out.push(p, class.into());
-    }
-}
+use common::Scene;
 
 /// A person `height_m` tall standing at (`x`, `y`), facing +y (shoulders along x): the
 /// 1.72 m body of `robot_arm.rs` scaled. Returns their true box (exact extent plus
@@ -78,11 +28,10 @@ fn leaning_person(
 ) -> PersonBox {
     let s = height_m / 1.72;
     let at = |dx: f32, dy: f32, z: f32| [x + s * dx, y + s * dy, s * z];
-    sphere(out, at(0.0, lean_y_m / s, 1.62), s * 0.1, Class::Head);
+    out.sphere(at(0.0, lean_y_m / s, 1.62), s * 0.1, Class::Head);
     let neck_top = at(0.0, 0.6 * lean_y_m / s, 1.54);
-    cylinder(out, at(0.0, 0.0, 1.44), neck_top, s * 0.05, Class::Head);
-    cylinder(
-        out,
+    out.cylinder(at(0.0, 0.0, 1.44), neck_top, s * 0.05, Class::Head);
+    out.cylinder(
         at(0.0, 0.0, 0.88),
         at(0.0, 0.0, 1.44),
         s * 0.16,
@@ -90,8 +39,7 @@ fn leaning_person(
     );
     // Shoulders: joins the neck to the trunk and the arms (an open trunk's rim is
     // farther than `person_gap_m` from a scaled-up neck).
-    cylinder(
-        out,
+    out.cylinder(
         at(-0.22, 0.0, 1.42),
         at(0.22, 0.0, 1.42),
         s * 0.06,
@@ -99,19 +47,13 @@ fn leaning_person(
     );
     for side in [-1.0, 1.0] {
         let (hip, knee) = (at(side * 0.09, 0.0, 0.9), at(side * 0.09, 0.0, 0.45));
-        cylinder(out, hip, knee, s * 0.07, Class::UpperLegs);
-        cylinder(
-            out,
-            knee,
-            at(side * 0.09, 0.0, 0.0),
-            s * 0.07,
-            Class::LowerLegs,
-        );
+        out.cylinder(hip, knee, s * 0.07, Class::UpperLegs);
+        out.cylinder(knee, at(side * 0.09, 0.0, 0.0), s * 0.07, Class::LowerLegs);
         if arms {
             let (shoulder, elbow) = (at(side * 0.22, 0.0, 1.42), at(side * 0.23, 0.0, 1.14));
-            cylinder(out, shoulder, elbow, s * 0.045, Class::UpperArms);
+            out.cylinder(shoulder, elbow, s * 0.045, Class::UpperArms);
             let hand = at(side * 0.24, 0.0, 0.86);
-            cylinder(out, elbow, hand, s * 0.045, Class::LowerArms);
+            out.cylinder(elbow, hand, s * 0.045, Class::LowerArms);
         }
     }
     // Extent: x ±0.285 (arms), y ±0.16 (torso), z 0–1.72, scaled; plus 0.05 on every
@@ -124,37 +66,10 @@ fn leaning_person(
     }
 }
 
-fn floor(out: &mut Scene) {
-    let n = (4.0 / 0.02) as i32;
-    for i in 0..n {
-        for j in 0..n {
-            let p = [-2.0 + 0.02 * i as f32, -2.0 + 0.02 * j as f32, 0.0];
-            out.push(p, Label::BACKGROUND);
-        }
-    }
-}
-
-/// The scene's cloud; without `labels` every point is unknown (geometry mode's input).
-fn cloud(scene: Scene, labels: bool) -> LabeledCloud {
-    let n = scene.points.len();
-    LabeledCloud {
-        positions_m: scene.points,
-        labels: if labels {
-            scene.labels
-        } else {
-            vec![Label::UNKNOWN; n]
-        },
-        colors: None,
-        origins: (0..n as u32)
-            .map(|pixel| PointOrigin { camera: 0, pixel })
-            .collect(),
-    }
-}
-
 #[test]
 fn a_short_person_beside_a_tall_one_keeps_their_head() {
     let mut scene = Scene::default();
-    floor(&mut scene);
+    scene.floor();
     let short = person(&mut scene, 0.0, 0.0, 1.65, true);
     // 0.6 m away (beyond head_separation_m): the tall neighbour's shoulder and upper
     // arm, at 1.5–1.6 m, lie within 0.4 m of the short person's head and above their
@@ -164,7 +79,7 @@ fn a_short_person_beside_a_tall_one_keeps_their_head() {
         mode: BoxMode::Geometry,
         ..BoxesConfig::default()
     };
-    let found = find_boxes(&cloud(scene, false), &cfg).expect("boxes");
+    let found = find_boxes(&scene.cloud(false), &cfg).expect("boxes");
     // Counting every voxel within 0.4 m below the top, the neighbour's arm made the short
     // person's head "not compact" and they had no box.
     assert_eq!(found.boxes.len(), 2, "{found:?}");
@@ -181,15 +96,15 @@ fn a_short_person_beside_a_tall_one_keeps_their_head() {
 #[test]
 fn an_arm_touching_someone_else_s_head_stays_its_owner_s() {
     let mut scene = Scene::default();
-    floor(&mut scene);
+    scene.floor();
     let left = person(&mut scene, 0.0, 0.0, 1.72, true);
     // The right person, 0.8 m away and without hanging arms, reaches out with their
     // left arm: the hand touches the left person's head from the side.
     person(&mut scene, 0.8, 0.0, 1.72, false);
     let (shoulder, elbow, hand) = ([0.58, 0.0, 1.42], [0.45, 0.0, 1.68], [0.15, 0.0, 1.68]);
-    cylinder(&mut scene, shoulder, elbow, 0.045, Class::UpperArms);
-    cylinder(&mut scene, elbow, hand, 0.04, Class::LowerArms);
-    let found = find_boxes(&cloud(scene, true), &BoxesConfig::default()).expect("boxes");
+    scene.cylinder(shoulder, elbow, 0.045, Class::UpperArms);
+    scene.cylinder(elbow, hand, 0.04, Class::LowerArms);
+    let found = find_boxes(&scene.cloud(true), &BoxesConfig::default()).expect("boxes");
     assert_eq!(found.boxes.len(), 2, "{found:?}");
     let (mine, theirs): (Vec<&PersonBox>, Vec<&PersonBox>) =
         found.boxes.iter().partition(|b| box_iou(&left, b) >= 0.5);
@@ -204,7 +119,7 @@ fn an_arm_touching_someone_else_s_head_stays_its_owner_s() {
 #[test]
 fn two_heads_leaning_together_are_two_people() {
     let mut scene = Scene::default();
-    floor(&mut scene);
+    scene.floor();
     // Standing 0.6 m apart (facing each other along y), heads leaning 0.12 m towards
     // each other: tops 0.36 m apart, closer than head_separation_m, with a dip of more
     // than a head's height between them.
@@ -212,12 +127,12 @@ fn two_heads_leaning_together_are_two_people() {
     leaning_person(&mut scene, 0.0, 0.6, 1.85, true, -0.12);
     // Their right forearms meet at chest height (a hand-over): one cluster.
     let (a, b) = ([0.22, 0.0, 1.1], [0.25, 0.6, 1.1]);
-    cylinder(&mut scene, a, b, 0.045, Class::LowerArms);
+    scene.cylinder(a, b, 0.045, Class::LowerArms);
     let cfg = BoxesConfig {
         mode: BoxMode::Geometry,
         ..BoxesConfig::default()
     };
-    let found = find_boxes(&cloud(scene, false), &cfg).expect("boxes");
+    let found = find_boxes(&scene.cloud(false), &cfg).expect("boxes");
     // The higher top hid every lower one within head_separation_m: one person.
     assert_eq!(found.boxes.len(), 2, "{found:?}");
     let heads = [[0.0, 0.12, 1.55], [0.0, 0.48, 1.75]];

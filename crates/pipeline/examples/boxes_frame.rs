@@ -4,11 +4,10 @@
 //! `cargo run --release -p bodyseg-pipeline --example boxes_frame PRESET SEED FRAME...`
 //! (`RUST_LOG=bodyseg_people=trace` for the finder's reasons).
 
-use bodyseg_calib::BackProjectOptions;
 use bodyseg_core::PersonBox;
 use bodyseg_people::{BoxMode, BoxesConfig, box_iou, find_boxes};
-use bodyseg_pipeline::{camera_images, match_boxes, parsing_images};
-use bodyseg_project::{FrameProjector, ProjectConfig};
+use bodyseg_pipeline::{match_boxes, study_frame};
+use bodyseg_project::FrameProjector;
 use bodyseg_synth::{Synth, preset};
 
 fn describe(b: &PersonBox) -> String {
@@ -39,20 +38,12 @@ fn main() -> anyhow::Result<()> {
     let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(100);
     let frames: Vec<usize> = args.filter_map(|s| s.parse().ok()).collect();
     let synth = Synth::new(preset(&name)?, seed)?;
-    let rig = synth.written_rig();
-    let projector = FrameProjector::new(rig)?;
+    let projector = FrameProjector::new(synth.written_rig())?;
     for p in synth.people() {
         println!("person pose {}", p.pose().name());
     }
     for index in frames {
-        let frame = synth.frame(index);
-        let labels = parsing_images(rig, &frame);
-        let images = camera_images(&frame, &labels);
-        let cloud = projector.project_frame(
-            &images,
-            &BackProjectOptions::default(),
-            &ProjectConfig::default(),
-        )?;
+        let (frame, cloud) = study_frame(&synth, &projector, index)?;
         println!("== {name} seed {seed} frame {index}");
         for t in &frame.boxes.boxes {
             println!("  true  {}", describe(t));

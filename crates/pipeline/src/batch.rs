@@ -331,8 +331,9 @@ pub fn text_hash(text: &str) -> String {
 }
 
 /// Removes the temporary files (`.bodyseg-*.tmp`) a killed run left in `out` and its
-/// sub-folders. Only for a whole batch: with shards, another process may be writing.
-pub fn remove_stale_temporaries(out: &Path) {
+/// sub-folders. Only for a whole batch: with shards, another process may be writing
+/// ([`run_batch`] calls it so).
+fn remove_stale_temporaries(out: &Path) {
     let mut stack = vec![out.to_path_buf()];
     while let Some(dir) = stack.pop() {
         let Ok(entries) = std::fs::read_dir(&dir) else {
@@ -367,7 +368,8 @@ pub struct BatchFrame<'a, J> {
 }
 
 /// Runs `process` on this shard's frames of `jobs` (`(id, job)`, sorted by id, ids
-/// unique) that are not complete yet (all of them with `redo`), in parallel. `process`
+/// unique) that are not complete yet (all of them with `redo`), in parallel, after
+/// removing the temporaries a killed run left (whole batch only). `process`
 /// writes its files through the [`FrameWriter`], pushes its stages, and returns the
 /// record (the batch fills in `outputs`, then writes the record).
 ///
@@ -393,6 +395,9 @@ pub fn run_batch<J: Sync>(
         .filter(|(i, _)| shard.holds(*i))
         .map(|(_, j)| j)
         .collect();
+    if shard == Shard::ALL {
+        remove_stale_temporaries(out);
+    }
     let total = mine.len();
     let finished = AtomicUsize::new(0);
     let failed_count = AtomicUsize::new(0);

@@ -4,10 +4,10 @@
 use crate::projection_study::{camera_images, parsing_images};
 use anyhow::Result;
 use bodyseg_calib::BackProjectOptions;
-use bodyseg_core::PersonBox;
+use bodyseg_core::{LabeledCloud, PersonBox};
 use bodyseg_people::{BoxesConfig, box_iou, find_boxes};
 use bodyseg_project::{FrameProjector, ProjectConfig};
-use bodyseg_synth::Synth;
+use bodyseg_synth::{Synth, SynthFrame};
 
 /// A found box matches a true one when their IoU is at least this (issue 6).
 pub const MATCH_IOU: f32 = 0.5;
@@ -103,6 +103,28 @@ impl BoxStats {
     }
 }
 
+/// Frame `index` of `synth` and its cloud as the box studies see it: the written rig, the
+/// simulated parser's predicted labels, DSA projection with default settings
+/// (`projector` is `synth`'s written rig's).
+///
+/// # Errors
+/// The projection fails.
+pub fn study_frame(
+    synth: &Synth,
+    projector: &FrameProjector,
+    index: usize,
+) -> Result<(SynthFrame, LabeledCloud)> {
+    let frame = synth.frame(index);
+    let labels = parsing_images(synth.written_rig(), &frame);
+    let images = camera_images(&frame, &labels);
+    let cloud = projector.project_frame(
+        &images,
+        &BackProjectOptions::default(),
+        &ProjectConfig::default(),
+    )?;
+    Ok((frame, cloud))
+}
+
 /// Projects frames `frames` of `synth` (written rig, the simulated parser's predicted
 /// labels, DSA projection with default settings), finds boxes with each of `configs`,
 /// and scores them against the frame's true boxes.
@@ -111,18 +133,10 @@ pub fn box_stats(
     frames: &[usize],
     configs: &[BoxesConfig],
 ) -> Result<Vec<BoxStats>> {
-    let rig = synth.written_rig();
-    let projector = FrameProjector::new(rig)?;
+    let projector = FrameProjector::new(synth.written_rig())?;
     let mut stats = vec![BoxStats::default(); configs.len()];
     for &index in frames {
-        let frame = synth.frame(index);
-        let labels = parsing_images(rig, &frame);
-        let images = camera_images(&frame, &labels);
-        let cloud = projector.project_frame(
-            &images,
-            &BackProjectOptions::default(),
-            &ProjectConfig::default(),
-        )?;
+        let (frame, cloud) = study_frame(synth, &projector, index)?;
         for (cfg, s) in configs.iter().zip(&mut stats) {
             let found = find_boxes(&cloud, cfg)?;
             let m = match_boxes(&frame.boxes.boxes, &found.boxes);

@@ -152,9 +152,6 @@ fn convert_recordings(
             processors.push(processor);
         }
         jobs.sort_by(|a, b| a.0.cmp(&b.0));
-        if opts.shard == Shard::ALL {
-            crate::batch::remove_stale_temporaries(&opts.out);
-        }
         Ok((recordings, processors, jobs))
     })?;
     let (recordings, processors, jobs) = setup;
@@ -263,9 +260,6 @@ fn convert_3dpeople(
             );
         }
         bodyseg_io::create_folder(&opts.out)?;
-        if opts.shard == Shard::ALL {
-            crate::batch::remove_stale_temporaries(&opts.out);
-        }
         Ok(views)
     })?;
     let mut jobs: Vec<(String, _)> = views.into_iter().map(|v| (v.stem(), v)).collect();

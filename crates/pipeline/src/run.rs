@@ -783,9 +783,6 @@ pub fn run_recording(
         let figures = figure_frames(&opts.figures, &frames);
         let processor = processor.with_figures(figures.clone());
         bodyseg_io::create_folder(&opts.out)?;
-        if opts.shard == Shard::ALL {
-            crate::batch::remove_stale_temporaries(&opts.out);
-        }
         Ok((frames, figures, processor))
     })?;
     let (frames, figures, processor) = setup;

@@ -203,13 +203,14 @@ impl FrameProjector {
         result
     }
 
-    fn fill_frame(
+    /// The checks of every frame's inputs: the configurations, one camera's images per
+    /// rig camera, each of its sensors' size (in the order of back-projecting every
+    /// camera then projecting each one's labels, so the errors are those).
+    pub(crate) fn check_inputs(
         &self,
         images: &[CameraImages<'_>],
         opts: &BackProjectOptions,
         cfg: &ProjectConfig,
-        out: &mut LabeledCloud,
-        keep_hits: Option<&mut Hits>,
     ) -> Result<(), ProjectError> {
         cfg.validate()?;
         opts.validate()?;
@@ -219,8 +220,6 @@ impl FrameProjector {
                 want: self.cameras.len(),
             });
         }
-        // The errors, and their order, of back-projecting every camera then projecting
-        // each one's labels.
         for (t, img) in self.cameras.iter().zip(images) {
             if img.depth_raw.len() != t.camera.depth.num_pixels() {
                 return Err(CalibError::DepthSize {
@@ -235,6 +234,18 @@ impl FrameProjector {
         for (t, img) in self.cameras.iter().zip(images) {
             check_images(&t.camera, img.depth_raw, img.labels)?;
         }
+        Ok(())
+    }
+
+    fn fill_frame(
+        &self,
+        images: &[CameraImages<'_>],
+        opts: &BackProjectOptions,
+        cfg: &ProjectConfig,
+        out: &mut LabeledCloud,
+        keep_hits: Option<&mut Hits>,
+    ) -> Result<(), ProjectError> {
+        self.check_inputs(images, opts, cfg)?;
         let stride = opts.stride as usize;
 
         // Pass 1: points per chunk of rows, so that pass 2 can write each chunk's points

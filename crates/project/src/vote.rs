@@ -63,24 +63,8 @@ impl FrameProjector {
         cloud: &LabeledCloud,
         out: &mut Vec<Label>,
     ) -> Result<(), ProjectError> {
-        cfg.validate()?;
-        opts.validate()?;
-        if images.len() != self.cameras.len() {
-            return Err(ProjectError::CameraCount {
-                got: images.len(),
-                want: self.cameras.len(),
-            });
-        }
-        for (t, img) in self.cameras.iter().zip(images) {
-            if img.depth_raw.len() != t.camera.depth.num_pixels() {
-                return Err(ProjectError::SizeMismatch {
-                    camera: t.camera.name.clone(),
-                    what: "depth image",
-                    got: img.depth_raw.len(),
-                    want: t.camera.depth.num_pixels(),
-                });
-            }
-        }
+        // The projection's own checks: the same errors as the projection that made `cloud`.
+        self.check_inputs(images, opts, cfg)?;
         let n = cloud.len();
         for (what, got) in [
             ("labels", cloud.labels.len()),

@@ -46,6 +46,25 @@ fn slab_body(s: &mut Scene) -> usize {
     torso
 }
 
+/// A forearm beside the slab body, seen by two cameras as lower arm (a 2 cm lattice) and
+/// by a third as background (a missed part: the same cuboid sampled 1 cm off the others'
+/// points): `(arm, missed)`, as [`Scene::add`] gives them.
+fn forearm_one_camera_missed(s: &mut Scene) -> (usize, usize) {
+    let arm = s.add(cuboid(
+        [0.2, -0.04, 1.0],
+        [0.24, 0.0, 1.3],
+        0.02,
+        l(Class::LowerArms),
+    ));
+    let missed = s.add(cuboid(
+        [0.21, -0.03, 1.01],
+        [0.23, -0.01, 1.31],
+        0.02,
+        Label::BACKGROUND,
+    ));
+    (arm, missed)
+}
+
 #[test]
 fn contact_graph_lets_r_remove_a_blob_whose_sphere_but_not_its_points_touch_the_body() {
     let mut s = Scene::default();
@@ -111,18 +130,7 @@ fn contact_graph_merges_one_cameras_other_label_for_a_surface_the_others_see() {
     // background (a missed part; the same cylinder sampled 1 cm off the others' points).
     // The two clusters have alike spheres, so the sphere test puts neither inside the
     // other; every background point lies within 1.8 cm of a lower-arm point.
-    let arm = s.add(cuboid(
-        [0.2, -0.04, 1.0],
-        [0.24, 0.0, 1.3],
-        0.02,
-        l(Class::LowerArms),
-    ));
-    let missed = s.add(cuboid(
-        [0.21, -0.03, 1.01],
-        [0.23, -0.01, 1.31],
-        0.02,
-        Label::BACKGROUND,
-    ));
+    let (arm, missed) = forearm_one_camera_missed(&mut s);
     let r = refine_person(&s.pos, &s.lab, &paper("M"));
     assert!(all(&s, &r.point_labels, arm, Class::LowerArms));
     assert!(
@@ -346,18 +354,7 @@ fn vote_mode_starts_the_steps_from_the_voted_labels_and_leaves_reference_alone()
     // A forearm that one camera's parser missed: its points (1 cm off the other views')
     // are background in the projection. The multi-view vote (two views against one) gave
     // them lower arm; here that vote is the `voted` list.
-    let arm = s.add(cuboid(
-        [0.2, -0.04, 1.0],
-        [0.24, 0.0, 1.3],
-        0.02,
-        l(Class::LowerArms),
-    ));
-    let missed = s.add(cuboid(
-        [0.21, -0.03, 1.01],
-        [0.23, -0.01, 1.31],
-        0.02,
-        Label::BACKGROUND,
-    ));
+    let (arm, missed) = forearm_one_camera_missed(&mut s);
     let cloud = s.cloud();
     let mut voted = cloud.labels.clone();
     for i in s.parts[missed].clone() {
