@@ -4,8 +4,9 @@
 # runs the paper's five configurations (Reference, M, N, M-N, M-R-N) for both 2D prediction
 # sources (the synthetic parser errors recorded with the recording, and the bundled ONNX
 # model) and both projection modes (naive, DSA), then the improved refinement
-# (configs/benchmarks/improved.toml) and the improved refinement with the multi-view vote
-# for both projections (configs/benchmarks/improved_vote.toml), the projection study, the
+# (configs/benchmarks/improved.toml; for the model also without its probabilities,
+# improved_weighted.toml) and the improved refinement with the multi-view vote
+# (configs/benchmarks/improved_vote.toml), each for both projections, the projection study, the
 # figures and the regression subset, and writes the tables and their reading into
 # docs/results.md.
 #
@@ -61,9 +62,13 @@ for source in recorded model; do
     for mode in naive dsa; do
         convert "${source}_${mode}" --parser "$source" --mode "$mode"
     done
-    convert "${source}_dsa_improved" --parser "$source" --mode dsa --config configs/benchmarks/improved.toml
     for mode in naive dsa; do
+        convert "${source}_${mode}_improved" --parser "$source" --mode "$mode" --config configs/benchmarks/improved.toml
         convert "${source}_${mode}_vote" --parser "$source" --mode "$mode" --config configs/benchmarks/improved_vote.toml
+        if [ "$source" = model ]; then
+            # What the parser's probabilities add (recorded label images carry none).
+            convert "${source}_${mode}_weighted" --parser "$source" --mode "$mode" --config configs/benchmarks/improved_weighted.toml
+        fi
     done
 done
 

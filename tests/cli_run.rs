@@ -6,6 +6,7 @@
 use crate::common::{
     FRAMES, assert_ok, bodyseg, copy_tree, recording, stderr, stdout, tempdir, tree,
 };
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -250,6 +251,39 @@ fn a_killed_run_finishes_when_started_again_with_identical_outputs() {
     }
 }
 
+/// `bodyseg run` on the first 2 frames of `rec` into `dir/out` with `extra` arguments: its
+/// report and its run log.
+fn run_two_frames(
+    dir: &Path,
+    rec: &Path,
+    out: &str,
+    extra: &[&str],
+) -> (bodyseg_eval::Report, String) {
+    let mut args = vec![
+        "run",
+        "--recording",
+        rec.to_str().expect("utf-8"),
+        "--out",
+        out,
+        "--limit",
+        "2",
+        "--figure",
+        "none",
+        "--no-label-images",
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let o = bodyseg(dir, &args);
+    assert_ok(&o, "bodyseg run");
+    let out = dir.join(out);
+    let report = bodyseg_eval::Report::from_json(
+        &std::fs::read_to_string(out.join("report.json")).expect("report.json"),
+    )
+    .expect("report parses");
+    let log = std::fs::read_to_string(out.join("run.json")).expect("run.json");
+    (report, log)
+}
+
 #[test]
 fn the_multi_view_vote_changes_the_steps_and_leaves_reference_alone() {
     let rec = recording();
@@ -259,31 +293,7 @@ fn the_multi_view_vote_changes_the_steps_and_leaves_reference_alone() {
         "[refine]\nvote = \"multi_view\"\n",
     )
     .expect("write");
-    let run = |out: &str, extra: &[&str]| {
-        let mut args = vec![
-            "run",
-            "--recording",
-            rec.to_str().expect("utf-8"),
-            "--out",
-            out,
-            "--limit",
-            "2",
-            "--figure",
-            "none",
-            "--no-label-images",
-            "-q",
-        ];
-        args.extend_from_slice(extra);
-        let o = bodyseg(dir.path(), &args);
-        assert_ok(&o, "bodyseg run");
-        let out = dir.path().join(out);
-        let report = bodyseg_eval::Report::from_json(
-            &std::fs::read_to_string(out.join("report.json")).expect("report.json"),
-        )
-        .expect("report parses");
-        let log = std::fs::read_to_string(out.join("run.json")).expect("run.json");
-        (report, log)
-    };
+    let run = |out: &str, extra: &[&str]| run_two_frames(dir.path(), rec, out, extra);
     let (paper, paper_log) = run("paper", &[]);
     let (vote, vote_log) = run("vote", &["--config", "vote.toml"]);
     // Reference is the projection in both: the same confusion matrix, hence equal metrics.
@@ -302,4 +312,48 @@ fn the_multi_view_vote_changes_the_steps_and_leaves_reference_alone() {
         m_vote > m_paper + 0.01,
         "M BIoU: vote {m_vote:.4}, paper {m_paper:.4}"
     );
+}
+
+/// `refine.noise = "probability"` reads the ONNX model's probabilities: against
+/// `"weighted"` it changes N with the model and nothing with recorded label images (which
+/// carry none).
+#[test]
+fn probability_noise_uses_the_models_probabilities() {
+    let rec = recording();
+    let dir = tempdir();
+    for (name, mode) in [("weighted", "weighted"), ("probability", "probability")] {
+        std::fs::write(
+            dir.path().join(format!("{name}.toml")),
+            format!("[refine]\nnoise = \"{mode}\"\n"),
+        )
+        .expect("write");
+    }
+    let run = |out: &str, parser: &str, config: &str| {
+        run_two_frames(
+            dir.path(),
+            rec,
+            out,
+            &["--parser", parser, "--config", config],
+        )
+        .0
+    };
+    let model_w = run("model_w", "model", "weighted.toml");
+    let model_p = run("model_p", "model", "probability.toml");
+    assert_eq!(
+        metrics(&model_w, "Reference"),
+        metrics(&model_p, "Reference")
+    );
+    let (n_w, n_p) = (
+        metrics(&model_w, "N").biou.expect("BIoU"),
+        metrics(&model_p, "N").biou.expect("BIoU"),
+    );
+    assert!(
+        (n_w - n_p).abs() > 1e-4,
+        "N BIoU: weighted {n_w}, probability {n_p}"
+    );
+    let rec_w = run("rec_w", "recorded", "weighted.toml");
+    let rec_p = run("rec_p", "recorded", "probability.toml");
+    for name in ["Reference", "M", "N", "M-N", "M-R-N"] {
+        assert_eq!(metrics(&rec_w, name), metrics(&rec_p, name), "{name}");
+    }
 }

@@ -75,6 +75,12 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
         ),
     )];
     tracing::info!(cloud = %opts.cloud.display(), points = cloud.len(), "read cloud");
+    if cfg.noise == bodyseg_refine::NoiseMode::Probability {
+        // A cloud file carries no parser probabilities (FORMATS.md's PLY has labels only).
+        tracing::warn!(
+            "refine.noise = \"probability\" on a cloud file: no parser probabilities, so every label counts as sure (the same as \"weighted\")"
+        );
+    }
 
     let (refined, took) = timed(|| {
         bodyseg_refine::refine(&cloud, &boxes.boxes, cfg)

@@ -33,7 +33,7 @@ use bodyseg_io::{DepthImage, Durability, PlyFormat, PlyWriteOptions};
 use bodyseg_parsing::{OnnxSegmenter, Segmenter, ViewInput};
 use bodyseg_people::BoxMode;
 use bodyseg_project::{CameraImages, FrameProjector, Hits};
-use bodyseg_refine::{RefinedVariants, Steps, VoteMode};
+use bodyseg_refine::{NoiseMode, PointEvidence, RefinedVariants, Steps, VoteMode};
 use serde::Serialize;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -207,6 +207,9 @@ struct Scratch {
     label_image: LabelImage,
     /// The multi-view vote's labels (`refine.vote = multi_view`; empty otherwise).
     voted: Vec<Label>,
+    /// The parser's probability of each point's label (`refine.noise = probability`
+    /// with a parser that gives probabilities; empty otherwise).
+    label_probs: Vec<f32>,
 }
 
 impl std::fmt::Debug for FrameProcessor {
@@ -411,6 +414,7 @@ impl FrameProcessor {
                 keys: Vec::new(),
                 label_image: LabelImage::filled(0, 0, Label::UNKNOWN),
                 voted: Vec::new(),
+                label_probs: Vec::new(),
             });
         let result = self.process_with(inputs, writer, stages, &mut scratch);
         if let Ok(mut p) = self.scratch.lock() {
@@ -433,6 +437,7 @@ impl FrameProcessor {
             keys,
             label_image,
             voted,
+            label_probs,
         } = scratch;
         let frame = inputs.frame.as_str();
         let cfg = &self.config;
@@ -445,9 +450,13 @@ impl FrameProcessor {
                 labels: l,
             })
             .collect();
+        // Recorded label images carry no probabilities; the model's do.
+        let with_probs = cfg.refine.noise == NoiseMode::Probability
+            && inputs.labels.iter().any(|l| l.probs.is_some());
         let ((), took) = timed(|| -> Result<()> {
-            if self.label_images {
-                // The label images reuse where the points landed.
+            if self.label_images || with_probs {
+                // The label images and the label probabilities reuse where the points
+                // landed.
                 projector.project_frame_keeping_hits(
                     &images,
                     &cfg.backproject.options(),
@@ -462,6 +471,9 @@ impl FrameProcessor {
                     &cfg.project,
                     cloud,
                 )?;
+            }
+            if with_probs {
+                hits.label_probs_into(cloud, &images, label_probs);
             }
             Ok(())
         })?;
@@ -509,9 +521,12 @@ impl FrameProcessor {
             steps.push(cfg.refine.steps);
         }
         let (mut variants, took) = timed(|| {
-            bodyseg_refine::refine_variants_voted(
+            bodyseg_refine::refine_variants_with(
                 cloud,
-                vote.then_some(voted.as_slice()),
+                PointEvidence {
+                    voted: vote.then_some(voted.as_slice()),
+                    label_probs: with_probs.then_some(label_probs.as_slice()),
+                },
                 &boxes.boxes,
                 &cfg.refine,
                 &steps,

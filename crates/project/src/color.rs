@@ -13,6 +13,7 @@
 //! are identical to the former f64 path in both modes.
 
 use bodyseg_calib::{Intrinsics, Pose, RgbdCamera};
+use bodyseg_core::LabeledCloud;
 
 /// Largest difference, colour pixels, between [`ColorProjection`] and the f64
 /// [`bodyseg_calib::Intrinsics::project`] of the same depth point, over the image.
@@ -98,6 +99,44 @@ impl Hits {
     /// Per point: its depth along the colour camera's z, metres.
     pub fn z_color_m(&self) -> &[f32] {
         &self.z_color_m
+    }
+
+    /// Per point of `cloud` (which these hits were kept for): the parser's probability of
+    /// the point's label, read at its colour pixel in its camera's label image
+    /// (`images[origin.camera]`). 1 where that is not known: no hit, no probabilities in
+    /// that image, an unknown label, or a label the pixel does not have (DSA's boundary
+    /// vote took a neighbour's). For `noise = "probability"` of the refinement.
+    pub fn label_probs_into(
+        &self,
+        cloud: &LabeledCloud,
+        images: &[crate::CameraImages<'_>],
+        out: &mut Vec<f32>,
+    ) {
+        out.clear();
+        out.extend(
+            cloud
+                .labels
+                .iter()
+                .zip(&cloud.origins)
+                .zip(self.u.iter().zip(&self.v))
+                .map(|((&label, origin), (&u, &v))| {
+                    let Some(image) = images.get(usize::from(origin.camera)) else {
+                        return 1.0;
+                    };
+                    let image = image.labels;
+                    let pixel = v as usize * image.width as usize + u as usize;
+                    match &image.probs {
+                        Some(probs)
+                            if u != NO_HIT
+                                && !label.is_unknown()
+                                && image.labels.get(pixel) == Some(&label) =>
+                        {
+                            probs.get(pixel).copied().unwrap_or(1.0)
+                        }
+                        _ => 1.0,
+                    }
+                }),
+        );
     }
 
     /// Forgets every point (keeps the allocations).

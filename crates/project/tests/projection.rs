@@ -11,7 +11,8 @@ use bodyseg_calib::{
 };
 use bodyseg_core::{Class, Label, LabelImage, PointOrigin};
 use bodyseg_project::{
-    CameraImages, ProjectConfig, ProjectError, ProjectMode, project_frame, project_labels,
+    CameraImages, FrameProjector, ProjectConfig, ProjectError, ProjectMode, project_frame,
+    project_labels,
 };
 
 const FG: Class = Class::Torso;
@@ -768,4 +769,73 @@ fn project_frame_equals_back_project_then_project_labels() {
         ),
         "{err}"
     );
+}
+
+/// `Hits::label_probs_into`: each labelled point reads the probability at its own colour
+/// pixel (here: left half of camera 0's image unsure, camera 1's image without
+/// probabilities); 1 where that says nothing.
+#[test]
+fn label_probabilities_follow_each_point_to_its_colour_pixel() {
+    let cam0 = simple_camera();
+    let mut cam1 = simple_camera();
+    cam1.name = "second".into();
+    let rig = Rig {
+        cameras: vec![cam0.clone(), cam1.clone()],
+    };
+    let f0 = fixture(cam0.clone(), &SIMPLE_SCENE);
+    let f1 = fixture(cam1, &SIMPLE_SCENE);
+    let mut labels0 = f0.labels.clone();
+    let w = labels0.width as usize;
+    labels0.probs = Some(
+        (0..labels0.num_pixels())
+            .map(|i| if i % w < w / 2 { 0.3 } else { 0.9 })
+            .collect(),
+    );
+    let images = [
+        CameraImages {
+            depth_raw: &f0.depth_raw,
+            labels: &labels0,
+        },
+        CameraImages {
+            depth_raw: &f1.depth_raw,
+            labels: &f1.labels,
+        },
+    ];
+    // Naive: every point's label is its pixel's, so the probability always applies.
+    let cfg = ProjectConfig {
+        occlusion: false,
+        depth_edge: false,
+        label_boundary: false,
+        ..Default::default()
+    };
+    let projector = FrameProjector::new(&rig).expect("valid rig");
+    let (mut cloud, mut hits, mut probs) = Default::default();
+    projector
+        .project_frame_keeping_hits(
+            &images,
+            &BackProjectOptions::default(),
+            &cfg,
+            &mut cloud,
+            &mut hits,
+        )
+        .expect("valid frame");
+    hits.label_probs_into(&cloud, &images, &mut probs);
+    assert_eq!(probs.len(), cloud.len());
+    let n0 = f0.points.len();
+    let (mut unsure, mut sure) = (0, 0);
+    for (i, p) in f0.points.iter().enumerate() {
+        if cloud.labels[i].is_unknown() {
+            assert_eq!(probs[i], 1.0, "unknown point {i}");
+            continue;
+        }
+        let uv = cam0
+            .color
+            .project([f64::from(p[0]) - 0.05, f64::from(p[1]), f64::from(p[2])])
+            .expect("in front");
+        let left = (uv[0].round() as usize) < w / 2;
+        assert_eq!(probs[i], if left { 0.3 } else { 0.9 }, "point {i}");
+        if left { unsure += 1 } else { sure += 1 }
+    }
+    assert!(unsure > 100 && sure > 100, "{unsure} unsure, {sure} sure");
+    assert!(probs[n0..].iter().all(|&p| p == 1.0), "no probabilities: 1");
 }

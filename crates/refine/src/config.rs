@@ -36,6 +36,14 @@ pub enum RefineError {
         /// Points of the cloud.
         want: usize,
     },
+    /// Label probabilities given, but not one per point.
+    #[error("label probabilities: {got} for {want} points (one per point expected)")]
+    LabelProbs {
+        /// Probabilities given.
+        got: usize,
+        /// Points of the cloud.
+        want: usize,
+    },
 }
 
 impl From<bodyseg_core::CloudError> for RefineError {
@@ -85,6 +93,13 @@ pub enum NoiseMode {
     /// with no clustered point within `eps_m`, its own label (unknown: the nearest
     /// clustered point's).
     Weighted,
+    /// As `weighted`, and the point's own label counts `noise_self_weight` × the parser's
+    /// probability of it (the softmax of that label at the point's colour pixel), so a
+    /// label the parser was unsure of yields to its neighbours and a sure one holds. The
+    /// probabilities come from the caller ([`crate::PointEvidence::label_probs`]); a point
+    /// without one (recorded label images carry none, a label changed by the multi-view
+    /// vote) counts 1, as in `weighted`.
+    Probability,
 }
 
 /// Whether the multi-view consistency vote runs before the steps (the paper's "future
@@ -98,7 +113,7 @@ pub enum VoteMode {
     /// Every configuration but Reference starts from the labels of the projection's
     /// multi-view vote (a point seen by several colour cameras takes the label most of
     /// them agree on; `bodyseg_project::FrameProjector::vote_labels`), which the caller
-    /// hands to [`crate::refine_variants_voted`]. Reference stays the projected labels.
+    /// hands to [`crate::refine_variants_with`]. Reference stays the projected labels.
     MultiView,
 }
 
@@ -260,16 +275,24 @@ pub struct RefineConfig {
     /// B, e.g. one camera's other label for a surface the others see). In (0, 1].
     /// Default 0.9.
     pub contact_inside_fraction: f32,
-    /// How N relabels noise: `nearest` (default, the paper) or `weighted`.
+    /// How N relabels noise: `nearest` (default, the paper), `weighted` or `probability`.
     pub noise: NoiseMode,
     /// Weighted noise: the number of nearest clustered points that vote. Default 16.
     pub noise_k: usize,
     /// Weighted noise: weight of the point's own label, in voters lying on the point (a
     /// voter at distance d weighs `1 / (1 + (d / eps_m)²)`); 0 = ignore it and give a point
     /// with no voter the nearest clustered point's label, as the paper. Unknown never
-    /// votes. The cloud carries no parser probabilities, so every own label counts the
-    /// same. Default 1.0.
+    /// votes. With `noise = "probability"` it is scaled by the parser's probability of the
+    /// point's label. Default 1.0.
     pub noise_self_weight: f32,
+    /// `noise = "probability"`: a point whose parser probability of its label is below
+    /// this takes no part in the clustering — it is noise, and N relabels it by the vote
+    /// of the sure points around it (its own label weighing `noise_self_weight` × that
+    /// probability) — so M and R work on labels the parser was sure of. Steps without N
+    /// leave it its own label. In [0, 1]; 0 = off. Default 0.6 (chosen with the bundled model
+    /// on handover 7, robot_cell 8 and single 9, none of the benchmark: 0.5 and 0.7 gained
+    /// less M-R-N BIoU).
+    pub noise_min_prob: f32,
     /// `off` (default, the paper) or `multi_view`: the steps start from the labels of
     /// the multi-view consistency vote instead of the projected ones (Reference is the
     /// projected labels either way). Needs the projection's depth and label images, so
@@ -299,6 +322,7 @@ impl Default for RefineConfig {
             noise: NoiseMode::Nearest,
             noise_k: 16,
             noise_self_weight: 1.0,
+            noise_min_prob: 0.6,
             vote: VoteMode::Off,
             steps: Steps::MRN,
             keep_outside_boxes: false,
@@ -360,6 +384,12 @@ impl RefineConfig {
                     "must be a finite number >= 0, got {}",
                     self.noise_self_weight
                 ),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.noise_min_prob) {
+            return bad(
+                "noise_min_prob",
+                format!("must be in [0, 1], got {}", self.noise_min_prob),
             );
         }
         Ok(())

@@ -15,7 +15,9 @@
 //! ([`build_graph_contact`]) instead of bounding spheres; `tree = "coverage"` searches the
 //! valid body tree covering the most points ([`best_tree_coverage`]) instead of filling
 //! slots greedily; `noise = "weighted"` relabels noise by a distance-weighted vote of its
-//! nearest clustered points and its own label ([`reassign_noise_weighted`]).
+//! nearest clustered points and its own label ([`reassign_noise_weighted`]), and `noise =
+//! "probability"` weighs that own label by the parser's probability of it
+//! ([`PointEvidence::label_probs`]).
 //!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).
@@ -126,10 +128,14 @@ pub fn analyse_person(
 
 /// Runs `steps` on a person's [`PersonStructure`] (Algorithm 1's second half). `Reference`
 /// is treated as no step (it does no per-person work; see [`refine`]).
+///
+/// `label_probs`: the parser's probability of each point's label in `labels` (one per
+/// point), used by `noise = "probability"` only; `None` counts every label as sure.
 pub fn apply_steps(
     structure: PersonStructure,
     positions_m: &[Vec3],
     labels: &[Label],
+    label_probs: Option<&[f32]>,
     steps: Steps,
     cfg: &RefineConfig,
 ) -> PersonRefinement {
@@ -175,10 +181,13 @@ pub fn apply_steps(
         let is_noise: Vec<bool> = clustering.cluster_of.iter().map(Option::is_none).collect();
         point_labels = match cfg.noise {
             NoiseMode::Nearest => reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m),
-            NoiseMode::Weighted => reassign_noise_weighted(
+            NoiseMode::Weighted | NoiseMode::Probability => reassign_noise_weighted(
                 positions_m,
                 &point_labels,
                 &is_noise,
+                // Noise points keep their starting label until here, so `label_probs[i]`
+                // is the probability of the label that votes.
+                label_probs.filter(|_| cfg.noise == NoiseMode::Probability),
                 cfg.eps_m,
                 cfg.noise_k,
                 cfg.noise_self_weight,
@@ -210,7 +219,7 @@ pub fn refine_person(
     cfg: &RefineConfig,
 ) -> PersonRefinement {
     let structure = analyse_person(positions_m, labels, cfg);
-    apply_steps(structure, positions_m, labels, cfg.steps, cfg)
+    apply_steps(structure, positions_m, labels, None, cfg.steps, cfg)
 }
 
 /// Runs the refinement on a whole cloud: every person box independently (in parallel),
@@ -256,7 +265,7 @@ pub struct RefinedVariants {
 /// figure draws them; a plain run does not need them).
 ///
 /// With `cfg.vote = multi_view` this is an error (no vote labels): see
-/// [`refine_variants_voted`].
+/// [`refine_variants_with`].
 pub fn refine_variants(
     cloud: &LabeledCloud,
     boxes: &[PersonBox],
@@ -264,21 +273,41 @@ pub fn refine_variants(
     steps: &[Steps],
     with_clusters: bool,
 ) -> Result<RefinedVariants, RefineError> {
-    refine_variants_voted(cloud, None, boxes, cfg, steps, with_clusters)
+    refine_variants_with(
+        cloud,
+        PointEvidence::default(),
+        boxes,
+        cfg,
+        steps,
+        with_clusters,
+    )
 }
 
-/// [`refine_variants`] with the labels of the projection's multi-view vote
-/// (`bodyseg_project::FrameProjector::vote_labels`, one per point of `cloud`). With
-/// `cfg.vote = multi_view` every configuration but Reference starts from `voted` instead
-/// of `cloud.labels` (clustering, steps, and the fuse's "original label"); Reference is
-/// `cloud.labels`, the projection, either way. With `cfg.vote = off`, `voted` is ignored.
+/// What the projection knows of each point beyond its label, one entry per point of the
+/// cloud; only `bodyseg run` / `convert`, which have the images, can give it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PointEvidence<'a> {
+    /// The labels of the projection's multi-view vote
+    /// (`bodyseg_project::FrameProjector::vote_labels`); needed by `vote = multi_view`.
+    pub voted: Option<&'a [Label]>,
+    /// The parser's probability of each point's projected label (the softmax of that
+    /// label at the point's colour pixel); used by `noise = "probability"`. Where the
+    /// vote changed a label, its probability is not the new label's: such points count 1.
+    pub label_probs: Option<&'a [f32]>,
+}
+
+/// [`refine_variants`] with the [`PointEvidence`] of the projection. With `cfg.vote =
+/// multi_view` every configuration but Reference starts from `evidence.voted` instead of
+/// `cloud.labels` (clustering, steps, and the fuse's "original label"); Reference is
+/// `cloud.labels`, the projection, either way. With `cfg.vote = off`, `voted` is ignored;
+/// `label_probs` only matter to `noise = "probability"`.
 ///
 /// # Errors
 /// As [`refine_variants`]; `cfg.vote = multi_view` and `voted` is `None` or not one label
-/// per point.
-pub fn refine_variants_voted(
+/// per point; `label_probs` not one per point.
+pub fn refine_variants_with(
     cloud: &LabeledCloud,
-    voted: Option<&[Label]>,
+    evidence: PointEvidence<'_>,
     boxes: &[PersonBox],
     cfg: &RefineConfig,
     steps: &[Steps],
@@ -286,6 +315,18 @@ pub fn refine_variants_voted(
 ) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
     cloud.validate()?;
+    let PointEvidence { voted, label_probs } = evidence;
+    if let Some(p) = label_probs
+        && p.len() != cloud.len()
+    {
+        return Err(RefineError::LabelProbs {
+            got: p.len(),
+            want: cloud.len(),
+        });
+    }
+    // Probabilities only where the steps use them: the starting label's, 1 where the vote
+    // replaced the projected label.
+    let label_probs = label_probs.filter(|_| cfg.noise == NoiseMode::Probability);
     // The labels the configurations other than Reference start from.
     let start: &[Label] = match (cfg.vote, voted) {
         (VoteMode::Off, _) => &cloud.labels,
@@ -332,15 +373,49 @@ pub fn refine_variants_voted(
                     );
                     (&copied.0, &copied.1)
                 };
-                let structure = analyse_person(pos, lab, cfg);
+                let probs: Option<Vec<f32>> = label_probs.map(|p| {
+                    idx.iter()
+                        .map(|&i| {
+                            let i = i as usize;
+                            if start[i] == cloud.labels[i] {
+                                p[i]
+                            } else {
+                                1.0
+                            }
+                        })
+                        .collect()
+                });
+                let probs = probs.as_deref();
+                // `noise = "probability"`: labels the parser was unsure of take no part in
+                // the clustering (they become noise, relabelled by N from the sure ones
+                // around them); the steps still see them as the point's own label.
+                let doubtful;
+                let cluster_lab: &[Label] = match probs {
+                    Some(p) if cfg.noise_min_prob > 0.0 => {
+                        doubtful = lab
+                            .iter()
+                            .zip(p)
+                            .map(|(&l, &q)| {
+                                if q < cfg.noise_min_prob {
+                                    Label::UNKNOWN
+                                } else {
+                                    l
+                                }
+                            })
+                            .collect::<Vec<Label>>();
+                        &doubtful
+                    }
+                    _ => lab,
+                };
+                let structure = analyse_person(pos, cluster_lab, cfg);
                 // Every run but the last works on a copy; the last (the only one of a
                 // plain run) takes the structure itself.
                 let mut refinements: Vec<PersonRefinement> = Vec::with_capacity(runs.len());
                 if let Some((&last, rest)) = runs.split_last() {
                     for &s in rest {
-                        refinements.push(apply_steps(structure.clone(), pos, lab, s, cfg));
+                        refinements.push(apply_steps(structure.clone(), pos, lab, probs, s, cfg));
                     }
-                    refinements.push(apply_steps(structure, pos, lab, last, cfg));
+                    refinements.push(apply_steps(structure, pos, lab, probs, last, cfg));
                 }
                 if let Some(r) = refinements.last() {
                     tracing::debug!(

@@ -121,16 +121,21 @@ pub fn reassign_noise(
 /// label, unless that is unknown or `self_weight` is 0 (then the nearest clustered point's
 /// label, as in [`reassign_noise`]).
 ///
+/// With `label_probs` (`noise = "probability"`: the parser's probability of each point's
+/// own label, one per point) the own label weighs `self_weight × label_probs[i]` (clamped
+/// to [0, 1]; NaN counts 1), so a label the parser was unsure of — a border pixel, a part
+/// it hesitated on — yields to its neighbours while a sure one holds against a strand of
+/// another label. Without, every own label weighs `self_weight`.
+///
 /// What it fixes: 1-NN follows whichever single point is nearest — a thin strand of another
 /// label, a stray border point — where the surrounding surface says otherwise, and it
 /// overwrites whole parts too sparse to cluster (a hand far from the sensors) with the
-/// label of whatever cluster is nearest. The cloud carries no parser probabilities
-/// (`LabeledCloud` has labels only), so every own label has the same weight; a per-point
-/// probability would scale it.
+/// label of whatever cluster is nearest.
 pub fn reassign_noise_weighted(
     positions_m: &[Vec3],
     labels: &[Label],
     is_noise: &[bool],
+    label_probs: Option<&[f32]>,
     eps_m: f32,
     k: usize,
     self_weight: f32,
@@ -167,7 +172,11 @@ pub fn reassign_noise_weighted(
             }
         }
         if let Some(c) = labels[i].class() {
-            votes[usize::from(c.id())] += self_weight;
+            let p = label_probs.map_or(1.0, |p| {
+                let p = p[i];
+                if p.is_nan() { 1.0 } else { p.clamp(0.0, 1.0) }
+            });
+            votes[usize::from(c.id())] += self_weight * p;
         }
         let mut best = labels[nearest as usize];
         let mut best_vote = best.class().map_or(0.0, |c| votes[usize::from(c.id())]);

@@ -6,8 +6,8 @@ mod common;
 
 use bodyseg_core::{Class, Label, PersonBox};
 use bodyseg_refine::{
-    GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode, VoteMode, refine,
-    refine_person, refine_variants, refine_variants_voted,
+    GraphMode, NoiseMode, PointEvidence, RefineConfig, RefineError, Steps, TreeMode, VoteMode,
+    refine, refine_person, refine_variants, refine_variants_with,
 };
 use common::{Scene, ball, cuboid, l};
 
@@ -376,23 +376,189 @@ fn vote_mode_starts_the_steps_from_the_voted_labels_and_leaves_reference_alone()
     // inside the other).
     let paper_out = refine_variants(&cloud, &boxes, &off, &steps, true).expect("valid");
     assert!(all(&s, &paper_out.labels[1], missed, Class::Background));
-    let out =
-        refine_variants_voted(&cloud, Some(&voted), &boxes, &on, &steps, true).expect("valid");
+    let out = refine_variants_with(
+        &cloud,
+        PointEvidence {
+            voted: Some(&voted),
+            ..Default::default()
+        },
+        &boxes,
+        &on,
+        &steps,
+        true,
+    )
+    .expect("valid");
     // Reference is the projection, untouched by the vote; M-R-N starts from the vote.
     assert_eq!(out.labels[0], cloud.labels);
     assert!(all(&s, &out.labels[1], missed, Class::LowerArms));
     assert!(all(&s, &out.labels[1], arm, Class::LowerArms));
     // The vote off: `voted` is ignored.
-    let ignored =
-        refine_variants_voted(&cloud, Some(&voted), &boxes, &off, &steps, true).expect("valid");
+    let ignored = refine_variants_with(
+        &cloud,
+        PointEvidence {
+            voted: Some(&voted),
+            ..Default::default()
+        },
+        &boxes,
+        &off,
+        &steps,
+        true,
+    )
+    .expect("valid");
     assert_eq!(ignored, paper_out);
     // The vote on without its labels, or with a list of another length: an error naming
     // the key, never a silent fallback to the projection.
     for v in [None, Some(&voted[1..])] {
-        let e = refine_variants_voted(&cloud, v, &boxes, &on, &steps, true)
-            .expect_err("no vote labels");
+        let e = refine_variants_with(
+            &cloud,
+            PointEvidence {
+                voted: v,
+                ..Default::default()
+            },
+            &boxes,
+            &on,
+            &steps,
+            true,
+        )
+        .expect_err("no vote labels");
         assert!(matches!(e, RefineError::VoteLabels { .. }), "{e}");
         assert!(e.to_string().starts_with("refine.vote"), "{e}");
     }
     assert!(refine(&cloud, &boxes, &on).is_err());
+}
+
+#[test]
+fn probability_noise_lets_an_unsure_label_yield_and_a_sure_one_hold() {
+    // A torso voter 1.5 cm from a noise point the parser called head (eps 3 cm: the
+    // voter weighs 1 / (1 + 0.25) = 0.8).
+    let pos = vec![[0.0, 0.0, 1.0], [0.015, 0.0, 1.0]];
+    let labels = vec![l(Class::Head), l(Class::Torso)];
+    let is_noise = [true, false];
+    let run = |probs: Option<&[f32]>| {
+        bodyseg_refine::reassign_noise_weighted(&pos, &labels, &is_noise, probs, 0.03, 16, 1.0)[0]
+    };
+    assert_eq!(run(None), l(Class::Head), "own label 1.0 against 0.8");
+    assert_eq!(run(Some(&[1.0, 1.0])), l(Class::Head), "sure: holds");
+    assert_eq!(
+        run(Some(&[0.5, 1.0])),
+        l(Class::Torso),
+        "unsure: 0.5 yields"
+    );
+    assert_eq!(
+        run(Some(&[f32::NAN, 1.0])),
+        l(Class::Head),
+        "NaN counts as sure"
+    );
+}
+
+/// A forearm (2 cm lattice) beside the slab body whose middle band (two layers) the parser
+/// called upper arm, unsure of it: `(forearm, band, probabilities)`.
+fn forearm_with_unsure_band(s: &mut Scene, band_prob: f32) -> (usize, usize, Vec<f32>) {
+    let below = s.add(cuboid(
+        [0.2, -0.04, 1.0],
+        [0.24, 0.0, 1.12],
+        0.02,
+        l(Class::LowerArms),
+    ));
+    let band = s.add(cuboid(
+        [0.2, -0.04, 1.14],
+        [0.24, 0.0, 1.16],
+        0.02,
+        l(Class::UpperArms),
+    ));
+    s.add(cuboid(
+        [0.2, -0.04, 1.18],
+        [0.24, 0.0, 1.3],
+        0.02,
+        l(Class::LowerArms),
+    ));
+    let mut probs = vec![0.9; s.pos.len()];
+    for i in s.parts[band].clone() {
+        probs[i] = band_prob;
+    }
+    (below, band, probs)
+}
+
+#[test]
+fn probability_noise_relabels_a_band_the_parser_was_unsure_of() {
+    let mut s = Scene::default();
+    slab_body(&mut s);
+    let (below, band, unsure) = forearm_with_unsure_band(&mut s, 0.4);
+    let cloud = s.cloud();
+    let boxes = [PersonBox {
+        id: 0,
+        center_m: [0.0, 0.0, 1.0],
+        half_extents_m: [0.6, 0.6, 1.0],
+        yaw_rad: 0.0,
+    }];
+    let steps = [Steps::Run {
+        merge: false,
+        remove: false,
+        noise: true,
+    }];
+    let weighted = RefineConfig {
+        noise: NoiseMode::Weighted,
+        ..paper("N")
+    };
+    let probability = RefineConfig {
+        noise: NoiseMode::Probability,
+        noise_min_prob: 0.6,
+        ..weighted.clone()
+    };
+    fn with(probs: &[f32]) -> PointEvidence<'_> {
+        PointEvidence {
+            label_probs: Some(probs),
+            ..Default::default()
+        }
+    }
+    // Weighted noise: the band is a cluster of its own (18 points), so N leaves it.
+    let out = refine_variants_with(&cloud, with(&unsure), &boxes, &weighted, &steps, false)
+        .expect("valid");
+    assert!(all(&s, &out.labels[0], band, Class::UpperArms));
+    // Probability: below noise_min_prob the band is noise, and its forearm neighbours
+    // outvote its own label (weight 0.4).
+    let out = refine_variants_with(&cloud, with(&unsure), &boxes, &probability, &steps, false)
+        .expect("valid");
+    assert!(all(&s, &out.labels[0], band, Class::LowerArms));
+    assert!(all(&s, &out.labels[0], below, Class::LowerArms));
+    // A band the parser was sure of stays what it said.
+    let mut s2 = Scene::default();
+    slab_body(&mut s2);
+    let (_, band2, sure) = forearm_with_unsure_band(&mut s2, 0.95);
+    let out = refine_variants_with(
+        &s2.cloud(),
+        with(&sure),
+        &boxes,
+        &probability,
+        &steps,
+        false,
+    )
+    .expect("valid");
+    assert!(all(&s2, &out.labels[0], band2, Class::UpperArms));
+    // Without N the unsure points keep their own label (never left unknown).
+    let m_only = RefineConfig {
+        steps: "M".parse().expect("valid"),
+        ..probability.clone()
+    };
+    let out = refine_variants_with(
+        &cloud,
+        with(&unsure),
+        &boxes,
+        &m_only,
+        &[m_only.steps],
+        false,
+    )
+    .expect("valid");
+    assert!(all(&s, &out.labels[0], band, Class::UpperArms));
+    // One probability per point, or an error.
+    let e = refine_variants_with(
+        &cloud,
+        with(&unsure[1..]),
+        &boxes,
+        &probability,
+        &steps,
+        false,
+    )
+    .expect_err("short list");
+    assert!(matches!(e, RefineError::LabelProbs { .. }), "{e}");
 }
