@@ -29,6 +29,14 @@ fn contact(steps: &str) -> RefineConfig {
     }
 }
 
+/// The evidence of a multi-view vote that gave `voted`.
+fn vote_of(voted: Option<&[Label]>) -> PointEvidence<'_> {
+    PointEvidence {
+        voted,
+        ..Default::default()
+    }
+}
+
 fn all(s: &Scene, out: &[Label], part: usize, want: Class) -> bool {
     s.labels_of(out, part).iter().all(|&x| x == l(want))
 }
@@ -376,51 +384,21 @@ fn vote_mode_starts_the_steps_from_the_voted_labels_and_leaves_reference_alone()
     // inside the other).
     let paper_out = refine_variants(&cloud, &boxes, &off, &steps, true).expect("valid");
     assert!(all(&s, &paper_out.labels[1], missed, Class::Background));
-    let out = refine_variants_with(
-        &cloud,
-        PointEvidence {
-            voted: Some(&voted),
-            ..Default::default()
-        },
-        &boxes,
-        &on,
-        &steps,
-        true,
-    )
-    .expect("valid");
+    let out = refine_variants_with(&cloud, vote_of(Some(&voted)), &boxes, &on, &steps, true)
+        .expect("valid");
     // Reference is the projection, untouched by the vote; M-R-N starts from the vote.
     assert_eq!(out.labels[0], cloud.labels);
     assert!(all(&s, &out.labels[1], missed, Class::LowerArms));
     assert!(all(&s, &out.labels[1], arm, Class::LowerArms));
     // The vote off: `voted` is ignored.
-    let ignored = refine_variants_with(
-        &cloud,
-        PointEvidence {
-            voted: Some(&voted),
-            ..Default::default()
-        },
-        &boxes,
-        &off,
-        &steps,
-        true,
-    )
-    .expect("valid");
+    let ignored = refine_variants_with(&cloud, vote_of(Some(&voted)), &boxes, &off, &steps, true)
+        .expect("valid");
     assert_eq!(ignored, paper_out);
     // The vote on without its labels, or with a list of another length: an error naming
     // the key, never a silent fallback to the projection.
     for v in [None, Some(&voted[1..])] {
-        let e = refine_variants_with(
-            &cloud,
-            PointEvidence {
-                voted: v,
-                ..Default::default()
-            },
-            &boxes,
-            &on,
-            &steps,
-            true,
-        )
-        .expect_err("no vote labels");
+        let e = refine_variants_with(&cloud, vote_of(v), &boxes, &on, &steps, true)
+            .expect_err("no vote labels");
         assert!(matches!(e, RefineError::VoteLabels { .. }), "{e}");
         assert!(e.to_string().starts_with("refine.vote"), "{e}");
     }
