@@ -151,9 +151,10 @@ def main():
     w("")
     w("Three refinement settings: the **paper mode** (every key at its default), the **improved "
       "refinement** ([`configs/benchmarks/improved.toml`](../configs/benchmarks/improved.toml): contact "
-      "graph, coverage tree, probability noise: labels the 2D parser gave a probability below "
-      "`noise_min_prob` = 0.6 take no part in the clustering and N relabels them by a distance-weighted "
-      "vote of the sure points around them, their own label weighing its probability; the synthetic "
+      "graph, coverage tree, probability noise: labels the 2D parser doubted — probability below "
+      "`noise_doubt_ratio` = 0.7 × the median probability of that label over the person — take no part in "
+      "the clustering and N relabels them by a distance-weighted vote of the sure points around them, "
+      "their own label weighing its probability; the synthetic "
       "parser errors carry no probabilities, so there every label counts as sure) and the improved refinement **+ multi-view vote** "
       "([`configs/benchmarks/improved_vote.toml`](../configs/benchmarks/improved_vote.toml), "
       "`refine.vote = \"multi_view\"`: before the steps, a point that other cameras see too — its depth "
@@ -239,11 +240,11 @@ def main():
           f"(×{d_w / d0:.2f} the paper mode's), with `noise = \"probability\"` {d_p:+.2f} (×{d_p / d0:.2f}); "
           f"lower arms {pc_w['lower_arms']:+.2f} → {pc_p['lower_arms']:+.2f} IoU. "
           + ("The probabilities help BIoU here: " if d_p > d_w else "The probabilities do not help BIoU here: ")
-          + "labels the model is unsure of (below 0.6) no longer form clusters of their own that M and N "
+          + "labels the model doubted no longer form clusters of their own that M and N "
           "keep, and N gives them the label of the sure points around them"
           + ("; the lower-arm loss says that where a whole small part is unsure, the larger sure parts "
              "next to it (upper arm, torso) outvote it." if pc_p["lower_arms"] < pc_w["lower_arms"] else ".")
-          + " (`noise_min_prob` = 0.6 was chosen on recordings outside the benchmark, where it helped; "
+          + " (`noise_doubt_ratio` = 0.7 was chosen on recordings outside the benchmark; "
           "see configs/benchmarks/improved.toml.)")
     for source in ["recorded", "model"]:
         for mode in ["naive", "dsa"]:

@@ -93,9 +93,11 @@ pub enum NoiseMode {
     /// with no clustered point within `eps_m`, its own label (unknown: the nearest
     /// clustered point's).
     Weighted,
-    /// As `weighted`, and the point's own label counts `noise_self_weight` × the parser's
-    /// probability of it (the softmax of that label at the point's colour pixel), so a
-    /// label the parser was unsure of yields to its neighbours and a sure one holds. The
+    /// As `weighted`, with the parser's probability of each point's label (the softmax of
+    /// that label at the point's colour pixel): doubtful labels (`noise_doubt_ratio`) are
+    /// left out of the clustering and relabelled by N, and the own label counts
+    /// `noise_self_weight` × its probability, so a label the parser was unsure of yields to
+    /// its neighbours and a sure one holds. The
     /// probabilities come from the caller ([`crate::PointEvidence::label_probs`]); a point
     /// without one (recorded label images carry none, a label changed by the multi-view
     /// vote) counts 1, as in `weighted`.
@@ -285,14 +287,15 @@ pub struct RefineConfig {
     /// votes. With `noise = "probability"` it is scaled by the parser's probability of the
     /// point's label. Default 1.0.
     pub noise_self_weight: f32,
-    /// `noise = "probability"`: a point whose parser probability of its label is below
-    /// this takes no part in the clustering — it is noise, and N relabels it by the vote
-    /// of the sure points around it (its own label weighing `noise_self_weight` × that
-    /// probability) — so M and R work on labels the parser was sure of. Steps without N
-    /// leave it its own label. In [0, 1]; 0 = off. Default 0.6 (chosen with the bundled model
-    /// on handover 7, robot_cell 8 and single 9, none of the benchmark: 0.5 and 0.7 gained
-    /// less M-R-N BIoU).
-    pub noise_min_prob: f32,
+    /// `noise = "probability"`: a label is doubtful when its parser probability is below
+    /// this fraction of the median probability of that label over the person's points
+    /// ([`crate::doubtful_as_unknown`]); a doubtful point takes no part in the clustering —
+    /// it is noise, and N relabels it by the vote of the sure points around it (its own
+    /// label weighing `noise_self_weight` × its probability) — so M and R work on labels
+    /// the parser was sure of. Steps without N leave it its own label. In [0, 1); 0 = off.
+    /// Default 0.7 (chosen with the bundled model on recordings outside the benchmark; 1.0
+    /// makes half of every part doubtful and R then cuts limbs off).
+    pub noise_doubt_ratio: f32,
     /// `off` (default, the paper) or `multi_view`: the steps start from the labels of
     /// the multi-view consistency vote instead of the projected ones (Reference is the
     /// projected labels either way). Needs the projection's depth and label images, so
@@ -322,7 +325,7 @@ impl Default for RefineConfig {
             noise: NoiseMode::Nearest,
             noise_k: 16,
             noise_self_weight: 1.0,
-            noise_min_prob: 0.6,
+            noise_doubt_ratio: 0.7,
             vote: VoteMode::Off,
             steps: Steps::MRN,
             keep_outside_boxes: false,
@@ -386,10 +389,10 @@ impl RefineConfig {
                 ),
             );
         }
-        if !(0.0..=1.0).contains(&self.noise_min_prob) {
+        if !(0.0..1.0).contains(&self.noise_doubt_ratio) {
             return bad(
-                "noise_min_prob",
-                format!("must be in [0, 1], got {}", self.noise_min_prob),
+                "noise_doubt_ratio",
+                format!("must be in [0, 1), got {}", self.noise_doubt_ratio),
             );
         }
         Ok(())

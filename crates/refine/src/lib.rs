@@ -36,7 +36,9 @@ pub use graph::{
     BodyTree, ClusterFeatures, Graph, best_tree_coverage, best_tree_paper, build_graph,
     build_graph_contact, cluster_features,
 };
-pub use steps::{merge_nodes, reassign_noise, reassign_noise_weighted, remove_nodes};
+pub use steps::{
+    doubtful_as_unknown, merge_nodes, reassign_noise, reassign_noise_weighted, remove_nodes,
+};
 
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, LabeledCloud, PersonBox, RefinedCloud};
@@ -391,18 +393,8 @@ pub fn refine_variants_with(
                 // around them); the steps still see them as the point's own label.
                 let doubtful;
                 let cluster_lab: &[Label] = match probs {
-                    Some(p) if cfg.noise_min_prob > 0.0 => {
-                        doubtful = lab
-                            .iter()
-                            .zip(p)
-                            .map(|(&l, &q)| {
-                                if q < cfg.noise_min_prob {
-                                    Label::UNKNOWN
-                                } else {
-                                    l
-                                }
-                            })
-                            .collect::<Vec<Label>>();
+                    Some(p) if cfg.noise_doubt_ratio > 0.0 => {
+                        doubtful = doubtful_as_unknown(lab, p, cfg.noise_doubt_ratio);
                         &doubtful
                     }
                     _ => lab,

@@ -191,6 +191,44 @@ pub fn reassign_noise_weighted(
     out
 }
 
+/// `noise = "probability"`'s doubt test: `labels` with every label the parser was unsure of
+/// made unknown (so the clustering leaves it out and N relabels it). A label is doubtful
+/// when its probability (`probs[i]`, one per point) is below `ratio` × the median
+/// probability of that same label over these points (a person's); unknown stays unknown,
+/// a NaN probability is never doubtful.
+///
+/// Why relative to the label's own median, not one threshold for all: a parser is less sure
+/// of small parts everywhere (a forearm's pixels are mostly border pixels). One absolute
+/// threshold (0.6) made whole forearms noise, and the larger sure parts around them outvoted
+/// them in N: on the benchmark of docs/results.md lower arms lost 1.2–3.5 IoU against no
+/// probabilities. Relative to each label's median only the points the parser doubted more
+/// than it usually doubts that part go (tuning in `configs/benchmarks/improved.toml`).
+pub fn doubtful_as_unknown(labels: &[Label], probs: &[f32], ratio: f32) -> Vec<Label> {
+    let mut by_class: [Vec<f32>; bodyseg_core::NUM_CLASSES] = Default::default();
+    for (l, &p) in labels.iter().zip(probs) {
+        if let Some(c) = l.class()
+            && !p.is_nan()
+        {
+            by_class[usize::from(c.id())].push(p);
+        }
+    }
+    let threshold = by_class.map(|mut v| {
+        if v.is_empty() {
+            return 0.0;
+        }
+        let mid = v.len() / 2;
+        *v.select_nth_unstable_by(mid, f32::total_cmp).1 * ratio
+    });
+    labels
+        .iter()
+        .zip(probs)
+        .map(|(&l, &p)| match l.class() {
+            Some(c) if p < threshold[usize::from(c.id())] => Label::UNKNOWN,
+            _ => l,
+        })
+        .collect()
+}
+
 /// Fine cells per block edge in [`NnIndex`].
 const NN_BLOCK_CELLS: i32 = 4;
 

@@ -430,8 +430,15 @@ fn probability_noise_lets_an_unsure_label_yield_and_a_sure_one_hold() {
 }
 
 /// A forearm (2 cm lattice) beside the slab body whose middle band (two layers) the parser
-/// called upper arm, unsure of it: `(forearm, band, probabilities)`.
+/// called upper arm with probability `band_prob`, and a real upper arm on the body's other
+/// side (probability 0.9, as every other point): `(forearm, band, probabilities)`.
 fn forearm_with_unsure_band(s: &mut Scene, band_prob: f32) -> (usize, usize, Vec<f32>) {
+    s.add(cuboid(
+        [-0.24, -0.04, 1.2],
+        [-0.2, 0.0, 1.4],
+        0.02,
+        l(Class::UpperArms),
+    ));
     let below = s.add(cuboid(
         [0.2, -0.04, 1.0],
         [0.24, 0.0, 1.12],
@@ -480,7 +487,7 @@ fn probability_noise_relabels_a_band_the_parser_was_unsure_of() {
     };
     let probability = RefineConfig {
         noise: NoiseMode::Probability,
-        noise_min_prob: 0.6,
+        noise_doubt_ratio: 0.7,
         ..weighted.clone()
     };
     fn with(probs: &[f32]) -> PointEvidence<'_> {
@@ -493,7 +500,8 @@ fn probability_noise_relabels_a_band_the_parser_was_unsure_of() {
     let out = refine_variants_with(&cloud, with(&unsure), &boxes, &weighted, &steps, false)
         .expect("valid");
     assert!(all(&s, &out.labels[0], band, Class::UpperArms));
-    // Probability: below noise_min_prob the band is noise, and its forearm neighbours
+    // Probability: 0.4 is below 0.7 × the upper arms' median (0.9), so the band is noise,
+    // and its forearm neighbours
     // outvote its own label (weight 0.4).
     let out = refine_variants_with(&cloud, with(&unsure), &boxes, &probability, &steps, false)
         .expect("valid");
@@ -539,4 +547,23 @@ fn probability_noise_relabels_a_band_the_parser_was_unsure_of() {
     )
     .expect_err("short list");
     assert!(matches!(e, RefineError::LabelProbs { .. }), "{e}");
+}
+
+#[test]
+fn doubt_is_measured_against_each_labels_own_median() {
+    let (a, b) = (l(Class::Torso), l(Class::LowerArms));
+    // The torso: mostly sure, one point unsure. The forearm: a part the parser is never
+    // sure of (median 0.4), one point much less sure than the rest.
+    let labels = [a, a, a, a, b, b, b, b, Label::UNKNOWN, a];
+    let probs = [0.9, 0.95, 0.9, 0.3, 0.4, 0.4, 0.35, 0.2, 0.1, f32::NAN];
+    let out = bodyseg_refine::doubtful_as_unknown(&labels, &probs, 0.7);
+    let u = Label::UNKNOWN;
+    // Thresholds: torso 0.7 × 0.9 = 0.63, forearm 0.7 × 0.4 = 0.28 (one absolute threshold
+    // of 0.6 would have made the whole forearm doubtful).
+    assert_eq!(out, [a, a, a, u, b, b, b, u, u, a]);
+    // Ratio 0: nothing is doubtful.
+    assert_eq!(
+        bodyseg_refine::doubtful_as_unknown(&labels, &probs, 0.0),
+        labels
+    );
 }
