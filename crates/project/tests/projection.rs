@@ -423,17 +423,24 @@ fn label_boundary_vote_repairs_bleeding() {
     assert_eq!(backward, forward);
 }
 
+/// `labels` with probabilities: 0.3 on the left half of the image, 0.9 on the right.
+fn left_half_unsure(labels: &LabelImage) -> LabelImage {
+    let w = labels.width as usize;
+    LabelImage {
+        probs: Some(
+            (0..labels.num_pixels())
+                .map(|i| if i % w < w / 2 { 0.3 } else { 0.9 })
+                .collect(),
+        ),
+        ..labels.clone()
+    }
+}
+
 #[test]
 fn low_probability_labels_become_unknown() {
     let f = fixture(simple_camera(), &SIMPLE_SCENE);
-    let mut labels = f.labels.clone();
+    let labels = left_half_unsure(&f.labels);
     let w = labels.width as usize;
-    // Left half of the colour image unsure.
-    labels.probs = Some(
-        (0..labels.num_pixels())
-            .map(|i| if i % w < w / 2 { 0.3 } else { 0.9 })
-            .collect(),
-    );
     let base = ProjectConfig {
         occlusion: false,
         depth_edge: false,
@@ -784,13 +791,8 @@ fn label_probabilities_follow_each_point_to_its_colour_pixel() {
     };
     let f0 = fixture(cam0.clone(), &SIMPLE_SCENE);
     let f1 = fixture(cam1, &SIMPLE_SCENE);
-    let mut labels0 = f0.labels.clone();
+    let labels0 = left_half_unsure(&f0.labels);
     let w = labels0.width as usize;
-    labels0.probs = Some(
-        (0..labels0.num_pixels())
-            .map(|i| if i % w < w / 2 { 0.3 } else { 0.9 })
-            .collect(),
-    );
     let images = [
         CameraImages {
             depth_raw: &f0.depth_raw,

@@ -439,24 +439,13 @@ fn forearm_with_unsure_band(s: &mut Scene, band_prob: f32) -> (usize, usize, Vec
         0.02,
         l(Class::UpperArms),
     ));
-    let below = s.add(cuboid(
-        [0.2, -0.04, 1.0],
-        [0.24, 0.0, 1.12],
-        0.02,
-        l(Class::LowerArms),
-    ));
-    let band = s.add(cuboid(
-        [0.2, -0.04, 1.14],
-        [0.24, 0.0, 1.16],
-        0.02,
-        l(Class::UpperArms),
-    ));
-    s.add(cuboid(
-        [0.2, -0.04, 1.18],
-        [0.24, 0.0, 1.3],
-        0.02,
-        l(Class::LowerArms),
-    ));
+    // The forearm, bottom to top: lower arm, the band, lower arm.
+    let [below, band, _] = [
+        (1.0, 1.12, Class::LowerArms),
+        (1.14, 1.16, Class::UpperArms),
+        (1.18, 1.3, Class::LowerArms),
+    ]
+    .map(|(z0, z1, class)| s.add(cuboid([0.2, -0.04, z0], [0.24, 0.0, z1], 0.02, l(class))));
     let mut probs = vec![0.9; s.pos.len()];
     for i in s.parts[band].clone() {
         probs[i] = band_prob;
