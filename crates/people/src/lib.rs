@@ -30,8 +30,10 @@
 //! The `file` mode (boxes read from `boxes/<stem>.json`) is the pipeline's: it reads files.
 //!
 //! A box is the person's points' horizontal extent along their principal horizontal axis
-//! (its yaw) plus `box_margin_m` on each side, from the floor up to the top plus
-//! `box_margin_m` — the shape of bodyseg-synth's true boxes. [`box_iou`] scores a box
+//! (its yaw; labels mode takes the axis of the torso-labelled voxels alone, as the trunk
+//! follows the facing direction whichever way the arms point) plus `box_margin_m` on each
+//! side, from the floor up to the top plus `box_margin_m` — the shape of bodyseg-synth's
+//! true boxes, which are aligned with the facing direction. [`box_iou`] scores a box
 //! against another exactly.
 //!
 //! # Conventions
