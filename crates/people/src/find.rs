@@ -474,7 +474,8 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
 /// legs). A voxel goes to whichever seed is nearer along the graph: a robot arm touching
 /// a person is claimed from its pedestal and shoulder up to about halfway to the head,
 /// while a person's own arm, nearer their head than anything that is not them, stays
-/// theirs.
+/// theirs. A path leaving a head sideways at its height pays [`CONTACT_PENALTY_M`], so an
+/// arm touching the side of a shorter neighbour's head stays its owner's.
 fn split_people(
     graph: &Graph,
     cluster: &[u32],
@@ -520,7 +521,26 @@ fn split_people(
     if heads.len() == 1 && seeds[1].is_empty() {
         groups[0] = cluster.to_vec();
     } else {
-        let owner = graph.split(centers, cluster, &seeds);
+        // Leaving a head sideways at head level (outward across HEAD_CONTACT_RADIUS_M around
+        // its top, within a head's height below it) costs the contact penalty: a body goes
+        // on from the head down through the neck, while what touches the head's side at
+        // its height is someone else's hand or arm (a pointing arm reaching past a shorter
+        // neighbour's head), which then stays nearer its owner along the graph.
+        let head_at: Vec<(Vec3, f32)> = heads
+            .iter()
+            .map(|&h| (centers[h as usize], heights[h as usize] - HEAD_HEIGHT_M))
+            .collect();
+        let owner = graph.split_with(centers, cluster, &seeds, |i, j| {
+            let (pi, pj) = (centers[i as usize], centers[j as usize]);
+            let (hi, hj) = (heights[i as usize], heights[j as usize]);
+            let leaves = head_at.iter().any(|&(top, band)| {
+                hi >= band
+                    && hj >= band
+                    && xy_dist(pi, top) <= HEAD_CONTACT_RADIUS_M
+                    && xy_dist(pj, top) > HEAD_CONTACT_RADIUS_M
+            });
+            if leaves { CONTACT_PENALTY_M } else { 0.0 }
+        });
         for (&i, &g) in cluster.iter().zip(&owner) {
             // Group `heads.len()` is nobody's: dropped.
             if let Some(group) = groups.get_mut(g) {
@@ -552,6 +572,9 @@ const ANCHOR_SLACK_M: f32 = 0.2;
 /// and voxels this low beyond the legs' reach seed the part that is nobody's, without
 /// pulling a hand and its forearm away.
 const LOW_LEG_FRACTION: f32 = 0.3;
+/// Horizontal radius around a head's top that holds all of the head, metres (a head is
+/// ≈ 0.1 m in radius; hair, a tilted head and voxel centroids add up to 0.1 m).
+const HEAD_CONTACT_RADIUS_M: f32 = 0.2;
 /// Horizontal radius of a head around its top, metres (a head is ≈ 0.2 m wide).
 const HEAD_RADIUS_M: f32 = 0.12;
 /// Height of a head below its top, metres (crown to chin ≈ 0.22 m; the shoulders start

@@ -21,8 +21,9 @@
 //!   continuous column of points below them down to the ground (the lower legs within a
 //!   leg's reach: a crouch), in the spirit of the ground-based people detector of Munaro et al. (ICRA
 //!   2012, "Tracking people within groups with RGB-D data", without its HOG classifier);
-//!   a cluster is split along the voxel graph (multi-source Dijkstra) between its heads
-//!   and what no person can own (voxels beyond arm's reach of every head, or low and
+//!   a cluster is split along the voxel graph (multi-source Dijkstra; leaving a head
+//!   sideways at its height costs a contact, as only a hand or an arm touches a head
+//!   there) between its heads and what no person can own (voxels beyond arm's reach of every head, or low and
 //!   beyond the legs: a robot's pedestal, a box), so a robot arm touching a person is
 //!   claimed from its base; each person keeps what lies within arm's reach of the head
 //!   (below the hips: within a leg's reach), and the same size filters apply.
