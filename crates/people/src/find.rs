@@ -81,11 +81,22 @@ impl VoxelPoints {
     }
 }
 
+/// Labels mode: a person's torso holds at least this many voxels for the box's yaw to
+/// be fitted on it (≈ 0.03 m² of trunk surface at 5 cm); fewer (a person seen mostly
+/// through their limbs, a torso the parser missed) and the yaw follows all their voxels.
+const MIN_TORSO_VOXELS: usize = 12;
+
 /// Checks one person candidate (its voxels) against the size limits and fits its box
-/// around its raw points.
+/// around its raw points. The box's yaw is the principal horizontal axis of the voxels
+/// `is_torso` accepts when there are at least [`MIN_TORSO_VOXELS`] of them, else of all
+/// the voxels: the trunk (shoulders and hips wider than deep) follows the facing
+/// direction, which the true boxes are aligned with, while a pointing, reaching or
+/// handing-over arm turns the axis of the whole body towards itself.
+#[allow(clippy::too_many_arguments)]
 fn person_box(
     id: u32,
     group: &[u32],
+    is_torso: impl Fn(u32) -> bool,
     centers: &[Vec3],
     index: &VoxelPoints,
     positions: &[Vec3],
@@ -110,11 +121,18 @@ fn person_box(
         );
         return None;
     }
-    let voxel_xy: Vec<[f32; 2]> = group
+    let xy_of = |v: u32| [centers[v as usize][0], centers[v as usize][1]];
+    let torso_xy: Vec<[f32; 2]> = group
         .iter()
-        .map(|&v| [centers[v as usize][0], centers[v as usize][1]])
+        .filter(|&&v| is_torso(v))
+        .map(|&v| xy_of(v))
         .collect();
-    let yaw = principal_yaw(&voxel_xy);
+    let yaw = if torso_xy.len() >= MIN_TORSO_VOXELS {
+        principal_yaw(&torso_xy)
+    } else {
+        let voxel_xy: Vec<[f32; 2]> = group.iter().map(|&v| xy_of(v)).collect();
+        principal_yaw(&voxel_xy)
+    };
     let mut xy = Vec::new();
     let mut top = f32::NEG_INFINITY;
     for &v in group {
@@ -261,9 +279,13 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
         };
         for group in groups {
             let id = boxes.len() as u32;
+            // Torso alone: the legs stride along the facing direction while the hips and
+            // shoulders lie across it, so together they have no clear axis.
+            let is_torso = |i: u32| v.labels[i as usize] == Class::Torso.id();
             if let Some(b) = person_box(
                 id,
                 &group,
+                is_torso,
                 &v.centers,
                 &index,
                 &cloud.positions_m,
@@ -411,7 +433,20 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
         let groups = split_people(&graph, &cluster, &heads, &all.centers, &heights, cfg);
         for group in groups {
             let id = boxes.len() as u32;
-            if let Some(b) = person_box(id, &group, &all.centers, &index, positions, ground, cfg) {
+            // No labels: the yaw follows all the person's voxels. (A band of heights below
+            // the chest as the trunk moved borderline boxes of people handing over
+            // both ways on held-out seeds, with no net gain.)
+            let no_torso = |_| false;
+            if let Some(b) = person_box(
+                id,
+                &group,
+                no_torso,
+                &all.centers,
+                &index,
+                positions,
+                ground,
+                cfg,
+            ) {
                 boxes.push(b);
             }
         }
@@ -439,7 +474,8 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
 /// legs). A voxel goes to whichever seed is nearer along the graph: a robot arm touching
 /// a person is claimed from its pedestal and shoulder up to about halfway to the head,
 /// while a person's own arm, nearer their head than anything that is not them, stays
-/// theirs.
+/// theirs. A path leaving a head sideways at its height pays [`CONTACT_PENALTY_M`], so an
+/// arm touching the side of a shorter neighbour's head stays its owner's.
 fn split_people(
     graph: &Graph,
     cluster: &[u32],
@@ -485,7 +521,26 @@ fn split_people(
     if heads.len() == 1 && seeds[1].is_empty() {
         groups[0] = cluster.to_vec();
     } else {
-        let owner = graph.split(centers, cluster, &seeds);
+        // Leaving a head sideways at head level (outward across HEAD_CONTACT_RADIUS_M around
+        // its top, within a head's height below it) costs the contact penalty: a body goes
+        // on from the head down through the neck, while what touches the head's side at
+        // its height is someone else's hand or arm (a pointing arm reaching past a shorter
+        // neighbour's head), which then stays nearer its owner along the graph.
+        let head_at: Vec<(Vec3, f32)> = heads
+            .iter()
+            .map(|&h| (centers[h as usize], heights[h as usize] - HEAD_HEIGHT_M))
+            .collect();
+        let owner = graph.split_with(centers, cluster, &seeds, |i, j| {
+            let (pi, pj) = (centers[i as usize], centers[j as usize]);
+            let (hi, hj) = (heights[i as usize], heights[j as usize]);
+            let leaves = head_at.iter().any(|&(top, band)| {
+                hi >= band
+                    && hj >= band
+                    && xy_dist(pi, top) <= HEAD_CONTACT_RADIUS_M
+                    && xy_dist(pj, top) > HEAD_CONTACT_RADIUS_M
+            });
+            if leaves { CONTACT_PENALTY_M } else { 0.0 }
+        });
         for (&i, &g) in cluster.iter().zip(&owner) {
             // Group `heads.len()` is nobody's: dropped.
             if let Some(group) = groups.get_mut(g) {
@@ -517,6 +572,9 @@ const ANCHOR_SLACK_M: f32 = 0.2;
 /// and voxels this low beyond the legs' reach seed the part that is nobody's, without
 /// pulling a hand and its forearm away.
 const LOW_LEG_FRACTION: f32 = 0.3;
+/// Horizontal radius around a head's top that holds all of the head, metres (a head is
+/// ≈ 0.1 m in radius; hair, a tilted head and voxel centroids add up to 0.1 m).
+const HEAD_CONTACT_RADIUS_M: f32 = 0.2;
 /// Horizontal radius of a head around its top, metres (a head is ≈ 0.2 m wide).
 const HEAD_RADIUS_M: f32 = 0.12;
 /// Height of a head below its top, metres (crown to chin ≈ 0.22 m; the shoulders start

@@ -21,8 +21,9 @@
 //!   continuous column of points below them down to the ground (the lower legs within a
 //!   leg's reach: a crouch), in the spirit of the ground-based people detector of Munaro et al. (ICRA
 //!   2012, "Tracking people within groups with RGB-D data", without its HOG classifier);
-//!   a cluster is split along the voxel graph (multi-source Dijkstra) between its heads
-//!   and what no person can own (voxels beyond arm's reach of every head, or low and
+//!   a cluster is split along the voxel graph (multi-source Dijkstra; leaving a head
+//!   sideways at its height costs a contact, as only a hand or an arm touches a head
+//!   there) between its heads and what no person can own (voxels beyond arm's reach of every head, or low and
 //!   beyond the legs: a robot's pedestal, a box), so a robot arm touching a person is
 //!   claimed from its base; each person keeps what lies within arm's reach of the head
 //!   (below the hips: within a leg's reach), and the same size filters apply.
@@ -30,8 +31,10 @@
 //! The `file` mode (boxes read from `boxes/<stem>.json`) is the pipeline's: it reads files.
 //!
 //! A box is the person's points' horizontal extent along their principal horizontal axis
-//! (its yaw) plus `box_margin_m` on each side, from the floor up to the top plus
-//! `box_margin_m` — the shape of bodyseg-synth's true boxes. [`box_iou`] scores a box
+//! (its yaw; labels mode takes the axis of the torso-labelled voxels alone, as the trunk
+//! follows the facing direction whichever way the arms point) plus `box_margin_m` on each
+//! side, from the floor up to the top plus `box_margin_m` — the shape of bodyseg-synth's
+//! true boxes, which are aligned with the facing direction. [`box_iou`] scores a box
 //! against another exactly.
 //!
 //! # Conventions

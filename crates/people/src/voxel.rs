@@ -239,16 +239,11 @@ impl Graph {
         out
     }
 
-    /// Multi-source Dijkstra (Euclidean edge lengths) inside `members`: each member goes
-    /// to the seed group it is closest to along the graph. `seeds[k]` are the nodes of
-    /// group k. Returns per member (same order) its group; unreachable members get the
-    /// group whose seed is nearest in a straight line.
-    pub fn split(&self, centers: &[Vec3], members: &[u32], seeds: &[Vec<u32>]) -> Vec<usize> {
-        self.split_with(centers, members, seeds, |_, _| 0.0)
-    }
-
-    /// [`Graph::split`] with `penalty(i, j)` metres added to the length of every edge
-    /// from `i` to `j` (an edge that crosses between people rather than along a body).
+    /// Multi-source Dijkstra (Euclidean edge lengths plus `penalty(i, j)` metres on the
+    /// edge from `i` to `j`: one that crosses between people rather than along a body)
+    /// inside `members`: each member goes to the seed group it is closest to along the
+    /// graph. `seeds[k]` are the nodes of group k. Returns per member (same order) its
+    /// group; unreachable members get the group whose seed is nearest in a straight line.
     pub fn split_with(
         &self,
         centers: &[Vec3],
@@ -363,7 +358,7 @@ mod tests {
         let mut grown = g.grow(&pts, 0, |j| pts[j as usize][0] < 0.18);
         grown.sort_unstable();
         assert_eq!(grown, [0, 2, 4, 6]);
-        let groups = g.split(&pts, &comps[0], &[vec![0], vec![18]]);
+        let groups = g.split_with(&pts, &comps[0], &[vec![0], vec![18]], |_, _| 0.0);
         assert_eq!(groups[..5], [0; 5]);
         assert_eq!(groups[5..], [1; 5]);
     }
