@@ -96,9 +96,7 @@ impl LabeledCloud {
         // index searched only in a chunk that has a bad point.
         const CHUNK: usize = 1024;
         for (c, chunk) in self.positions_m.chunks(CHUNK).enumerate() {
-            let all_finite = chunk.iter().fold(true, |ok, p| {
-                ok & p.iter().fold(true, |ok, c| ok & c.is_finite())
-            });
+            let all_finite = chunk.iter().fold(true, |ok, &p| ok & is_finite(p));
             if !all_finite {
                 let offset = chunk.iter().position(|&p| !is_finite(p)).unwrap_or(0);
                 return Err(CloudError::NonFinite {

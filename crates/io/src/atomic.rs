@@ -104,8 +104,7 @@ pub fn sync_file_system(folder: &Path) -> Result<(), IoError> {
     }
     #[cfg(not(target_os = "linux"))]
     {
-        let _ = dir.sync_all();
-        Ok(())
+        dir.sync_all().map_err(wrap)
     }
 }
 

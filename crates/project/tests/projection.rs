@@ -804,12 +804,7 @@ fn label_probabilities_follow_each_point_to_its_colour_pixel() {
         },
     ];
     // Naive: every point's label is its pixel's, so the probability always applies.
-    let cfg = ProjectConfig {
-        occlusion: false,
-        depth_edge: false,
-        label_boundary: false,
-        ..Default::default()
-    };
+    let cfg = ProjectConfig::naive();
     let projector = FrameProjector::new(&rig).expect("valid rig");
     let (mut cloud, mut hits, mut probs) = Default::default();
     projector
