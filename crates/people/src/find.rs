@@ -88,15 +88,17 @@ const MIN_TORSO_VOXELS: usize = 12;
 
 /// Checks one person candidate (its voxels) against the size limits and fits its box
 /// around its raw points. The box's yaw is the principal horizontal axis of the voxels
-/// `is_torso` accepts when there are at least [`MIN_TORSO_VOXELS`] of them, else of all
-/// the voxels: the trunk (shoulders and hips wider than deep) follows the facing
-/// direction, which the true boxes are aligned with, while a pointing, reaching or
-/// handing-over arm turns the axis of the whole body towards itself.
+/// labelled torso in `voxel_labels` (class ids per voxel; labels mode) when there are at
+/// least [`MIN_TORSO_VOXELS`] of them, else of all the voxels: the trunk (shoulders and
+/// hips wider than deep) follows the facing direction, which the true boxes are aligned
+/// with, while a pointing, reaching or handing-over arm turns the axis of the whole body
+/// towards itself. Torso alone, not with the legs: they stride along the facing direction
+/// while hips and shoulders lie across it, so together they have no clear axis.
 #[allow(clippy::too_many_arguments)]
 fn person_box(
     id: u32,
     group: &[u32],
-    is_torso: impl Fn(u32) -> bool,
+    voxel_labels: Option<&[u8]>,
     centers: &[Vec3],
     index: &VoxelPoints,
     positions: &[Vec3],
@@ -122,11 +124,14 @@ fn person_box(
         return None;
     }
     let xy_of = |v: u32| [centers[v as usize][0], centers[v as usize][1]];
-    let torso_xy: Vec<[f32; 2]> = group
-        .iter()
-        .filter(|&&v| is_torso(v))
-        .map(|&v| xy_of(v))
-        .collect();
+    let torso = Class::Torso.id();
+    let torso_xy: Vec<[f32; 2]> = voxel_labels.map_or_else(Vec::new, |labels| {
+        group
+            .iter()
+            .filter(|&&v| labels[v as usize] == torso)
+            .map(|&v| xy_of(v))
+            .collect()
+    });
     let yaw = if torso_xy.len() >= MIN_TORSO_VOXELS {
         principal_yaw(&torso_xy)
     } else {
@@ -279,13 +284,10 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
         };
         for group in groups {
             let id = boxes.len() as u32;
-            // Torso alone: the legs stride along the facing direction while the hips and
-            // shoulders lie across it, so together they have no clear axis.
-            let is_torso = |i: u32| v.labels[i as usize] == Class::Torso.id();
             if let Some(b) = person_box(
                 id,
                 &group,
-                is_torso,
+                Some(&v.labels),
                 &v.centers,
                 &index,
                 &cloud.positions_m,
@@ -436,11 +438,10 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
             // No labels: the yaw follows all the person's voxels. (A band of heights below
             // the chest as the trunk moved borderline boxes of people handing over
             // both ways on held-out seeds, with no net gain.)
-            let no_torso = |_| false;
             if let Some(b) = person_box(
                 id,
                 &group,
-                no_torso,
+                None,
                 &all.centers,
                 &index,
                 positions,
