@@ -150,7 +150,7 @@ impl Graph {
 
     /// Calls `f(j, distance²)` for every neighbour `j` of point `i` (not `i` itself).
     #[inline]
-    fn for_neighbors(&self, i: usize, p: Vec3, mut f: impl FnMut(u32, f32)) {
+    pub(crate) fn for_neighbors(&self, i: usize, p: Vec3, mut f: impl FnMut(u32, f32)) {
         for &(s0, s1) in &self.near[self.cell_index[i] as usize] {
             for b in s0..s1 {
                 let d2 = dist2(p, self.sorted[b as usize]);
@@ -174,6 +174,17 @@ impl Graph {
     /// Connected components among the points where `keep` is true; each component's
     /// points ascending, components in order of their smallest point.
     pub fn components(&self, centers: &[Vec3], keep: &[bool]) -> Vec<Vec<u32>> {
+        self.components_along(centers, keep, |_, _| true)
+    }
+
+    /// [`Graph::components`] joining two points only where `joined(i, j)` (e.g. along a
+    /// body: parts that touch within one body, not a hand on someone's trunk).
+    pub fn components_along(
+        &self,
+        centers: &[Vec3],
+        keep: &[bool],
+        joined: impl Fn(u32, u32) -> bool,
+    ) -> Vec<Vec<u32>> {
         let n = keep.len();
         let mut parent: Vec<u32> = (0..n as u32).collect();
         fn root(parent: &mut [u32], mut i: u32) -> u32 {
@@ -191,7 +202,7 @@ impl Graph {
             }
             links.clear();
             self.for_neighbors(i, centers[i], |j, _| {
-                if (j as usize) > i && keep[j as usize] {
+                if (j as usize) > i && keep[j as usize] && joined(i as u32, j) {
                     links.push(j);
                 }
             });

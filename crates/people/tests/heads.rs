@@ -197,3 +197,46 @@ fn a_pointing_arm_does_not_turn_the_box() {
     let iou = box_iou(&truth, b);
     assert!(iou > 0.85, "IoU {iou}: {b:?} vs {truth:?}");
 }
+
+/// A person at the origin facing +y whose right arm reaches forward with the elbow
+/// hidden: the upper arm ends 0.3 m in front of the shoulder and the forearm starts
+/// 0.25 m further on (no voxel in between, wider than `person_gap_m`). Returns the
+/// hand's centre.
+fn reaching_with_a_hidden_elbow(scene: &mut Scene) -> [f32; 3] {
+    person(scene, 0.0, 0.0, 1.72, false);
+    scene.cylinder(
+        [0.22, 0.0, 1.42],
+        [0.22, 0.3, 1.36],
+        0.045,
+        Class::UpperArms,
+    );
+    let hand = [0.22, 0.82, 1.26];
+    scene.cylinder([0.22, 0.55, 1.31], hand, 0.04, Class::LowerArms);
+    hand
+}
+
+#[test]
+fn a_forearm_whose_elbow_is_hidden_stays_in_its_owner_s_box() {
+    // Alone, the forearm was a cluster too small to be a person and was dropped.
+    let mut scene = Scene::default();
+    scene.floor();
+    let hand = reaching_with_a_hidden_elbow(&mut scene);
+    let found = find_boxes(&scene.cloud(true), &BoxesConfig::default()).expect("boxes");
+    assert_eq!(found.boxes.len(), 1, "{found:?}");
+    assert!(found.boxes[0].contains(hand), "{found:?}");
+
+    // Its hand touching the chest of someone standing in front: the forearm joined their
+    // cluster and went into their box.
+    let mut scene = Scene::default();
+    scene.floor();
+    let hand = reaching_with_a_hidden_elbow(&mut scene);
+    let other = person(&mut scene, 0.25, 1.05, 1.72, true);
+    let found = find_boxes(&scene.cloud(true), &BoxesConfig::default()).expect("boxes");
+    assert_eq!(found.boxes.len(), 2, "{found:?}");
+    let (theirs, mine): (Vec<&PersonBox>, Vec<&PersonBox>) =
+        found.boxes.iter().partition(|b| box_iou(&other, b) >= 0.5);
+    assert_eq!((mine.len(), theirs.len()), (1, 1), "{found:?}");
+    assert!(mine[0].contains(hand), "{found:?}");
+    // The forearm's elbow end is not theirs.
+    assert!(!theirs[0].contains([0.22, 0.6, 1.3]), "{found:?}");
+}
