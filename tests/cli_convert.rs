@@ -143,6 +143,31 @@ fn a_folder_of_recordings_converts_whole_and_in_merged_shards_alike() {
     );
     assert_ok(&again, "shard again");
     assert!(stderr(&again).contains("0 processed"), "{}", stderr(&again));
+
+    // A shard holding frames of one recording only (job 9 of 16: b's second frame) reports
+    // on that one; it failed writing a report into the other's folder, which it never made.
+    let sparse = bodyseg(
+        dir.path(),
+        &[
+            "convert",
+            "--input",
+            "data",
+            "--format",
+            "recording",
+            "--out",
+            "sparse",
+            "--shard",
+            "9/24",
+        ],
+    );
+    assert_ok(&sparse, "a shard with one recording's frames");
+    let files = tree(&dir.path().join("sparse"));
+    assert!(
+        files.contains(&"b/report.shard-9-of-24.md".to_string())
+            && files.contains(&"report.shard-9-of-24.md".to_string())
+            && !files.iter().any(|f| f.starts_with("a/")),
+        "{files:?}"
+    );
 }
 
 #[test]

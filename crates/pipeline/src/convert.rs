@@ -197,6 +197,15 @@ fn convert_recordings(
                 continue; // A single recording: the overall report is its report.
             }
             let prefix = format!("{name}/");
+            // A shard holding none of this recording's frames has nothing to report on it
+            // (and its folder may not exist).
+            let held = jobs
+                .iter()
+                .enumerate()
+                .any(|(i, (id, _))| opts.shard.holds(i) && id.starts_with(&prefix));
+            if !held {
+                continue;
+            }
             let sub = BatchOutcome {
                 records: outcome
                     .records
