@@ -240,3 +240,22 @@ fn a_forearm_whose_elbow_is_hidden_stays_in_its_owner_s_box() {
     // The forearm's elbow end is not theirs.
     assert!(!theirs[0].contains([0.22, 0.6, 1.3]), "{found:?}");
 }
+
+#[test]
+fn only_forearm_sized_lower_arm_pieces_are_fragments() {
+    // Near a person with hanging arms: a streak labelled upper leg beside the chest (a
+    // parser's mistake on flying pixels), and a 0.8 m bar labelled lower arm starting
+    // beside the elbow (a robot link). Neither is a forearm: both stay out of the box.
+    let mut scene = Scene::default();
+    scene.floor();
+    let truth = person(&mut scene, 0.0, 0.0, 1.72, true);
+    let streak_end = [0.55, 0.0, 1.3];
+    scene.cylinder([0.45, 0.0, 1.3], streak_end, 0.03, Class::UpperLegs);
+    let bar_end = [0.0, -1.05, 1.1];
+    scene.cylinder([0.25, -0.3, 1.1], bar_end, 0.04, Class::LowerArms);
+    let found = find_boxes(&scene.cloud(true), &BoxesConfig::default()).expect("boxes");
+    assert_eq!(found.boxes.len(), 1, "{found:?}");
+    let b = &found.boxes[0];
+    assert!(!b.contains(streak_end) && !b.contains(bar_end), "{b:?}");
+    assert!(box_iou(&truth, b) > 0.8, "{b:?} vs {truth:?}");
+}
