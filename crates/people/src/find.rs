@@ -349,14 +349,15 @@ fn parent_part(class: u8) -> Option<u8> {
     Some(parent.id())
 }
 
-/// Labels mode: gives limb fragments to the person they hang on. A fragment is a piece of
-/// limb joined to no torso along a body (only parts that touch within one body join:
-/// [`adjacent_parts`]) — a forearm whose elbow the cameras did not see, floating on its own
-/// (then too small to be a person and dropped) or touching someone else's trunk (then in
-/// that person's cluster). Such a piece goes to the person, other than the one it touches,
-/// with the part it hangs on ([`parent_part`]) nearest to it within [`FRAGMENT_REACH_M`];
-/// with none, it stays where it was. `owner` holds each voxel's person (u32::MAX: none)
-/// and is updated in place.
+/// Labels mode: gives forearm fragments to the person they hang on. A fragment is a piece
+/// of arm joined to no torso along a body (only parts that touch within one body join:
+/// [`adjacent_parts`]), mostly lower arm ([`MIN_FRAGMENT_LOWER_ARM`]) and no longer than
+/// a forearm ([`MAX_FRAGMENT_EXTENT_M`]) — a forearm whose elbow the cameras did not see,
+/// floating on its own (then too small to be a person and dropped) or touching someone
+/// else's trunk (then in that person's cluster). Such a piece goes to the person, other
+/// than the one it touches, with the part it hangs on ([`parent_part`]: an upper arm)
+/// nearest to it within [`FRAGMENT_REACH_M`]; with none, it stays where it was. `owner`
+/// holds each voxel's person (u32::MAX: none) and is updated in place.
 fn attach_limb_fragments(
     graph: &Graph,
     v: &Voxels,
@@ -368,20 +369,17 @@ fn attach_limb_fragments(
         return;
     }
     let torso = Class::Torso.id();
-    let is_limb = |l: u8| {
-        matches!(
-            Class::from_id(l),
-            Some(Class::UpperArms | Class::LowerArms | Class::UpperLegs | Class::LowerLegs)
-        )
-    };
-    // Pieces of limb (only the limbs' voxels, joined along a body); a piece hangs on a
-    // torso when one of its voxels (an upper arm or leg) touches one.
-    let limb: Vec<bool> = dense
+    let (upper_arm, lower_arm_id) = (Class::UpperArms.id(), Class::LowerArms.id());
+    let is_arm = |l: u8| l == upper_arm || l == lower_arm_id;
+    // Pieces of arm (only the arms' voxels, joined along a body: a forearm with its upper
+    // arm); a piece hangs on a torso when one of its upper-arm voxels touches one. Only arms:
+    // a fragment is a forearm, and the legs would double the work for nothing.
+    let arm: Vec<bool> = dense
         .iter()
         .zip(&v.labels)
-        .map(|(&d, &l)| d && is_limb(l))
+        .map(|(&d, &l)| d && is_arm(l))
         .collect();
-    let pieces = graph.components_along(&v.centers, &limb, |i, j| {
+    let pieces = graph.components_along(&v.centers, &arm, |i, j| {
         adjacent_parts(v.labels[i as usize], v.labels[j as usize])
     });
     let hangs_on_torso = |piece: &[u32]| {
@@ -401,7 +399,7 @@ fn attach_limb_fragments(
     for piece in pieces {
         let lower_arm = piece
             .iter()
-            .filter(|&&i| v.labels[i as usize] == Class::LowerArms.id())
+            .filter(|&&i| v.labels[i as usize] == lower_arm_id)
             .count();
         if piece.len() < MIN_FRAGMENT_VOXELS
             || (lower_arm as f32) < MIN_FRAGMENT_LOWER_ARM * piece.len() as f32
@@ -431,7 +429,7 @@ fn attach_limb_fragments(
             let q = v.centers[j];
             if o == u32::MAX
                 || o == touched
-                || (!is_limb(l) && l != torso)
+                || (l != upper_arm && l != torso)
                 || (0..3).any(|a| q[a] < lo[a] || q[a] > hi[a])
             {
                 continue;
