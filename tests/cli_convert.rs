@@ -32,6 +32,21 @@ fn slurm_script(dir: &Path, script: &str, args: &[&str], env: &[(&str, String)])
     );
 }
 
+/// `bodyseg convert --input data --format recording --out OUT EXTRA...` in `dir`.
+fn convert_data(dir: &Path, out: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "convert",
+        "--input",
+        "data",
+        "--format",
+        "recording",
+        "--out",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    bodyseg(dir, &args)
+}
+
 #[test]
 fn a_folder_of_recordings_converts_whole_and_in_merged_shards_alike() {
     let dir = tempdir();
@@ -41,18 +56,7 @@ fn a_folder_of_recordings_converts_whole_and_in_merged_shards_alike() {
     copy_tree(recording(), &data.join("b"));
     std::fs::create_dir_all(data.join("notes")).expect("mkdir");
 
-    let whole = bodyseg(
-        dir.path(),
-        &[
-            "convert",
-            "--input",
-            "data",
-            "--format",
-            "recording",
-            "--out",
-            "whole",
-        ],
-    );
+    let whole = convert_data(dir.path(), "whole", &[]);
     assert_ok(&whole, "bodyseg convert");
     let w = dir.path().join("whole");
     let files = tree(&w);
@@ -127,39 +131,13 @@ fn a_folder_of_recordings_converts_whole_and_in_merged_shards_alike() {
         );
     }
     // A shard run again skips its frames.
-    let again = bodyseg(
-        dir.path(),
-        &[
-            "convert",
-            "--input",
-            "data",
-            "--format",
-            "recording",
-            "--out",
-            "sharded",
-            "--shard",
-            "0/3",
-        ],
-    );
+    let again = convert_data(dir.path(), "sharded", &["--shard", "0/3"]);
     assert_ok(&again, "shard again");
     assert!(stderr(&again).contains("0 processed"), "{}", stderr(&again));
 
     // A shard holding frames of one recording only (job 9 of 16: b's second frame) reports
     // on that one; it failed writing a report into the other's folder, which it never made.
-    let sparse = bodyseg(
-        dir.path(),
-        &[
-            "convert",
-            "--input",
-            "data",
-            "--format",
-            "recording",
-            "--out",
-            "sparse",
-            "--shard",
-            "9/24",
-        ],
-    );
+    let sparse = convert_data(dir.path(), "sparse", &["--shard", "9/24"]);
     assert_ok(&sparse, "a shard with one recording's frames");
     let files = tree(&dir.path().join("sparse"));
     assert!(
