@@ -92,17 +92,23 @@ fn a_pointing_arm_past_a_shorter_head_stays_its_owner_s_without_labels() {
     // arm at the neighbour's head height touching the side of their head. Split at equal
     // graph distance from the heads, the arm went to the neighbour (their box IoU ≈ 0.46,
     // the pointer's ≈ 0.48); leaving a head sideways at its height now costs a contact.
-    let synth = Synth::new(preset("robot_cell").expect("preset"), 603).expect("synth");
+    every_person_matched_once_without_labels("robot_cell", 603, &[0, 16]);
+}
+
+/// Geometry mode on frames `indices` of a synthetic recording: every true person is
+/// matched by exactly one found box with IoU ≥ 0.5.
+fn every_person_matched_once_without_labels(name: &str, seed: u64, indices: &[usize]) {
+    let synth = Synth::new(preset(name).expect("preset"), seed).expect("synth");
     let cfg = BoxesConfig {
         mode: BoxMode::Geometry,
         ..BoxesConfig::default()
     };
-    for index in [0, 16] {
+    for &index in indices {
         let frame = synth.frame(index);
         let found = find_boxes(&cloud(&synth, &frame), &cfg).expect("boxes");
         for t in &frame.boxes.boxes {
             let hits = found.boxes.iter().filter(|f| box_iou(t, f) >= 0.5).count();
-            assert_eq!(hits, 1, "frame {index}: {t:?} vs {found:?}");
+            assert_eq!(hits, 1, "{name} {seed} frame {index}: {t:?} vs {found:?}");
         }
     }
 }
@@ -113,17 +119,5 @@ fn a_robot_forearm_passing_a_person_is_not_in_their_box_without_labels() {
     // height and ends beside them. Split at equal cost from the robot's pedestal and the
     // person's head, the part beyond the contact was theirs (their box IoU 0.41 and 0.50);
     // what is nobody's now spreads at half the cost.
-    let synth = Synth::new(preset("robot_cell").expect("preset"), 701).expect("synth");
-    let cfg = BoxesConfig {
-        mode: BoxMode::Geometry,
-        ..BoxesConfig::default()
-    };
-    for index in [20, 60] {
-        let frame = synth.frame(index);
-        let found = find_boxes(&cloud(&synth, &frame), &cfg).expect("boxes");
-        for t in &frame.boxes.boxes {
-            let hits = found.boxes.iter().filter(|f| box_iou(t, f) >= 0.5).count();
-            assert_eq!(hits, 1, "frame {index}: {t:?} vs {found:?}");
-        }
-    }
+    every_person_matched_once_without_labels("robot_cell", 701, &[20, 60]);
 }
