@@ -240,9 +240,9 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
         .iter()
         .map(|&c| c >= cfg.min_voxel_points)
         .collect();
-    // Each voxel's person (index into `groups`), u32::MAX for none.
+    // Each voxel's person (0, 1, ... in the order found), u32::MAX for none.
     let mut owner = vec![u32::MAX; v.centers.len()];
-    let mut groups: Vec<Vec<u32>> = Vec::new();
+    let mut people = 0u32;
     for cluster in graph.components(&v.centers, &dense) {
         if cluster.len() < cfg.min_voxels {
             continue;
@@ -265,34 +265,30 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
                 cfg.head_separation_m,
             );
         }
-        let mut split = if seeds.len() >= 2 {
+        if seeds.len() >= 2 {
             // Along bodies: a step between parts not joined in a body (a hand on someone's
             // head) costs a contact penalty, so an arm reaching someone stays its owner's.
-            let owner = graph.split_with(&v.centers, &cluster, &seeds, |i, j| {
+            let split = graph.split_with(&v.centers, &cluster, &seeds, |i, j| {
                 if adjacent_parts(v.labels[i as usize], v.labels[j as usize]) {
                     0.0
                 } else {
                     CONTACT_PENALTY_M
                 }
             });
-            let mut split = vec![Vec::new(); seeds.len()];
-            for (&i, &g) in cluster.iter().zip(&owner) {
-                split[g].push(i);
+            for (&i, &g) in cluster.iter().zip(&split) {
+                owner[i as usize] = people + g as u32;
             }
-            split.sort_by_key(|g| g.first().copied());
-            split
+            people += seeds.len() as u32;
         } else {
-            vec![cluster]
-        };
-        for group in split.iter_mut() {
-            for &i in group.iter() {
-                owner[i as usize] = groups.len() as u32;
+            for &i in &cluster {
+                owner[i as usize] = people;
             }
-            groups.push(std::mem::take(group));
+            people += 1;
         }
     }
-    attach_limb_fragments(&graph, &v, &dense, &mut owner, groups.len());
-    let mut groups: Vec<Vec<u32>> = vec![Vec::new(); groups.len()];
+    attach_limb_fragments(&graph, &v, &dense, &mut owner);
+    // Ids in order of each person's first voxel.
+    let mut groups: Vec<Vec<u32>> = vec![Vec::new(); people as usize];
     for (i, &g) in owner.iter().enumerate() {
         if let Some(group) = groups.get_mut(g as usize) {
             group.push(i as u32);
@@ -336,48 +332,27 @@ const MIN_FRAGMENT_LOWER_ARM: f32 = 0.6;
 /// (≈ 0.45 m); a longer piece labelled lower arm is something else (a robot link).
 const MAX_FRAGMENT_EXTENT_M: f32 = 0.6;
 
-/// The part a limb hangs on in the body tree (class ids): lower arm on upper arm, upper
-/// arm on torso, lower leg on upper leg, upper leg on torso; `None` for head and torso.
-fn parent_part(class: u8) -> Option<u8> {
-    let c = Class::from_id(class)?;
-    let parent = match c {
-        Class::LowerArms => Class::UpperArms,
-        Class::LowerLegs => Class::UpperLegs,
-        Class::UpperArms | Class::UpperLegs => Class::Torso,
-        _ => return None,
-    };
-    Some(parent.id())
-}
-
 /// Labels mode: gives forearm fragments to the person they hang on. A fragment is a piece
 /// of arm joined to no torso along a body (only parts that touch within one body join:
 /// [`adjacent_parts`]), mostly lower arm ([`MIN_FRAGMENT_LOWER_ARM`]) and no longer than
 /// a forearm ([`MAX_FRAGMENT_EXTENT_M`]) — a forearm whose elbow the cameras did not see,
 /// floating on its own (then too small to be a person and dropped) or touching someone
 /// else's trunk (then in that person's cluster). Such a piece goes to the person, other
-/// than the one it touches, with the part it hangs on ([`parent_part`]: an upper arm)
+/// than the one it touches, with the upper arm it hangs on
 /// nearest to it within [`FRAGMENT_REACH_M`]; with none, it stays where it was. `owner`
 /// holds each voxel's person (u32::MAX: none) and is updated in place.
-fn attach_limb_fragments(
-    graph: &Graph,
-    v: &Voxels,
-    dense: &[bool],
-    owner: &mut [u32],
-    people: usize,
-) {
-    if people == 0 {
-        return;
-    }
+fn attach_limb_fragments(graph: &Graph, v: &Voxels, dense: &[bool], owner: &mut [u32]) {
     let torso = Class::Torso.id();
-    let (upper_arm, lower_arm_id) = (Class::UpperArms.id(), Class::LowerArms.id());
-    let is_arm = |l: u8| l == upper_arm || l == lower_arm_id;
+    let (upper_arm, lower_arm) = (Class::UpperArms.id(), Class::LowerArms.id());
+    // The part an arm voxel hangs on: a lower arm on an upper arm, an upper arm on a torso.
+    let parent = |l: u8| if l == lower_arm { upper_arm } else { torso };
     // Pieces of arm (only the arms' voxels, joined along a body: a forearm with its upper
     // arm); a piece hangs on a torso when one of its upper-arm voxels touches one. Only arms:
     // a fragment is a forearm, and the legs would double the work for nothing.
     let arm: Vec<bool> = dense
         .iter()
         .zip(&v.labels)
-        .map(|(&d, &l)| d && is_arm(l))
+        .map(|(&d, &l)| d && (l == upper_arm || l == lower_arm))
         .collect();
     let pieces = graph.components_along(&v.centers, &arm, |i, j| {
         adjacent_parts(v.labels[i as usize], v.labels[j as usize])
@@ -385,58 +360,56 @@ fn attach_limb_fragments(
     let hangs_on_torso = |piece: &[u32]| {
         piece.iter().any(|&i| {
             let i = i as usize;
-            if parent_part(v.labels[i]) != Some(torso) {
-                return false;
-            }
             let mut found = false;
-            graph.for_neighbors(i, v.centers[i], |j, _| {
-                found |= dense[j as usize] && v.labels[j as usize] == torso;
-            });
+            if v.labels[i] == upper_arm {
+                graph.for_neighbors(i, v.centers[i], |j, _| {
+                    found |= dense[j as usize] && v.labels[j as usize] == torso;
+                });
+            }
             found
         })
     };
-    let reach2 = FRAGMENT_REACH_M * FRAGMENT_REACH_M;
     for piece in pieces {
-        let lower_arm = piece
+        let lower_arms = piece
             .iter()
-            .filter(|&&i| v.labels[i as usize] == lower_arm_id)
+            .filter(|&&i| v.labels[i as usize] == lower_arm)
             .count();
         if piece.len() < MIN_FRAGMENT_VOXELS
-            || (lower_arm as f32) < MIN_FRAGMENT_LOWER_ARM * piece.len() as f32
+            || (lower_arms as f32) < MIN_FRAGMENT_LOWER_ARM * piece.len() as f32
             || hangs_on_torso(&piece)
         {
             continue;
         }
-        // The person it touches (where it is now), if any.
-        let touched = owner[piece[0] as usize];
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
         for &i in &piece {
             for a in 0..3 {
-                lo[a] = lo[a].min(v.centers[i as usize][a] - FRAGMENT_REACH_M);
-                hi[a] = hi[a].max(v.centers[i as usize][a] + FRAGMENT_REACH_M);
+                lo[a] = lo[a].min(v.centers[i as usize][a]);
+                hi[a] = hi[a].max(v.centers[i as usize][a]);
             }
         }
         // No longer than a forearm with its hand (≈ 0.45 m).
-        let diagonal2: f32 = (0..3)
-            .map(|a| (hi[a] - lo[a] - 2.0 * FRAGMENT_REACH_M).powi(2))
-            .sum();
+        let diagonal2: f32 = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum();
         if diagonal2 > MAX_FRAGMENT_EXTENT_M * MAX_FRAGMENT_EXTENT_M {
             continue;
         }
-        let mut best = (reach2, u32::MAX);
+        // The person it touches (where it is now), if any, is not the one it hangs on.
+        let touched = owner[piece[0] as usize];
+        let near = |q: Vec3| {
+            (0..3).all(|a| (lo[a] - FRAGMENT_REACH_M..=hi[a] + FRAGMENT_REACH_M).contains(&q[a]))
+        };
+        let mut best = (FRAGMENT_REACH_M * FRAGMENT_REACH_M, u32::MAX);
         for (j, (&o, &l)) in owner.iter().zip(&v.labels).enumerate() {
-            let q = v.centers[j];
             if o == u32::MAX
                 || o == touched
                 || (l != upper_arm && l != torso)
-                || (0..3).any(|a| q[a] < lo[a] || q[a] > hi[a])
+                || !near(v.centers[j])
             {
                 continue;
             }
             for &i in &piece {
-                if parent_part(v.labels[i as usize]) == Some(l) {
-                    let d2 = bodyseg_core::math::dist2(v.centers[i as usize], q);
+                if parent(v.labels[i as usize]) == l {
+                    let d2 = bodyseg_core::math::dist2(v.centers[i as usize], v.centers[j]);
                     if d2 < best.0 {
                         best = (d2, o);
                     }
@@ -446,10 +419,10 @@ fn attach_limb_fragments(
         if best.1 != u32::MAX {
             tracing::trace!(
                 voxels = piece.len(),
-                lower_arm,
+                lower_arms,
                 from = touched,
                 to = best.1,
-                "limb fragment given to the person it hangs on"
+                "forearm fragment given to the person it hangs on"
             );
             for &i in &piece {
                 owner[i as usize] = best.1;
