@@ -119,19 +119,6 @@ pub enum VoteMode {
     MultiView,
 }
 
-/// Whether the limb shape prior runs after the steps ([`crate::shape`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ShapeMode {
-    /// The paper: no shape prior.
-    #[default]
-    Off,
-    /// Each limb of the body tree is fitted with a cylinder; torso points on an upper
-    /// limb's surface take the limb's label, and at a bent elbow or knee points take the
-    /// label of the side of the joint they lie on ([`crate::shape::limb_shape_prior`]).
-    Limbs,
-}
-
 /// Which refinement steps run: the paper's five configurations and the rest of the
 /// combinations. Written as `"reference"` or letters joined by `-`: `"M-R-N"`, `"m,n"`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -314,24 +301,9 @@ pub struct RefineConfig {
     /// projected labels either way). Needs the projection's depth and label images, so
     /// only `bodyseg run` / `convert` can run it, not `bodyseg refine` on a cloud file.
     pub vote: VoteMode,
-    /// `off` (default, the paper) or `limbs`: after the steps, a limb shape prior moves
-    /// points between adjacent parts by how well they fit each limb's fitted cylinder
-    /// ([`crate::shape`]). Not run in Reference.
-    pub shape: ShapeMode,
-    /// `shape = "limbs"`: a point lies on a limb's surface when its distance to the fitted
-    /// axis is within this fraction of the fitted radius (at least 1 cm). Default 0.25.
-    pub shape_tol_ratio: f32,
-    /// `shape = "limbs"`: a limb's fit is kept only when at least this fraction of its own
-    /// points lie on its fitted surface (a cluster that is not one limb — both legs, a
-    /// forearm with its hand bent off — fits no cylinder well and is left alone). In [0, 1].
-    /// Default 0.6.
-    pub shape_min_within: f32,
-    /// `shape = "limbs"`: fit → move rounds (each refits the limbs with the points the
-    /// last one gave them). Default 2.
-    pub shape_rounds: usize,
     /// After the steps, lower-leg points at most this high above the floor (the median
     /// height of the person's lowest background points) become background, metres; 0 =
-    /// off (default, the paper). Not run in Reference ([`crate::shape::floor_contact`]).
+    /// off (default, the paper). Not run in Reference ([`crate::floor::floor_contact`]).
     pub floor_contact_m: f32,
     /// Steps to run: `reference`, `M`, `N`, `M-N`, `M-R-N` (default) or any other mix.
     pub steps: Steps,
@@ -359,10 +331,6 @@ impl Default for RefineConfig {
             noise_self_weight: 1.0,
             noise_doubt_ratio: 0.7,
             vote: VoteMode::Off,
-            shape: ShapeMode::Off,
-            shape_tol_ratio: 0.25,
-            shape_min_within: 0.6,
-            shape_rounds: 2,
             floor_contact_m: 0.0,
             steps: Steps::MRN,
             keep_outside_boxes: false,
@@ -432,31 +400,13 @@ impl RefineConfig {
                 format!("must be in [0, 1), got {}", self.noise_doubt_ratio),
             );
         }
-        for (field, v) in [
-            ("shape_tol_ratio", self.shape_tol_ratio),
-            ("floor_contact_m", self.floor_contact_m),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(field, format!("must be a finite number >= 0, got {v}"));
-            }
-        }
-        if !(0.0..=1.0).contains(&self.shape_min_within) {
+        if !(self.floor_contact_m.is_finite() && self.floor_contact_m >= 0.0) {
             return bad(
-                "shape_min_within",
-                format!("must be in [0, 1], got {}", self.shape_min_within),
+                "floor_contact_m",
+                format!("must be a finite number >= 0, got {}", self.floor_contact_m),
             );
         }
         Ok(())
-    }
-
-    /// The parameters of the limb shape prior.
-    pub fn shape_params(&self) -> crate::shape::ShapeParams {
-        crate::shape::ShapeParams {
-            tol_ratio: f64::from(self.shape_tol_ratio),
-            min_within: f64::from(self.shape_min_within),
-            rounds: self.shape_rounds,
-            ..Default::default()
-        }
     }
 
     /// The DBSCAN parameters of this configuration.

@@ -17,10 +17,8 @@
 //! slots greedily; `noise = "weighted"` relabels noise by a distance-weighted vote of its
 //! nearest clustered points and its own label ([`reassign_noise_weighted`]), and `noise =
 //! "probability"` weighs that own label by the parser's probability of it
-//! ([`PointEvidence::label_probs`]). After the steps, `shape = "limbs"` moves points
-//! between adjacent parts by how well they fit each limb's fitted cylinder, and
-//! `floor_contact_m` gives lower-leg points on the floor back to the background
-//! ([`shape`]).
+//! ([`PointEvidence::label_probs`]). After the steps, `floor_contact_m` gives lower-leg
+//! points on the floor back to the background ([`floor`]).
 //!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).
@@ -30,13 +28,11 @@
 
 pub mod config;
 pub mod dbscan;
+pub mod floor;
 pub mod graph;
-pub mod shape;
 pub mod steps;
 
-pub use config::{
-    GraphMode, NoiseMode, RefineConfig, RefineError, ShapeMode, Steps, TreeMode, VoteMode,
-};
+pub use config::{GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode, VoteMode};
 pub use dbscan::{Clustering, DbscanParams, dbscan, dbscan_brute_force};
 pub use graph::{
     BodyTree, ClusterFeatures, Graph, best_tree_coverage, best_tree_paper, build_graph,
@@ -203,16 +199,7 @@ pub fn apply_steps(
         };
     }
     if cfg.floor_contact_m > 0.0 {
-        point_labels = shape::floor_contact(positions_m, &point_labels, cfg.floor_contact_m);
-    }
-    if cfg.shape == ShapeMode::Limbs {
-        point_labels = shape::limb_shape_prior(
-            positions_m,
-            &point_labels,
-            &clustering,
-            &tree,
-            &cfg.shape_params(),
-        );
+        point_labels = floor::floor_contact(positions_m, &point_labels, cfg.floor_contact_m);
     }
     // Nothing leaves refinement unknown: an unknown point nobody relabelled is background.
     for l in &mut point_labels {
