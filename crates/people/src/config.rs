@@ -115,9 +115,9 @@ pub struct BoxesConfig {
     /// Geometry mode: 90% of the voxels within 0.2 m below a head's top (and closer than
     /// `head_separation_m`) lie within this horizontal distance of the top, metres: a
     /// head is ≈ 0.1 m in radius (voxel centroids add up to half a voxel), the sloping
-    /// links below a robot arm's joint reach farther. Tops higher than 1.5 m get 0.05 m
-    /// more (only people reach there in a workcell: hair, a tilted head). Must be > 0.
-    /// Default 0.15.
+    /// links below a robot arm's joint reach farther. Tops higher than 1.5 m get 0.1 m
+    /// more, on 75% of the voxels (only people reach there in a workcell: hair, a tilted
+    /// head, a neighbour's hand on it). Must be > 0. Default 0.15.
     pub max_head_radius_m: f32,
     /// Geometry mode: a person's points lie within this horizontal distance of their head,
     /// metres (a hand pointing sideways ≈ 0.85 m): what touches them farther out (a robot
