@@ -5,14 +5,9 @@
 //! parser's leg label bleeds onto the floor around the foot; those points lie in the leg's
 //! cluster, so M, R and N keep them.
 
+use crate::steps::quantile;
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label};
-
-/// Value at quantile `q` in [0, 1] of `v` (reorders `v`).
-fn quantile(v: &mut [f64], q: f64) -> f64 {
-    let k = ((v.len() - 1) as f64 * q).round() as usize;
-    *v.select_nth_unstable_by(k, f64::total_cmp).1
-}
 
 /// Lower-leg points lying on the floor become background: a foot's visible surface is
 /// above the floor (its sole faces down), so a lower-leg point within `floor_tol_m` of the
@@ -23,26 +18,26 @@ fn quantile(v: &mut [f64], q: f64) -> f64 {
 /// [`MIN_FLOOR_POINTS`] of them nothing changes. World z is up (ALGORITHM.md §0).
 pub fn floor_contact(positions_m: &[Vec3], labels: &[Label], floor_tol_m: f32) -> Vec<Label> {
     let mut out = labels.to_vec();
-    let mut body_z: Vec<f64> = positions_m
+    let mut body_z: Vec<f32> = positions_m
         .iter()
         .zip(labels)
         .filter(|(_, l)| l.is_body())
-        .map(|(p, _)| f64::from(p[2]))
+        .map(|(p, _)| p[2])
         .collect();
     if body_z.is_empty() {
         return out;
     }
-    let lowest_body = quantile(&mut body_z, LOW_BODY_QUANTILE) as f32;
-    let mut floor: Vec<f64> = positions_m
+    let lowest_body = quantile(&mut body_z, LOW_BODY_QUANTILE);
+    let mut floor: Vec<f32> = positions_m
         .iter()
         .zip(labels)
         .filter(|(p, l)| **l == Label::BACKGROUND && p[2] <= lowest_body + FLOOR_BAND_M)
-        .map(|(p, _)| f64::from(p[2]))
+        .map(|(p, _)| p[2])
         .collect();
     if floor.len() < MIN_FLOOR_POINTS {
         return out;
     }
-    let floor_z = quantile(&mut floor, 0.5) as f32;
+    let floor_z = quantile(&mut floor, 0.5);
     let lower_legs = Label::from(Class::LowerLegs);
     for (l, p) in out.iter_mut().zip(positions_m) {
         if *l == lower_legs && p[2] <= floor_z + floor_tol_m {

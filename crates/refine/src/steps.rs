@@ -191,6 +191,13 @@ pub fn reassign_noise_weighted(
     out
 }
 
+/// Value at quantile `q` in [0, 1] of `v`, which must not be empty: the element of rank
+/// round((len - 1) q) (the upper median for q = 0.5 and an even length). Reorders `v`.
+pub(crate) fn quantile(v: &mut [f32], q: f64) -> f32 {
+    let k = ((v.len() - 1) as f64 * q).round() as usize;
+    *v.select_nth_unstable_by(k, f32::total_cmp).1
+}
+
 /// `noise = "probability"`'s doubt test: `labels` with every label the parser was unsure of
 /// made unknown (so the clustering leaves it out and N relabels it). A label is doubtful
 /// when its probability (`probs[i]`, one per point) is below `ratio` × the median
@@ -216,8 +223,7 @@ pub fn doubtful_as_unknown(labels: &[Label], probs: &[f32], ratio: f32) -> Vec<L
         if v.is_empty() {
             return 0.0;
         }
-        let mid = v.len() / 2;
-        *v.select_nth_unstable_by(mid, f32::total_cmp).1 * ratio
+        quantile(&mut v, 0.5) * ratio
     });
     labels
         .iter()
@@ -568,6 +574,16 @@ impl NnIndex {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quantile_takes_the_rounded_rank_and_the_upper_median() {
+        let mut v = vec![4.0, 1.0, 3.0, 2.0];
+        assert_eq!(quantile(&mut v, 0.5), 3.0);
+        assert_eq!(quantile(&mut v, 0.0), 1.0);
+        assert_eq!(quantile(&mut v, 1.0), 4.0);
+        let mut w: Vec<f32> = (0..201).map(|i| (200 - i) as f32).collect();
+        assert_eq!(quantile(&mut w, 0.005), 1.0, "rank round(200 x 0.005) = 1");
+    }
 
     #[test]
     fn nearest_neighbour_index_equals_brute_force() {
