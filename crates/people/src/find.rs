@@ -770,6 +770,16 @@ const DENSE_SLICE_VOXELS: usize = 4;
 /// Share of dense slices below a head candidate for someone's limb touching it to be
 /// left out of its head test ([`dense_column`]).
 const MIN_DENSE_FILL: f32 = 0.95;
+/// A top hidden by someone's limb lying on it ([`find_heads`]) is a head only at least
+/// this high, metres (a crouching adult's head: ≈ 1.3 m in bodyseg-synth). Lower, the tops
+/// hidden by a link rising from them in the box study were a robot's base under its
+/// upper arm (0.94–0.97 m, `robot_cell`, ten frames of ten seeds) and a person's forearm
+/// held before the chest (1.15–1.17 m, 101 frames 80–88).
+const LIMB_HIDDEN_MIN_TOP_M: f32 = 1.2;
+/// A limb lying on a head rises at most this much above its top where it hides it,
+/// metres (a forearm's thickness and a little): a person's own head, 0.2–0.3 m above
+/// their shoulder, still hides the shoulder.
+const MAX_LIMB_ON_HEAD_RISE_M: f32 = 0.12;
 /// Cell of the top-view height map heads are searched in, metres.
 const HEIGHT_MAP_CELL_M: f32 = 0.08;
 /// Height of the slices of the column test, metres.
@@ -800,45 +810,100 @@ fn find_heads(
             *e = i;
         }
     }
-    let mut tops: Vec<([i32; 2], u32)> = map
-        .iter()
-        .filter(|(_, v)| heights[**v as usize] >= cfg.min_height_m)
-        .map(|(&c, &v)| (c, v))
+    let mut tops: Vec<u32> = map
+        .values()
+        .copied()
+        .filter(|&v| heights[v as usize] >= cfg.min_height_m)
         .collect();
-    tops.sort_by(|a, b| {
-        heights[b.1 as usize]
-            .total_cmp(&heights[a.1 as usize])
-            .then(a.1.cmp(&b.1))
+    tops.sort_by(|&a, &b| {
+        heights[b as usize]
+            .total_cmp(&heights[a as usize])
+            .then(a.cmp(&b))
     });
     let r = (cfg.head_separation_m * inv).ceil() as i32;
     let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
-    let mut heads = Vec::new();
-    for (c, v) in tops {
-        let p = centers[v as usize];
-        // A higher top within `head_separation_m` hides this one unless it is a separate
-        // peak: at least MIN_HEAD_GAP_M away and not joined to anything higher within a
-        // head's height below this top (two heads leaning together, not a shoulder).
-        let mut hidden = false;
-        let mut higher_near = false;
-        'scan: for dx in -r..=r {
+    // The tops of the height-map cells around `v` (within `head_separation_m`) that are
+    // higher than it, with their horizontal distance from it.
+    let higher_tops = |v: u32| {
+        let (p, c) = (centers[v as usize], cell(centers[v as usize]));
+        let mut out = Vec::new();
+        for dx in -r..=r {
             for dy in -r..=r {
                 if let Some(&o) = map.get(&[c[0] + dx, c[1] + dy])
                     && o != v
                     && higher(o, v)
                 {
-                    let d = xy_dist(centers[o as usize], p);
-                    if d < MIN_HEAD_GAP_M {
-                        hidden = true;
-                        break 'scan;
-                    }
-                    higher_near |= d < cfg.head_separation_m;
+                    out.push((o, xy_dist(centers[o as usize], p)));
                 }
             }
         }
-        if hidden {
+        out
+    };
+    // The cluster's voxels in horizontal cells as wide as the widest column radius, so
+    // that a column test reads the 3 × 3 cells around a top instead of the whole cluster
+    // (a wall or a shelf has hundreds of candidate tops).
+    let column_cell_m = LEG_RADIUS_M.max(cfg.column_radius_m);
+    let column_key = |p: Vec3| {
+        [
+            (p[0] / column_cell_m).floor() as i32,
+            (p[1] / column_cell_m).floor() as i32,
+        ]
+    };
+    let mut columns: FxHashMap<[i32; 2], Vec<u32>> = FxHashMap::default();
+    for &i in cluster {
+        columns
+            .entry(column_key(centers[i as usize]))
+            .or_default()
+            .push(i);
+    }
+    // Every voxel of the cluster within `column_cell_m` of `p` horizontally (and more).
+    let column_near = |p: Vec3| {
+        let k = column_key(p);
+        let mut near = Vec::new();
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                if let Some(vs) = columns.get(&[k[0] + dx, k[1] + dy]) {
+                    near.extend_from_slice(vs);
+                }
+            }
+        }
+        near
+    };
+    let mut heads: Vec<u32> = Vec::new();
+    for v in tops {
+        let p = centers[v as usize];
+        // A higher top within `head_separation_m` hides this one unless it is a separate
+        // peak: at least MIN_HEAD_GAP_M away and not joined to anything higher within a
+        // head's height below this top (two heads leaning together, not a shoulder).
+        // Closer tops hide it, unless they are someone's limb lying on it (see below).
+        let around = higher_tops(v);
+        let hiders: Vec<u32> = around
+            .iter()
+            .filter(|&&(_, d)| d < MIN_HEAD_GAP_M)
+            .map(|&(o, _)| o)
+            .collect();
+        let higher_near = around.iter().any(|&(_, d)| d < cfg.head_separation_m);
+        let h = heights[v as usize];
+        // A limb lying on the head (a hand or forearm a little higher than the top, on
+        // its way up to its owner's shoulder: no top of its own) neither hides it nor
+        // makes it part of something higher, far from every head found so far; near one,
+        // such a top is that person's shoulder or forearm under their own or a
+        // neighbour's hand. The cheap tests come first: most tops are hidden (a head's
+        // or a shoulder's, near a head found before; a wall's).
+        let may_be_under_limb = (LIMB_HIDDEN_MIN_TOP_M..=cfg.max_height_m).contains(&h)
+            && heads
+                .iter()
+                .all(|&k| xy_dist(centers[k as usize], p) >= cfg.head_separation_m);
+        let limb_hidden = !hiders.is_empty();
+        if limb_hidden
+            && !(may_be_under_limb
+                && hiders.iter().all(|&o| {
+                    heights[o as usize] <= h + MAX_LIMB_ON_HEAD_RISE_M
+                        && higher_tops(o).iter().any(|&(_, d)| d < MIN_HEAD_GAP_M)
+                }))
+        {
             continue;
         }
-        let h = heights[v as usize];
         // Only what is connected to the top within the head's height belongs to this
         // head: a neighbour's head or a raised arm beside it (touching it only through
         // the shoulders, lower down) does not.
@@ -848,23 +913,47 @@ fn find_heads(
                 && heights[j as usize] >= band
                 && xy_dist(centers[j as usize], p) < cfg.head_separation_m
         });
-        if higher_near && blob.iter().any(|&j| heights[j as usize] > h) {
+        let raised = higher_near && blob.iter().any(|&j| heights[j as usize] > h);
+        if raised && !may_be_under_limb {
             continue;
         }
-        // Head test: a head is a compact top. A robot arm's or a shelf's top continues
-        // sideways (cylinders sloping down from a joint).
+        let under_limb = limb_hidden || raised;
         let (percent, limit) = if h >= TALL_TOP_M {
             (75, cfg.max_head_radius_m + TALL_HEAD_SLACK_M)
         } else {
             (90, cfg.max_head_radius_m)
         };
         // Someone's limb touching the head from above (an arm reaching onto a crouching
-        // person) is left out of the test, but only where a body fills the column below:
-        // a robot's joint stands on thin links and a pedestal.
-        let mut foreign = reaching_limbs(graph, keep, &blob, centers, heights, v, limit, cfg);
-        if !foreign.is_empty() && dense_column(cluster, centers, heights, v, cfg) < MIN_DENSE_FILL {
-            foreign.clear();
+        // person) is left out of the head test, but only where a body fills the column
+        // below: a robot's joint stands on thin links and a pedestal.
+        let near = column_near(p);
+        let foreign = if dense_column(&near, centers, heights, v, cfg) >= MIN_DENSE_FILL {
+            reaching_limbs(graph, keep, &blob, centers, heights, v, limit, cfg)
+        } else {
+            FxHashSet::default()
+        };
+        if under_limb {
+            // What hides the top, and all of the blob higher than it, must be such a limb.
+            let limb = |j: &u32| foreign.contains(j);
+            if !hiders.iter().all(limb) || blob.iter().any(|j| heights[*j as usize] > h && !limb(j))
+            {
+                tracing::trace!(
+                    x = p[0],
+                    y = p[1],
+                    h,
+                    "head candidate dropped: hidden by something higher that is not a limb"
+                );
+                continue;
+            }
+            tracing::trace!(
+                x = p[0],
+                y = p[1],
+                h,
+                "head candidate: the limb lying on it does not hide it"
+            );
         }
+        // Head test: a head is a compact top. A robot arm's or a shelf's top continues
+        // sideways (cylinders sloping down from a joint).
         let mut near_top: Vec<f32> = blob
             .iter()
             .filter(|j| !foreign.contains(j))
@@ -888,7 +977,7 @@ fn find_heads(
             );
             continue;
         }
-        let (fill, lowest) = column_fill(cluster, centers, heights, v, cfg);
+        let (fill, lowest) = column_fill(&near, centers, heights, v, cfg);
         tracing::trace!(x = p[0], y = p[1], h, fill, lowest, "head candidate");
         if fill >= cfg.min_column_fill && lowest <= cfg.max_bottom_m {
             heads.push(v);
