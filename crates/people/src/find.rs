@@ -86,10 +86,6 @@ impl VoxelPoints {
 /// through their limbs, a torso the parser missed) and the yaw follows all their voxels.
 const MIN_TORSO_VOXELS: usize = 12;
 
-/// A labelled body (head and torso) whose lowest voxel is at most this fraction of its
-/// height up is a person whose legs the cameras miss (hips at ≈ 0.53 of the height).
-const HIDDEN_LEGS_FRACTION: f32 = 0.5;
-
 /// Checks one person candidate (its voxels) against the size limits and fits its box
 /// around its raw points. The box's yaw is the principal horizontal axis of the voxels
 /// labelled torso in `voxel_labels` (class ids per voxel; labels mode) when there are at
@@ -118,24 +114,7 @@ fn person_box(
         lo_h = lo_h.min(h);
         hi_h = hi_h.max(h);
     }
-    // A person stands on the floor: their lowest voxel is near it, unless they are a
-    // labelled body (head and torso) whose legs the cameras do not see below the hips
-    // (behind a robot's base or a table, or cut off by unlabelled points).
-    let body = voxel_labels.is_some_and(|labels| {
-        let count = |c: Class| {
-            group
-                .iter()
-                .filter(|&&v| labels[v as usize] == c.id())
-                .count()
-        };
-        count(Class::Head) >= cfg.min_head_voxels && count(Class::Torso) >= MIN_TORSO_VOXELS
-    });
-    let bottom_limit = if body {
-        cfg.max_bottom_m.max(HIDDEN_LEGS_FRACTION * hi_h)
-    } else {
-        cfg.max_bottom_m
-    };
-    if hi_h < cfg.min_height_m || hi_h > cfg.max_height_m || lo_h > bottom_limit {
+    if hi_h < cfg.min_height_m || hi_h > cfg.max_height_m || lo_h > cfg.max_bottom_m {
         tracing::trace!(
             voxels = group.len(),
             lo_h,
