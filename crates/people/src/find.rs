@@ -86,6 +86,13 @@ impl VoxelPoints {
 /// through their limbs, a torso the parser missed) and the yaw follows all their voxels.
 const MIN_TORSO_VOXELS: usize = 12;
 
+/// A labelled body (head and torso) whose lowest voxel is at most this fraction of its
+/// height up is a person whose legs the cameras miss (hips at ≈ 0.53 of the height).
+const HIDDEN_LEGS_FRACTION: f32 = 0.5;
+/// A labelled body's head voxels lie on average at most this far below its top, metres
+/// (a head's centre is ≈ 0.1 m below the crown; a hand raised over the head adds more).
+const HEAD_ON_TOP_M: f32 = 0.3;
+
 /// Checks one person candidate (its voxels) against the size limits and fits its box
 /// around its raw points. The box's yaw is the principal horizontal axis of the voxels
 /// labelled torso in `voxel_labels` (class ids per voxel; labels mode) when there are at
@@ -114,7 +121,33 @@ fn person_box(
         lo_h = lo_h.min(h);
         hi_h = hi_h.max(h);
     }
-    if hi_h < cfg.min_height_m || hi_h > cfg.max_height_m || lo_h > cfg.max_bottom_m {
+    // A person stands on the floor: their lowest voxel is near it, unless they are a
+    // labelled body (a head on top, a torso) whose legs the cameras do not see below the
+    // hips (behind a robot's base or a table, or cut off by unlabelled points). A parser
+    // calls parts of a robot head and torso too, but not with the head on top (bundled
+    // model, `robot_cell` 2011: head voxels 0.45 m below the top on average, forearms
+    // above them).
+    let body = voxel_labels.is_some_and(|labels| {
+        let (mut head, mut head_h_sum, mut torso) = (0usize, 0.0f32, 0usize);
+        for &v in group {
+            let l = labels[v as usize];
+            if l == Class::Head.id() {
+                head += 1;
+                head_h_sum += ground.height(centers[v as usize]);
+            } else if l == Class::Torso.id() {
+                torso += 1;
+            }
+        }
+        head >= cfg.min_head_voxels
+            && torso >= MIN_TORSO_VOXELS
+            && head_h_sum / head as f32 >= hi_h - HEAD_ON_TOP_M
+    });
+    let bottom_limit = if body {
+        cfg.max_bottom_m.max(HIDDEN_LEGS_FRACTION * hi_h)
+    } else {
+        cfg.max_bottom_m
+    };
+    if hi_h < cfg.min_height_m || hi_h > cfg.max_height_m || lo_h > bottom_limit {
         tracing::trace!(
             voxels = group.len(),
             lo_h,
