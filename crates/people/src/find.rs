@@ -929,8 +929,29 @@ fn find_heads(
             && heads
                 .iter()
                 .all(|&k| xy_dist(centers[k as usize], p) >= cfg.head_separation_m);
+        let (percent, limit) = if h >= TALL_TOP_M {
+            (75, cfg.max_head_radius_m + TALL_HEAD_SLACK_M)
+        } else {
+            (90, cfg.max_head_radius_m)
+        };
+        // Someone's limb touching the head from above (an arm reaching onto a crouching
+        // person) is left out of the head test, but only where a body fills the column
+        // below: a robot's joint stands on thin links and a pedestal. Such a limb lies
+        // beyond `limit` of the top ([`reaching_limbs`]), so a top hidden by something
+        // nearer, or over a column that is not filled, stays hidden: both are known
+        // before the blob is grown.
         let limb_hidden = !hiders.is_empty();
-        if limb_hidden && !may_be_under_limb {
+        if limb_hidden
+            && !(may_be_under_limb
+                && hiders
+                    .iter()
+                    .all(|&o| xy_dist(centers[o as usize], p) > limit))
+        {
+            continue;
+        }
+        let near = column_near(p);
+        let dense = dense_column(&near, centers, heights, v, cfg) >= MIN_DENSE_FILL;
+        if limb_hidden && !dense {
             continue;
         }
         // Only what is connected to the top within the head's height belongs to this
@@ -947,16 +968,7 @@ fn find_heads(
             continue;
         }
         let under_limb = limb_hidden || raised;
-        let (percent, limit) = if h >= TALL_TOP_M {
-            (75, cfg.max_head_radius_m + TALL_HEAD_SLACK_M)
-        } else {
-            (90, cfg.max_head_radius_m)
-        };
-        // Someone's limb touching the head from above (an arm reaching onto a crouching
-        // person) is left out of the head test, but only where a body fills the column
-        // below: a robot's joint stands on thin links and a pedestal.
-        let near = column_near(p);
-        let foreign = if dense_column(&near, centers, heights, v, cfg) >= MIN_DENSE_FILL {
+        let foreign = if dense {
             reaching_limbs(graph, keep, &blob, centers, heights, v, limit, cfg)
         } else {
             FxHashSet::default()
