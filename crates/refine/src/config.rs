@@ -281,6 +281,7 @@ pub struct RefineConfig {
     pub noise: NoiseMode,
     /// Weighted noise: the number of nearest clustered points that vote. Default 16.
     pub noise_k: usize,
+
     /// Weighted noise: weight of the point's own label, in voters lying on the point (a
     /// voter at distance d weighs `1 / (1 + (d / eps_m)²)`); 0 = ignore it and give a point
     /// with no voter the nearest clustered point's label, as the paper. Unknown never
@@ -296,6 +297,16 @@ pub struct RefineConfig {
     /// Default 0.7 (chosen with the bundled model on recordings outside the benchmark; 1.0
     /// makes half of every part doubtful and R then cuts limbs off).
     pub noise_doubt_ratio: f32,
+    /// `noise = "probability"`: the doubtful points are relabelled by a wider vote, of
+    /// about `noise_doubt_k` clustered points within this distance, metres
+    /// ([`crate::reassign_doubted_wide`]); 0 = as the other noise points (`noise_k` within
+    /// `eps_m`). Default 0. The improved configuration uses 0.15 with `noise_doubt_k` 256:
+    /// a doubted point lies mostly on a strip along a part boundary, and the sure points
+    /// across a limb's width say better which side it belongs to than the few nearest.
+    pub noise_doubt_radius_m: f32,
+    /// `noise = "probability"` with `noise_doubt_radius_m > 0`: about how many clustered
+    /// points vote for a doubtful point. Default 256.
+    pub noise_doubt_k: usize,
     /// `off` (default, the paper) or `multi_view`: the steps start from the labels of
     /// the multi-view consistency vote instead of the projected ones (Reference is the
     /// projected labels either way). Needs the projection's depth and label images, so
@@ -330,6 +341,8 @@ impl Default for RefineConfig {
             noise_k: 16,
             noise_self_weight: 1.0,
             noise_doubt_ratio: 0.7,
+            noise_doubt_radius_m: 0.0,
+            noise_doubt_k: 256,
             vote: VoteMode::Off,
             floor_contact_m: 0.0,
             steps: Steps::MRN,
@@ -399,6 +412,18 @@ impl RefineConfig {
                 "noise_doubt_ratio",
                 format!("must be in [0, 1), got {}", self.noise_doubt_ratio),
             );
+        }
+        if !(self.noise_doubt_radius_m.is_finite() && self.noise_doubt_radius_m >= 0.0) {
+            return bad(
+                "noise_doubt_radius_m",
+                format!(
+                    "must be a finite number >= 0, got {}",
+                    self.noise_doubt_radius_m
+                ),
+            );
+        }
+        if self.noise_doubt_k < 1 {
+            return bad("noise_doubt_k", "must be >= 1, got 0".into());
         }
         if !(self.floor_contact_m.is_finite() && self.floor_contact_m >= 0.0) {
             return bad(

@@ -39,7 +39,8 @@ pub use graph::{
     build_graph_contact, cluster_features,
 };
 pub use steps::{
-    doubtful_as_unknown, merge_nodes, reassign_noise, reassign_noise_weighted, remove_nodes,
+    WideVote, doubtful_as_unknown, merge_nodes, reassign_doubted_wide, reassign_noise,
+    reassign_noise_weighted, remove_nodes,
 };
 
 use bodyseg_core::math::Vec3;
@@ -140,6 +141,7 @@ pub fn apply_steps(
     positions_m: &[Vec3],
     labels: &[Label],
     label_probs: Option<&[f32]>,
+    doubted: Option<&[bool]>,
     steps: Steps,
     cfg: &RefineConfig,
 ) -> PersonRefinement {
@@ -183,6 +185,25 @@ pub fn apply_steps(
         .collect();
     if noise {
         let is_noise: Vec<bool> = clustering.cluster_of.iter().map(Option::is_none).collect();
+        // The labels the parser doubted: a wider vote (see `reassign_doubted_wide`), from
+        // the clustered labels as they are before N.
+        let wide = doubted
+            .filter(|_| cfg.noise == NoiseMode::Probability && cfg.noise_doubt_radius_m > 0.0)
+            .map(|doubted| {
+                let labels = reassign_doubted_wide(
+                    positions_m,
+                    &point_labels,
+                    &is_noise,
+                    doubted,
+                    label_probs,
+                    WideVote {
+                        k: cfg.noise_doubt_k,
+                        radius_m: cfg.noise_doubt_radius_m,
+                        self_weight: cfg.noise_self_weight,
+                    },
+                );
+                (doubted, labels)
+            });
         point_labels = match cfg.noise {
             NoiseMode::Nearest => reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m),
             NoiseMode::Weighted | NoiseMode::Probability => reassign_noise_weighted(
@@ -197,6 +218,13 @@ pub fn apply_steps(
                 cfg.noise_self_weight,
             ),
         };
+        if let Some((doubted, wide)) = wide {
+            for ((l, w), &d) in point_labels.iter_mut().zip(wide).zip(doubted) {
+                if d {
+                    *l = w;
+                }
+            }
+        }
     }
     if cfg.floor_contact_m > 0.0 {
         point_labels = floor::floor_contact(positions_m, &point_labels, cfg.floor_contact_m);
@@ -226,7 +254,7 @@ pub fn refine_person(
     cfg: &RefineConfig,
 ) -> PersonRefinement {
     let structure = analyse_person(positions_m, labels, cfg);
-    apply_steps(structure, positions_m, labels, None, cfg.steps, cfg)
+    apply_steps(structure, positions_m, labels, None, None, cfg.steps, cfg)
 }
 
 /// Runs the refinement on a whole cloud: every person box independently (in parallel),
@@ -396,23 +424,35 @@ pub fn refine_variants_with(
                 // `noise = "probability"`: labels the parser was unsure of take no part in
                 // the clustering (they become noise, relabelled by N from the sure ones
                 // around them); the steps still see them as the point's own label.
-                let doubtful;
-                let cluster_lab: &[Label] = match probs {
-                    Some(p) if cfg.noise_doubt_ratio > 0.0 => {
-                        doubtful = doubtful_as_unknown(lab, p, cfg.noise_doubt_ratio);
-                        &doubtful
-                    }
-                    _ => lab,
-                };
+                let doubtful: Option<Vec<Label>> = probs
+                    .filter(|_| cfg.noise_doubt_ratio > 0.0)
+                    .map(|p| doubtful_as_unknown(lab, p, cfg.noise_doubt_ratio));
+                let cluster_lab: &[Label] = doubtful.as_deref().unwrap_or(lab);
+                // The points whose label was doubted (for the wider vote of N).
+                let doubted: Option<Vec<bool>> = doubtful.as_ref().map(|d| {
+                    d.iter()
+                        .zip(lab)
+                        .map(|(c, l)| c.is_unknown() && !l.is_unknown())
+                        .collect()
+                });
+                let doubted = doubted.as_deref();
                 let structure = analyse_person(pos, cluster_lab, cfg);
                 // Every run but the last works on a copy; the last (the only one of a
                 // plain run) takes the structure itself.
                 let mut refinements: Vec<PersonRefinement> = Vec::with_capacity(runs.len());
                 if let Some((&last, rest)) = runs.split_last() {
                     for &s in rest {
-                        refinements.push(apply_steps(structure.clone(), pos, lab, probs, s, cfg));
+                        refinements.push(apply_steps(
+                            structure.clone(),
+                            pos,
+                            lab,
+                            probs,
+                            doubted,
+                            s,
+                            cfg,
+                        ));
                     }
-                    refinements.push(apply_steps(structure, pos, lab, probs, last, cfg));
+                    refinements.push(apply_steps(structure, pos, lab, probs, doubted, last, cfg));
                 }
                 if let Some(r) = refinements.last() {
                     tracing::debug!(
