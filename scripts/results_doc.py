@@ -152,9 +152,9 @@ def main():
     w("Three refinement settings: the **paper mode** (every key at its default), the **improved "
       "refinement** ([`configs/benchmarks/improved.toml`](../configs/benchmarks/improved.toml): contact "
       "graph, coverage tree, probability noise: labels the 2D parser doubted — probability below "
-      "`noise_doubt_ratio` = 0.7 × the median probability of that label over the person — take no part in "
-      "the clustering and N relabels them by a distance-weighted vote of the sure points around them, "
-      "their own label weighing its probability; the synthetic "
+      "`noise_doubt_ratio` = 0.85 × the median probability of that label over the person — take no part in "
+      "the clustering and N relabels them by a distance-weighted vote of about 256 sure points within "
+      "`noise_doubt_radius_m` = 0.15 m, their own label weighing its probability; the synthetic "
       "parser errors carry no probabilities, so there every label counts as sure; and floor contact: "
       "lower-leg points within `floor_contact_m` = 6 mm of the floor under the person become background) "
       "and the improved refinement **+ multi-view vote** "
@@ -247,7 +247,8 @@ def main():
           "keep, and N gives them the label of the sure points around them"
           + ("; the lower-arm loss says that where a whole small part is unsure, the larger sure parts "
              "next to it (upper arm, torso) outvote it." if pc_p["lower_arms"] < pc_w["lower_arms"] else ".")
-          + " (`noise_doubt_ratio` = 0.7 was chosen on recordings outside the benchmark; "
+          + " (`noise_doubt_ratio` = 0.85 and `noise_doubt_radius_m` = 0.15 were chosen on recordings "
+          "outside the benchmark; "
           "see configs/benchmarks/improved.toml.)")
     for source in ["recorded", "model"]:
         for mode in ["naive", "dsa"]:
