@@ -833,6 +833,41 @@ mod tests {
         }
     }
 
+    #[test]
+    fn wide_vote_relabels_only_the_points_asked_and_counts_every_cell() {
+        let torso = Label::from(bodyseg_core::Class::Torso);
+        let arm = Label::from(bodyseg_core::Class::UpperArms);
+        // A line of 40 arm points 1 cm apart, 3 torso points 5 cm beside its start (another
+        // cell), and three noise points (own label unknown) by the torso points: two to
+        // relabel, one not.
+        let mut pos: Vec<Vec3> = (0..40).map(|i| [i as f32 * 0.01, 0.0, 1.0]).collect();
+        let mut labels = vec![arm; 40];
+        for j in 0..3 {
+            pos.push([0.0, 0.05 + 0.004 * j as f32, 1.0]);
+            labels.push(torso);
+        }
+        for j in 0..3 {
+            pos.push([0.001 * j as f32, 0.045, 1.0]);
+            labels.push(Label::UNKNOWN);
+        }
+        let n = pos.len();
+        let is_noise: Vec<bool> = (0..n).map(|i| i >= 43).collect();
+        let relabel: Vec<bool> = (0..n).map(|i| i >= 44).collect();
+        let vote = |k| WideVote {
+            k,
+            radius_m: 0.3,
+            self_weight: 1.0,
+        };
+        // About 40 voters: the whole arm outvotes the 3 torso points.
+        let out = reassign_doubted_wide(&pos, &labels, &is_noise, &relabel, None, vote(40));
+        assert_eq!(out[43], Label::UNKNOWN, "not asked: unchanged");
+        assert_eq!(&out[44..], &[arm, arm]);
+        assert_eq!(&out[..43], &labels[..43], "clustered points unchanged");
+        // The nearest cell only: the torso points'.
+        let out = reassign_doubted_wide(&pos, &labels, &is_noise, &relabel, None, vote(1));
+        assert_eq!(&out[44..], &[torso, torso]);
+    }
+
     /// A tiny xorshift so this unit test needs no dev-dependency.
     fn bodyseg_testkit_free_rng(seed: u64) -> impl FnMut() -> f32 {
         let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;

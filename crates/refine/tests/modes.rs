@@ -556,3 +556,102 @@ fn doubt_is_measured_against_each_labels_own_median() {
         labels
     );
 }
+
+/// A forearm far from the slab body (lower arm, 2 cm lattice) crossed by a one-layer
+/// sliver the parser called torso and was sure of (0.9), with a layer on each side of it
+/// that it also called torso but doubted (0.3): `(sliver, doubted layers, probabilities)`.
+fn forearm_with_a_torso_sliver(s: &mut Scene) -> (usize, [usize; 2], Vec<f32>) {
+    let layer = |s: &mut Scene, z0: f32, z1: f32, class: Class| {
+        s.add(cuboid([0.4, -0.04, z0], [0.6, 0.0, z1], 0.02, l(class)))
+    };
+    layer(s, 1.0, 1.12, Class::LowerArms);
+    let below = layer(s, 1.14, 1.14, Class::Torso);
+    let sliver = layer(s, 1.16, 1.16, Class::Torso);
+    let above = layer(s, 1.18, 1.18, Class::Torso);
+    layer(s, 1.2, 1.3, Class::LowerArms);
+    let mut probs = vec![0.9; s.pos.len()];
+    for part in [below, above] {
+        for i in s.parts[part].clone() {
+            probs[i] = 0.3;
+        }
+    }
+    (sliver, [below, above], probs)
+}
+
+#[test]
+fn doubted_labels_are_voted_by_the_sure_points_across_the_limb() {
+    let mut s = Scene::default();
+    slab_body(&mut s);
+    let (sliver, doubted, probs) = forearm_with_a_torso_sliver(&mut s);
+    let cloud = s.cloud();
+    let boxes = [PersonBox {
+        id: 0,
+        center_m: [0.1, 0.0, 1.0],
+        half_extents_m: [0.7, 0.6, 1.0],
+        yaw_rad: 0.0,
+    }];
+    let steps = [Steps::Run {
+        merge: false,
+        remove: false,
+        noise: true,
+    }];
+    let narrow = RefineConfig {
+        noise: NoiseMode::Probability,
+        noise_doubt_ratio: 0.85,
+        ..paper("N")
+    };
+    let wide = RefineConfig {
+        noise_doubt_radius_m: 0.15,
+        noise_doubt_k: 256,
+        ..narrow.clone()
+    };
+    let evidence = PointEvidence {
+        label_probs: Some(&probs),
+        ..Default::default()
+    };
+    let run = |cfg: &RefineConfig| {
+        refine_variants_with(&cloud, evidence, &boxes, cfg, &steps, false)
+            .expect("valid")
+            .labels
+            .swap_remove(0)
+    };
+    // The narrow vote: the nearest sure points are as many sliver (torso) as forearm points,
+    // and the doubted layers' own label breaks the tie.
+    let out = run(&narrow);
+    for part in doubted {
+        assert!(all(&s, &out, part, Class::Torso), "narrow vote");
+    }
+    // The wide vote: a few hundred sure points around them, most of them forearm.
+    let out = run(&wide);
+    for part in doubted {
+        assert!(all(&s, &out, part, Class::LowerArms), "wide vote");
+    }
+    // Only the doubted points: the sure sliver is a cluster N does not touch.
+    assert!(all(&s, &out, sliver, Class::Torso));
+    // Without probabilities nothing is doubted, and the radius changes nothing.
+    let weighted = |cfg: &RefineConfig| RefineConfig {
+        noise: NoiseMode::Weighted,
+        ..cfg.clone()
+    };
+    assert_eq!(run(&weighted(&wide)), run(&weighted(&narrow)));
+    // Bad values name their key.
+    for (cfg, key) in [
+        (
+            RefineConfig {
+                noise_doubt_radius_m: -0.1,
+                ..wide.clone()
+            },
+            "noise_doubt_radius_m",
+        ),
+        (
+            RefineConfig {
+                noise_doubt_k: 0,
+                ..wide.clone()
+            },
+            "noise_doubt_k",
+        ),
+    ] {
+        let e = cfg.validate().expect_err("invalid");
+        assert!(e.to_string().contains(key), "{e}");
+    }
+}
