@@ -307,6 +307,11 @@ pub struct RefineConfig {
     /// `noise = "probability"` with `noise_doubt_radius_m > 0`: about how many clustered
     /// points vote for a doubtful point. Default 256.
     pub noise_doubt_k: usize,
+    /// R: a cluster joined to the body tree through noise points the parser labelled body
+    /// (doubted labels, sparse DBSCAN noise; cells of `eps_m` touching) is not cut off
+    /// ([`crate::restore_bridged`]). Default false (the paper: only the clusters' own
+    /// contacts count).
+    pub remove_through_noise: bool,
     /// `off` (default, the paper) or `multi_view`: the steps start from the labels of
     /// the multi-view consistency vote instead of the projected ones (Reference is the
     /// projected labels either way). Needs the projection's depth and label images, so
@@ -343,6 +348,7 @@ impl Default for RefineConfig {
             noise_doubt_ratio: 0.7,
             noise_doubt_radius_m: 0.0,
             noise_doubt_k: 256,
+            remove_through_noise: false,
             vote: VoteMode::Off,
             floor_contact_m: 0.0,
             steps: Steps::MRN,

@@ -40,7 +40,7 @@ pub use graph::{
 };
 pub use steps::{
     WideVote, doubtful_as_unknown, merge_nodes, reassign_doubted_wide, reassign_noise,
-    reassign_noise_weighted, remove_nodes,
+    reassign_noise_weighted, remove_nodes, restore_bridged,
 };
 
 use bodyseg_core::math::Vec3;
@@ -172,7 +172,20 @@ pub fn apply_steps(
         initial
     };
     let labels_after_remove = if remove {
-        remove_nodes(&labels_after_merge, &graph, &tree)
+        let removed = remove_nodes(&labels_after_merge, &graph, &tree);
+        if cfg.remove_through_noise {
+            restore_bridged(
+                &removed,
+                &labels_after_merge,
+                positions_m,
+                &clustering.cluster_of,
+                labels,
+                &tree,
+                cfg.eps_m,
+            )
+        } else {
+            removed
+        }
     } else {
         labels_after_merge.clone()
     };

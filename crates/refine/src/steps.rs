@@ -73,6 +73,98 @@ pub fn remove_nodes(labels: &[Label], graph: &Graph, tree: &BodyTree) -> Vec<Lab
         .collect()
 }
 
+/// R's bridge (`remove_through_noise`): after [`remove_nodes`] (`removed`, from
+/// `before`), a cluster R turned into background gets its label back when a chain of body
+/// points joins it to a tree cluster: points of body-labelled clusters (labels `before`)
+/// and noise points the parser labelled body (`own`), in cells of `cell_m` touching one
+/// another (26 neighbours, so gaps up to about one cell). Tree clusters are never removed.
+///
+/// Why: the contact graph R walks joins clusters only, and the points left out of the
+/// clustering — labels the parser doubted (`noise_doubt_ratio`), sparse DBSCAN noise — are
+/// still the body's surface. A forearm or a foot joined to the body by a strip the parser
+/// hesitated on (an elbow, a knee, a hidden ankle) was cut off and removed; an object or a
+/// clump of flying pixels with no body points between it and the person still is. Measured
+/// on the tune sets of configs/benchmarks/improved.toml.
+pub fn restore_bridged(
+    removed: &[Label],
+    before: &[Label],
+    positions_m: &[Vec3],
+    cluster_of: &[Option<u32>],
+    own: &[Label],
+    tree: &BodyTree,
+    cell_m: f32,
+) -> Vec<Label> {
+    let mut out = removed.to_vec();
+    if !tree.is_valid() || removed == before {
+        return out;
+    }
+    let key = |p: Vec3| p.map(|x| (x / cell_m).floor() as i32);
+    // Cells holding body points, then their components (flood fill over 26 neighbours).
+    const UNSEEN: u32 = u32::MAX;
+    let mut component: std::collections::HashMap<[i32; 3], u32> = Default::default();
+    for ((p, c), l) in positions_m.iter().zip(cluster_of).zip(own) {
+        let body = match c {
+            Some(c) => before[*c as usize].is_body(),
+            None => l.is_body(),
+        };
+        if body {
+            component.insert(key(*p), UNSEEN);
+        }
+    }
+    let mut cells: Vec<[i32; 3]> = component.keys().copied().collect();
+    // Deterministic component ids whatever the map's order.
+    cells.sort_unstable();
+    let mut next = 0;
+    let mut stack = Vec::new();
+    for start in cells {
+        if component[&start] != UNSEEN {
+            continue;
+        }
+        component.insert(start, next);
+        stack.push(start);
+        while let Some(k) = stack.pop() {
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let n = [k[0] + dx, k[1] + dy, k[2] + dz];
+                        if let Some(id) = component.get_mut(&n)
+                            && *id == UNSEEN
+                        {
+                            *id = next;
+                            stack.push(n);
+                        }
+                    }
+                }
+            }
+        }
+        next += 1;
+    }
+    // The components the tree lies in, and those of each removed cluster.
+    let in_tree: Vec<bool> = (0..before.len() as u32).map(|c| tree.contains(c)).collect();
+    let mut with_tree = vec![false; next as usize];
+    for (p, c) in positions_m.iter().zip(cluster_of) {
+        if let Some(c) = c
+            && in_tree[*c as usize]
+            && let Some(&id) = component.get(&key(*p))
+        {
+            with_tree[id as usize] = true;
+        }
+    }
+    for (p, c) in positions_m.iter().zip(cluster_of) {
+        if let Some(c) = c {
+            let c = *c as usize;
+            if out[c] != before[c]
+                && component
+                    .get(&key(*p))
+                    .is_some_and(|&id| with_tree[id as usize])
+            {
+                out[c] = before[c];
+            }
+        }
+    }
+    out
+}
+
 /// N — reassign_noise: every point with `is_noise[i]` takes the label of the nearest point
 /// with `!is_noise` (ties: the smaller index), exact nearest neighbour. With no clustered
 /// point, noise keeps its label and unknown becomes background.

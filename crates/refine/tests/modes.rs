@@ -655,3 +655,90 @@ fn doubted_labels_are_voted_by_the_sure_points_across_the_limb() {
         assert!(e.to_string().contains(key), "{e}");
     }
 }
+
+#[test]
+fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose_object() {
+    let mut s = Scene::default();
+    slab_body(&mut s);
+    // An upper arm against the body's side, a forearm held out from its lower end joined
+    // only by an elbow band the parser doubted (3 layers: an 8 cm gap between the two arm
+    // clusters, more than twice the contact gap), and a piece labelled forearm 0.3 m from
+    // everything (an object).
+    let part = |s: &mut Scene, lo: [f32; 3], hi: [f32; 3], class: Class| {
+        s.add(cuboid(lo, hi, 0.02, l(class)))
+    };
+    part(
+        &mut s,
+        [0.17, -0.04, 1.2],
+        [0.21, 0.0, 1.48],
+        Class::UpperArms,
+    );
+    let elbow = part(
+        &mut s,
+        [0.23, -0.04, 1.2],
+        [0.27, 0.0, 1.24],
+        Class::UpperArms,
+    );
+    let forearm = part(
+        &mut s,
+        [0.29, -0.04, 1.2],
+        [0.5, 0.0, 1.24],
+        Class::LowerArms,
+    );
+    let object = part(
+        &mut s,
+        [0.5, -0.04, 0.8],
+        [0.54, 0.0, 0.9],
+        Class::LowerArms,
+    );
+    let mut probs = vec![0.9; s.pos.len()];
+    for i in s.parts[elbow].clone() {
+        probs[i] = 0.2;
+    }
+    let cloud = s.cloud();
+    let boxes = [PersonBox {
+        id: 0,
+        center_m: [0.2, 0.0, 1.0],
+        half_extents_m: [0.6, 0.6, 1.0],
+        yaw_rad: 0.0,
+    }];
+    let steps = [Steps::Run {
+        merge: false,
+        remove: true,
+        noise: false,
+    }];
+    let paper_r = RefineConfig {
+        noise: NoiseMode::Probability,
+        noise_doubt_ratio: 0.85,
+        ..contact("R")
+    };
+    let bridged = RefineConfig {
+        remove_through_noise: true,
+        ..paper_r.clone()
+    };
+    let evidence = PointEvidence {
+        label_probs: Some(&probs),
+        ..Default::default()
+    };
+    let run = |cfg: &RefineConfig| {
+        refine_variants_with(&cloud, evidence, &boxes, cfg, &steps, false)
+            .expect("valid")
+            .labels
+            .swap_remove(0)
+    };
+    let out = run(&paper_r);
+    assert!(
+        all(&s, &out, forearm, Class::Background),
+        "cut off at the elbow"
+    );
+    assert!(all(&s, &out, object, Class::Background));
+    let out = run(&bridged);
+    assert!(
+        all(&s, &out, forearm, Class::LowerArms),
+        "joined through the elbow"
+    );
+    assert!(
+        all(&s, &out, object, Class::Background),
+        "nothing joins the object"
+    );
+}
