@@ -557,6 +557,31 @@ fn doubt_is_measured_against_each_labels_own_median() {
     );
 }
 
+/// The labels `cfg` gives the scene's points with the parser's probabilities `probs`, one
+/// person box (`center`, `half_extents`), one step configuration `steps`.
+fn refine_with_probs(
+    cloud: &bodyseg_core::LabeledCloud,
+    probs: &[f32],
+    (center, half_extents): ([f32; 3], [f32; 3]),
+    steps: Steps,
+    cfg: &RefineConfig,
+) -> Vec<Label> {
+    let boxes = [PersonBox {
+        id: 0,
+        center_m: center,
+        half_extents_m: half_extents,
+        yaw_rad: 0.0,
+    }];
+    let evidence = PointEvidence {
+        label_probs: Some(probs),
+        ..Default::default()
+    };
+    refine_variants_with(cloud, evidence, &boxes, cfg, &[steps], false)
+        .expect("valid")
+        .labels
+        .swap_remove(0)
+}
+
 /// A forearm far from the slab body (lower arm, 2 cm lattice) crossed by a one-layer
 /// sliver the parser called torso and was sure of (0.9), with a layer on each side of it
 /// that it also called torso but doubted (0.3): `(sliver, doubted layers, probabilities)`.
@@ -584,17 +609,6 @@ fn doubted_labels_are_voted_by_the_sure_points_across_the_limb() {
     slab_body(&mut s);
     let (sliver, doubted, probs) = forearm_with_a_torso_sliver(&mut s);
     let cloud = s.cloud();
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.1, 0.0, 1.0],
-        half_extents_m: [0.7, 0.6, 1.0],
-        yaw_rad: 0.0,
-    }];
-    let steps = [Steps::Run {
-        merge: false,
-        remove: false,
-        noise: true,
-    }];
     let narrow = RefineConfig {
         noise: NoiseMode::Probability,
         noise_doubt_ratio: 0.85,
@@ -605,15 +619,19 @@ fn doubted_labels_are_voted_by_the_sure_points_across_the_limb() {
         noise_doubt_k: 256,
         ..narrow.clone()
     };
-    let evidence = PointEvidence {
-        label_probs: Some(&probs),
-        ..Default::default()
+    let n_only = Steps::Run {
+        merge: false,
+        remove: false,
+        noise: true,
     };
     let run = |cfg: &RefineConfig| {
-        refine_variants_with(&cloud, evidence, &boxes, cfg, &steps, false)
-            .expect("valid")
-            .labels
-            .swap_remove(0)
+        refine_with_probs(
+            &cloud,
+            &probs,
+            ([0.1, 0.0, 1.0], [0.7, 0.6, 1.0]),
+            n_only,
+            cfg,
+        )
     };
     // The narrow vote: the nearest sure points are as many sliver (torso) as forearm points,
     // and the doubted layers' own label breaks the tie.
@@ -696,17 +714,6 @@ fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose
         probs[i] = 0.2;
     }
     let cloud = s.cloud();
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.2, 0.0, 1.0],
-        half_extents_m: [0.6, 0.6, 1.0],
-        yaw_rad: 0.0,
-    }];
-    let steps = [Steps::Run {
-        merge: false,
-        remove: true,
-        noise: false,
-    }];
     let paper_r = RefineConfig {
         noise: NoiseMode::Probability,
         noise_doubt_ratio: 0.85,
@@ -716,15 +723,19 @@ fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose
         remove_through_noise: true,
         ..paper_r.clone()
     };
-    let evidence = PointEvidence {
-        label_probs: Some(&probs),
-        ..Default::default()
+    let r_only = Steps::Run {
+        merge: false,
+        remove: true,
+        noise: false,
     };
     let run = |cfg: &RefineConfig| {
-        refine_variants_with(&cloud, evidence, &boxes, cfg, &steps, false)
-            .expect("valid")
-            .labels
-            .swap_remove(0)
+        refine_with_probs(
+            &cloud,
+            &probs,
+            ([0.2, 0.0, 1.0], [0.6, 0.6, 1.0]),
+            r_only,
+            cfg,
+        )
     };
     let out = run(&paper_r);
     assert!(
