@@ -5,11 +5,15 @@
 //! `scripts/bench_dbscan_peers.py`. Run single-threaded with
 //! `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`. `refine_modes` prices
 //! the modes beside the paper's (issue 8: contact graph, coverage tree, weighted noise,
-//! and all three) on the 100k cloud.
+//! and all three; probability noise and its wide vote for doubted labels with made-up
+//! parser probabilities, doubted in strips) on the 100k cloud.
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
-use bodyseg_refine::{DbscanParams, GraphMode, NoiseMode, RefineConfig, TreeMode, dbscan, refine};
+use bodyseg_refine::{
+    DbscanParams, GraphMode, NoiseMode, PointEvidence, RefineConfig, TreeMode, dbscan, refine,
+    refine_variants_with,
+};
 use bodyseg_testkit::human_cloud;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -104,6 +108,51 @@ fn bench_refine_modes(c: &mut Criterion) {
     for (name, cfg) in &modes {
         g.bench_with_input(BenchmarkId::new(*name, n), &p, |b, p| {
             b.iter(|| refine(black_box(&p.cloud), &boxes, cfg))
+        });
+    }
+    // Probability noise needs the parser's probabilities: made up as the parser's doubts
+    // come, in strips (2.5 cm bands every 10 cm of height at 0.5, the rest at 0.9), so a
+    // quarter of the labels are doubted at 0.85.
+    let probs: Vec<f32> = p
+        .cloud
+        .positions_m
+        .iter()
+        .map(|q| {
+            if (q[2] * 10.0).rem_euclid(1.0) < 0.25 {
+                0.5
+            } else {
+                0.9
+            }
+        })
+        .collect();
+    let evidence = PointEvidence {
+        label_probs: Some(&probs),
+        ..Default::default()
+    };
+    let probability = RefineConfig {
+        graph: GraphMode::Contact,
+        tree: TreeMode::Coverage,
+        noise: NoiseMode::Probability,
+        noise_doubt_ratio: 0.85,
+        ..paper.clone()
+    };
+    let improved = RefineConfig {
+        noise_doubt_radius_m: 0.15,
+        remove_through_noise: true,
+        ..probability.clone()
+    };
+    for (name, cfg) in [("probability", &probability), ("improved", &improved)] {
+        g.bench_with_input(BenchmarkId::new(name, n), &p, |b, p| {
+            b.iter(|| {
+                refine_variants_with(
+                    black_box(&p.cloud),
+                    evidence,
+                    &boxes,
+                    cfg,
+                    &[cfg.steps],
+                    false,
+                )
+            })
         });
     }
     g.finish();
