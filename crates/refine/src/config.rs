@@ -326,8 +326,11 @@ pub struct RefineConfig {
     /// Keep the labels of body points outside every box (default false: they are outliers
     /// and become background, as in the paper).
     pub keep_outside_boxes: bool,
-    /// Let background clusters act as containers in M (default false: a floor's bounding
-    /// sphere swallows leg fragments).
+    /// Let background clusters act as containers in M, except for lower-leg clusters,
+    /// which the floor always holds (default false: a floor's bounding sphere swallows leg
+    /// fragments). The improved configuration sets it with the contact graph: a body
+    /// label on a patch of background surface (a wall, the robot, the floor beside a
+    /// foot) goes to the background.
     pub merge_into_background: bool,
 }
 
