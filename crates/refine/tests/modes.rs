@@ -753,3 +753,39 @@ fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose
         "nothing joins the object"
     );
 }
+
+#[test]
+fn merge_into_background_takes_a_patch_on_a_wall_but_never_a_foot_on_the_floor() {
+    let mut s = Scene::default();
+    slab_body(&mut s);
+    let part = |s: &mut Scene, lo: [f32; 3], hi: [f32; 3], class: Class| {
+        s.add(cuboid(lo, hi, 0.02, l(class)))
+    };
+    // A floor under the body with a foot standing on it (lower leg points in the floor's
+    // layer), and a wall behind it with a patch the parser called forearm in it.
+    part(&mut s, [-0.5, -0.5, 0.0], [0.5, 0.5, 0.04], Class::Background);
+    let foot = part(&mut s, [0.2, 0.21, 0.01], [0.3, 0.27, 0.03], Class::LowerLegs);
+    part(&mut s, [-0.5, 0.6, 0.2], [0.5, 0.64, 1.4], Class::Background);
+    let patch = part(&mut s, [0.0, 0.61, 0.6], [0.1, 0.63, 0.7], Class::LowerArms);
+    let cloud = s.cloud();
+    let boxes = [PersonBox {
+        id: 0,
+        center_m: [0.0, 0.1, 1.0],
+        half_extents_m: [0.6, 0.6, 1.0],
+        yaw_rad: 0.0,
+    }];
+    let m = contact("M");
+    let into_background = RefineConfig {
+        merge_into_background: true,
+        ..m.clone()
+    };
+    let run = |cfg: &RefineConfig| refine(&cloud, &boxes, cfg).expect("valid").cloud.labels;
+    // Off (the paper): both keep their labels.
+    let out = run(&m);
+    assert!(all(&s, &out, patch, Class::LowerArms));
+    assert!(all(&s, &out, foot, Class::LowerLegs));
+    // On: the patch goes to the wall, the foot stays a foot.
+    let out = run(&into_background);
+    assert!(all(&s, &out, patch, Class::Background), "patch on the wall");
+    assert!(all(&s, &out, foot, Class::LowerLegs), "foot on the floor");
+}
