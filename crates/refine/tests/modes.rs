@@ -763,9 +763,24 @@ fn merge_into_background_takes_a_patch_on_a_wall_but_never_a_foot_on_the_floor()
     };
     // A floor under the body with a foot standing on it (lower leg points in the floor's
     // layer), and a wall behind it with a patch the parser called forearm in it.
-    part(&mut s, [-0.5, -0.5, 0.0], [0.5, 0.5, 0.04], Class::Background);
-    let foot = part(&mut s, [0.2, 0.21, 0.01], [0.3, 0.27, 0.03], Class::LowerLegs);
-    part(&mut s, [-0.5, 0.6, 0.2], [0.5, 0.64, 1.4], Class::Background);
+    part(
+        &mut s,
+        [-0.5, -0.5, 0.0],
+        [0.5, 0.5, 0.04],
+        Class::Background,
+    );
+    let foot = part(
+        &mut s,
+        [0.2, 0.21, 0.01],
+        [0.3, 0.27, 0.03],
+        Class::LowerLegs,
+    );
+    part(
+        &mut s,
+        [-0.5, 0.6, 0.2],
+        [0.5, 0.64, 1.4],
+        Class::Background,
+    );
     let patch = part(&mut s, [0.0, 0.61, 0.6], [0.1, 0.63, 0.7], Class::LowerArms);
     let cloud = s.cloud();
     let boxes = [PersonBox {
