@@ -557,13 +557,12 @@ fn doubt_is_measured_against_each_labels_own_median() {
     );
 }
 
-/// The labels `cfg` gives the scene's points with the parser's probabilities `probs`, one
-/// person box (`center`, `half_extents`), one step configuration `steps`.
+/// The labels `cfg` (its `steps`) gives the scene's points with the parser's probabilities
+/// `probs`, in one person box (`center`, `half_extents`).
 fn refine_with_probs(
     cloud: &bodyseg_core::LabeledCloud,
     probs: &[f32],
     (center, half_extents): ([f32; 3], [f32; 3]),
-    steps: Steps,
     cfg: &RefineConfig,
 ) -> Vec<Label> {
     let boxes = [PersonBox {
@@ -576,7 +575,7 @@ fn refine_with_probs(
         label_probs: Some(probs),
         ..Default::default()
     };
-    refine_variants_with(cloud, evidence, &boxes, cfg, &[steps], false)
+    refine_variants_with(cloud, evidence, &boxes, cfg, &[cfg.steps], false)
         .expect("valid")
         .labels
         .swap_remove(0)
@@ -619,19 +618,8 @@ fn doubted_labels_are_voted_by_the_sure_points_across_the_limb() {
         noise_doubt_k: 256,
         ..narrow.clone()
     };
-    let n_only = Steps::Run {
-        merge: false,
-        remove: false,
-        noise: true,
-    };
     let run = |cfg: &RefineConfig| {
-        refine_with_probs(
-            &cloud,
-            &probs,
-            ([0.1, 0.0, 1.0], [0.7, 0.6, 1.0]),
-            n_only,
-            cfg,
-        )
+        refine_with_probs(&cloud, &probs, ([0.1, 0.0, 1.0], [0.7, 0.6, 1.0]), cfg)
     };
     // The narrow vote: the nearest sure points are as many sliver (torso) as forearm points,
     // and the doubted layers' own label breaks the tie.
@@ -674,6 +662,11 @@ fn doubted_labels_are_voted_by_the_sure_points_across_the_limb() {
     }
 }
 
+/// Adds a cuboid part of `class` on a 2 cm lattice to the scene; its part index.
+fn part(s: &mut Scene, lo: [f32; 3], hi: [f32; 3], class: Class) -> usize {
+    s.add(cuboid(lo, hi, 0.02, l(class)))
+}
+
 #[test]
 fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose_object() {
     let mut s = Scene::default();
@@ -682,9 +675,6 @@ fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose
     // only by an elbow band the parser doubted (3 layers: an 8 cm gap between the two arm
     // clusters, more than twice the contact gap), and a piece labelled forearm 0.3 m from
     // everything (an object).
-    let part = |s: &mut Scene, lo: [f32; 3], hi: [f32; 3], class: Class| {
-        s.add(cuboid(lo, hi, 0.02, l(class)))
-    };
     part(
         &mut s,
         [0.17, -0.04, 1.2],
@@ -723,19 +713,8 @@ fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose
         remove_through_noise: true,
         ..paper_r.clone()
     };
-    let r_only = Steps::Run {
-        merge: false,
-        remove: true,
-        noise: false,
-    };
     let run = |cfg: &RefineConfig| {
-        refine_with_probs(
-            &cloud,
-            &probs,
-            ([0.2, 0.0, 1.0], [0.6, 0.6, 1.0]),
-            r_only,
-            cfg,
-        )
+        refine_with_probs(&cloud, &probs, ([0.2, 0.0, 1.0], [0.6, 0.6, 1.0]), cfg)
     };
     let out = run(&paper_r);
     assert!(
@@ -758,9 +737,6 @@ fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose
 fn merge_into_background_takes_a_patch_on_a_wall_but_never_a_foot_on_the_floor() {
     let mut s = Scene::default();
     slab_body(&mut s);
-    let part = |s: &mut Scene, lo: [f32; 3], hi: [f32; 3], class: Class| {
-        s.add(cuboid(lo, hi, 0.02, l(class)))
-    };
     // A floor under the body with a foot standing on it (lower leg points in the floor's
     // layer), and a wall behind it with a patch the parser called forearm in it.
     part(
