@@ -9,9 +9,9 @@ use bodyseg_core::math::{Vec3, dist2};
 /// smaller id). Containers are judged with `labels` as given (all updates at once), so the
 /// result does not depend on order. Background containers count only when
 /// `merge_into_background` is set, and never for a lower-leg cluster: a foot stands on the
-/// floor, so the floor's cluster holds it whatever its label (with the improved
-/// configuration's probabilities, merging them cost the synthetic parser errors 1.7–2.4
-/// IoU of lower legs on the tune sets; the other parts gained).
+/// floor, so the floor's cluster holds it whatever its label (merging them cost the
+/// synthetic parser errors 0.5–2.4 IoU of lower legs on the tune sets of the improved
+/// configuration; the other parts gained).
 pub fn merge_nodes(
     features: &[ClusterFeatures],
     labels: &[Label],
@@ -323,8 +323,8 @@ const WIDE_VOTE_CELLS: f32 = 8.0;
 /// votes from its centroid with its counts, the nearest cells first until they hold about
 /// `k` points (`k` over the mean count of a cell); the doubted points of one cell share
 /// the vote asked from the cell's centre and differ only by their own label. Point by
-/// point, a few hundred voters each made N ten times slower than the rest of the
-/// refinement; this is within 0.1 BIoU of it.
+/// point, a few hundred voters each made the refinement 15 times slower (tune sets,
+/// docs/notes/noise_oracle.md); this is within 0.2 BIoU of it.
 ///
 /// A doubted point with no clustered point within the radius keeps its own label, unless
 /// that is unknown or `self_weight` is 0 (then the nearest clustered point's). Ties go to
@@ -343,26 +343,6 @@ pub fn reassign_doubted_wide(
     if clustered.is_empty() || !relabel.iter().any(|&r| r) {
         return labels.to_vec();
     }
-    wide_vote(
-        positions_m,
-        labels,
-        is_noise,
-        relabel,
-        label_probs,
-        &clustered,
-        vote,
-    )
-}
-
-fn wide_vote(
-    positions_m: &[Vec3],
-    labels: &[Label],
-    is_noise: &[bool],
-    relabel: &[bool],
-    label_probs: Option<&[f32]>,
-    clustered: &[u32],
-    vote: WideVote,
-) -> Vec<Label> {
     const C: usize = bodyseg_core::NUM_CLASSES;
     let WideVote {
         k,
@@ -374,7 +354,7 @@ fn wide_vote(
     let mut cell_of: std::collections::HashMap<[i32; 3], u32> = Default::default();
     let mut sums: Vec<[f64; 3]> = Vec::new();
     let mut counts: Vec<[u32; C]> = Vec::new();
-    for &i in clustered {
+    for &i in &clustered {
         let p = positions_m[i as usize];
         let next = sums.len() as u32;
         let c = *cell_of.entry(key(p)).or_insert(next) as usize;
@@ -754,13 +734,9 @@ impl NnIndex {
 
     /// The at most `k` indexed points nearest to `q` within squared distance `r2`, as
     /// `(squared distance, id)` sorted by distance then id, into `out`. Every cell within
-    /// reach of `r2` is searched (3×3×3 when `r2` is at most a cell's side squared);
+    /// reach of `r2` is searched, nearest first (3×3×3 when `r2` is at most a cell's side
+    /// squared: the narrow N; wider for the cell centroids of [`reassign_doubted_wide`]);
     /// `cells` is scratch.
-    ///
-    /// Cells are opened nearest first and the `k` best kept in a heap, so a wide N
-    /// (`noise_radius_m`, a few hundred voters) opens only the cells up to its `k`-th
-    /// voter; an insertion into a sorted list per candidate made it the refinement's main
-    /// cost.
     fn knn_within(
         &self,
         q: Vec3,
@@ -792,15 +768,9 @@ impl NnIndex {
                 }
             }
         }
-        // Nearest cells first; a max-heap of the k best so far (squared distances are not
-        // negative, so their bits order as the numbers do); stop at the first cell farther
-        // than the k-th best.
         cells.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let mut heap = std::collections::BinaryHeap::with_capacity(k + 1);
         for &(d, c) in cells.iter() {
-            if k == 0
-                || (heap.len() == k && heap.peek().is_some_and(|&(w, _)| d > f32::from_bits(w)))
-            {
+            if out.len() == k && out.last().is_some_and(|&(w, _)| d > w) {
                 break;
             }
             let r = self.cell_start[c as usize] as usize..self.cell_start[c as usize + 1] as usize;
@@ -809,20 +779,15 @@ impl NnIndex {
                 if d2 > r2 {
                     continue;
                 }
-                let key = (d2.to_bits(), j);
-                if heap.len() < k {
-                    heap.push(key);
-                } else if heap.peek().is_some_and(|&top| key < top) {
-                    heap.pop();
-                    heap.push(key);
+                let beats = |&(w, wj): &(f32, u32)| d2 < w || (d2 == w && j < wj);
+                if out.len() == k && !out.last().is_some_and(beats) {
+                    continue;
                 }
+                let at = out.partition_point(|e| !beats(e));
+                out.insert(at, (d2, j));
+                out.truncate(k);
             }
         }
-        out.extend(
-            heap.into_sorted_vec()
-                .into_iter()
-                .map(|(d2, j)| (f32::from_bits(d2), j)),
-        );
     }
 
     /// Squared distance from `q` (in cell `k`) to the walls of the block of cells within
