@@ -91,11 +91,21 @@ fn default_options_write_formats_md_layout_with_palette_colours() {
     assert_eq!(rec[16], cloud.origins[1].camera);
     assert_eq!(rec[17..21], u32::MAX.to_le_bytes());
 
-    let back = parse(&bytes).expect("parse");
-    let palette: Vec<[u8; 3]> = cloud.labels.iter().map(|l| l.color()).collect();
-    assert_eq!(back.colors, Some(palette));
     // Unknown (id 255, point 7) is white.
-    assert_eq!(back.colors.as_ref().map(|c| c[7]), Some([255, 255, 255]));
+    let rec = &bytes[header_len + 7 * 21..header_len + 8 * 21];
+    assert_eq!(rec[12..15], [255, 255, 255]);
+
+    // The palette is read back as no colours (a camera colour is expected there).
+    let back = parse(&bytes).expect("parse");
+    assert_eq!(back.colors, None);
+    assert_eq!(back.labels, cloud.labels);
+    // The same bytes without the comment read the palette as colours.
+    let text = std::str::from_utf8(&bytes[..header_len]).expect("ascii header");
+    let plain = text.replace("class palette", "something");
+    let mut other = plain.into_bytes();
+    other.extend_from_slice(&bytes[header_len..]);
+    let palette: Vec<[u8; 3]> = cloud.labels.iter().map(|l| l.color()).collect();
+    assert_eq!(parse(&other).expect("parse").colors, Some(palette));
 }
 
 #[test]
@@ -128,7 +138,8 @@ fn empty_cloud_round_trips() {
         let bytes = ply_bytes(&LabeledCloud::default(), &opts, Path::new(P)).expect("bytes");
         let back = parse(&bytes).expect("parse");
         assert!(back.is_empty());
-        assert_eq!(back.colors, Some(vec![]));
+        // Default options write the class palette, read back as no colours.
+        assert_eq!(back.colors, None);
     }
 }
 

@@ -27,7 +27,7 @@ use crate::project::check_frame;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
-use bodyseg_core::{Label, LabelImage, LabeledCloud, PersonBoxes};
+use bodyseg_core::{Label, LabelImage, LabeledCloud, PersonBoxes, RgbImage};
 use bodyseg_eval::Report;
 use bodyseg_io::{DepthImage, Durability, PlyFormat, PlyWriteOptions};
 use bodyseg_parsing::{OnnxSegmenter, Segmenter, ViewInput};
@@ -172,6 +172,9 @@ pub struct FrameInputs {
     pub labels: Vec<LabelImage>,
     /// Ground truth per depth pixel per camera (`depth_labels/`), when the recording has it.
     pub truth: Option<Vec<LabelImage>>,
+    /// Colour images per camera, rig order, when the refinement needs the points' colours
+    /// (`refine.foreign_colour_density` > 0); else empty.
+    pub colour: Vec<RgbImage>,
     /// The files read (for the frame's record: changed inputs make the frame redone).
     pub sources: Vec<InputFile>,
 }
@@ -312,6 +315,12 @@ impl FrameProcessor {
         self.segmenter.is_some()
     }
 
+    /// Whether the refinement needs the points' camera colours (then the colour images are
+    /// read, and sampled where the points land).
+    fn needs_colours(&self) -> bool {
+        self.config.refine.foreign_colour_density > 0.0
+    }
+
     /// Reads and decodes one frame's images and runs the parser (stages `read`, `parse`).
     ///
     /// # Errors
@@ -331,11 +340,12 @@ impl FrameProcessor {
                 let (d, path) = read_depth(rec, camera, frame)?;
                 note(&path);
                 depth.push(d);
-                if self.segmenter.is_some() {
+                if self.segmenter.is_some() || self.needs_colours() {
                     let (image, path) = read_color(rec, camera, frame)?;
                     note(&path);
                     colour.push(image);
-                } else {
+                }
+                if self.segmenter.is_none() {
                     let (labels, path) = read_parsing(rec, camera, frame)?;
                     note(&path);
                     recorded.push(labels);
@@ -384,6 +394,11 @@ impl FrameProcessor {
             labels,
             truth: self.has_truth.then_some(truth),
             sources,
+            colour: if self.needs_colours() {
+                colour
+            } else {
+                Vec::new()
+            },
         })
     }
 
@@ -454,7 +469,7 @@ impl FrameProcessor {
         let with_probs = cfg.refine.noise == NoiseMode::Probability
             && inputs.labels.iter().any(|l| l.probs.is_some());
         let ((), took) = timed(|| -> Result<()> {
-            if self.label_images || with_probs {
+            if self.label_images || with_probs || self.needs_colours() {
                 // The label images and the label probabilities reuse where the points
                 // landed.
                 projector.project_frame_keeping_hits(
@@ -474,6 +489,10 @@ impl FrameProcessor {
             }
             if with_probs {
                 hits.label_probs_into(cloud, &images, label_probs);
+            }
+            if self.needs_colours() {
+                let colour: Vec<&RgbImage> = inputs.colour.iter().collect();
+                cloud.colors = Some(hits.colors_of(cloud, &colour));
             }
             Ok(())
         })?;
@@ -654,7 +673,7 @@ impl FrameProcessor {
         steps: &[Steps],
         variants: &RefinedVariants,
         truth: Option<&[Label]>,
-    ) -> bodyseg_core::RgbImage {
+    ) -> RgbImage {
         let view = panel_view(cloud, &boxes.boxes, &self.rig);
         let mut panels = vec![FigurePanel::Labels {
             title: "INPUT".into(),

@@ -13,7 +13,7 @@
 //! are identical to the former f64 path in both modes.
 
 use bodyseg_calib::{Intrinsics, Pose, RgbdCamera};
-use bodyseg_core::LabeledCloud;
+use bodyseg_core::{LabeledCloud, RgbImage};
 
 /// Largest difference, colour pixels, between [`ColorProjection`] and the f64
 /// [`bodyseg_calib::Intrinsics::project`] of the same depth point, over the image.
@@ -99,6 +99,29 @@ impl Hits {
     /// Per point: its depth along the colour camera's z, metres.
     pub fn z_color_m(&self) -> &[f32] {
         &self.z_color_m
+    }
+
+    /// Per point of `cloud` (which these hits were kept for): the colour at its colour pixel
+    /// in its camera's colour image (`colour[origin.camera]`); black where it has no hit.
+    pub fn colors_of(&self, cloud: &LabeledCloud, colour: &[&RgbImage]) -> Vec<[u8; 3]> {
+        cloud
+            .origins
+            .iter()
+            .zip(self.u.iter().zip(&self.v))
+            .map(|(origin, (&u, &v))| {
+                let Some(image) = colour.get(usize::from(origin.camera)) else {
+                    return [0; 3];
+                };
+                if u == NO_HIT {
+                    return [0; 3];
+                }
+                let at = 3 * (v as usize * image.width as usize + u as usize);
+                image
+                    .rgb
+                    .get(at..at + 3)
+                    .map_or([0; 3], |c| [c[0], c[1], c[2]])
+            })
+            .collect()
     }
 
     /// Per point of `cloud` (which these hits were kept for): the parser's probability of

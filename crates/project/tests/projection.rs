@@ -836,3 +836,72 @@ fn label_probabilities_follow_each_point_to_its_colour_pixel() {
     assert!(unsure > 100 && sure > 100, "{unsure} unsure, {sure} sure");
     assert!(probs[n0..].iter().all(|&p| p == 1.0), "no probabilities: 1");
 }
+
+/// `Hits::colors_of`: each point takes the colour of its own colour pixel in its own
+/// camera's image (here: camera 0's left half red, right half green; camera 1's blue).
+#[test]
+fn point_colours_are_read_at_each_points_colour_pixel() {
+    let cam0 = simple_camera();
+    let mut cam1 = simple_camera();
+    cam1.name = "second".into();
+    let rig = Rig {
+        cameras: vec![cam0.clone(), cam1.clone()],
+    };
+    let f0 = fixture(cam0.clone(), &SIMPLE_SCENE);
+    let f1 = fixture(cam1, &SIMPLE_SCENE);
+    let images = [
+        CameraImages {
+            depth_raw: &f0.depth_raw,
+            labels: &f0.labels,
+        },
+        CameraImages {
+            depth_raw: &f1.depth_raw,
+            labels: &f1.labels,
+        },
+    ];
+    let (w, h) = (f0.labels.width, f0.labels.height);
+    let (red, green, blue) = ([200, 10, 10], [10, 200, 10], [10, 10, 200]);
+    let rgb0: Vec<u8> = (0..h)
+        .flat_map(|_| (0..w).flat_map(|u| if u < w / 2 { red } else { green }))
+        .collect();
+    let colour0 = bodyseg_core::RgbImage::new(w, h, rgb0).expect("size");
+    let colour1 = bodyseg_core::RgbImage::new(w, h, blue.repeat((w * h) as usize)).expect("size");
+    let projector = FrameProjector::new(&rig).expect("valid rig");
+    let (mut cloud, mut hits) = Default::default();
+    projector
+        .project_frame_keeping_hits(
+            &images,
+            &BackProjectOptions::default(),
+            &ProjectConfig::naive(),
+            &mut cloud,
+            &mut hits,
+        )
+        .expect("valid frame");
+    let colours = hits.colors_of(&cloud, &[&colour0, &colour1]);
+    assert_eq!(colours.len(), cloud.len());
+    let n0 = f0.points.len();
+    let (mut left, mut right) = (0, 0);
+    for (i, p) in f0.points.iter().enumerate() {
+        if cloud.labels[i].is_unknown() {
+            continue; // no hit, or a hit on an unlabelled pixel
+        }
+        let uv = cam0
+            .color
+            .project([f64::from(p[0]) - 0.05, f64::from(p[1]), f64::from(p[2])])
+            .expect("in front");
+        let is_left = (uv[0].round() as u32) < w / 2;
+        assert_eq!(colours[i], if is_left { red } else { green }, "point {i}");
+        if is_left { left += 1 } else { right += 1 }
+    }
+    assert!(left > 100 && right > 100, "{left} left, {right} right");
+    assert!(
+        (n0..cloud.len()).all(|i| cloud.labels[i].is_unknown() || colours[i] == blue),
+        "camera 1's points: its image's blue"
+    );
+    // A camera without an image: black.
+    assert!(
+        hits.colors_of(&cloud, &[&colour0])[n0..]
+            .iter()
+            .all(|&c| c == [0; 3])
+    );
+}

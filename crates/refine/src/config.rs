@@ -36,6 +36,14 @@ pub enum RefineError {
         /// Points of the cloud.
         want: usize,
     },
+    /// `foreign_colour_density` > 0 on a cloud without camera colours.
+    #[error(
+        "refine.foreign_colour_density = {density} needs the cloud's camera colours, and this cloud has none: set it to 0, or give a cloud with colours (bodyseg run / convert add them)"
+    )]
+    NoColours {
+        /// The configured density.
+        density: f32,
+    },
     /// Label probabilities given, but not one per point.
     #[error("label probabilities: {got} for {want} points (one per point expected)")]
     LabelProbs {
@@ -332,6 +340,13 @@ pub struct RefineConfig {
     /// label on a patch of background surface (a wall, the robot, the floor beside a
     /// foot) goes to the background.
     pub merge_into_background: bool,
+    /// After the steps, an upper- or lower-arm point whose colour is rare on the person's
+    /// head and torso — less than this fraction of either's points share its chromaticity
+    /// (±0.02) — is an object the person holds or touches (a parcel, a robot link), not an
+    /// arm: background ([`crate::colour::drop_foreign_arms`]). Needs the cloud's camera
+    /// colours. In [0, 1); 0 = off (default, the paper). Gloves and sleeves of another
+    /// colour than the shirt are lost with it.
+    pub foreign_colour_density: f32,
 }
 
 impl Default for RefineConfig {
@@ -357,6 +372,7 @@ impl Default for RefineConfig {
             steps: Steps::MRN,
             keep_outside_boxes: false,
             merge_into_background: false,
+            foreign_colour_density: 0.0,
         }
     }
 }
@@ -433,6 +449,12 @@ impl RefineConfig {
         }
         if self.noise_doubt_k < 1 {
             return bad("noise_doubt_k", "must be >= 1, got 0".into());
+        }
+        if !(0.0..1.0).contains(&self.foreign_colour_density) {
+            return bad(
+                "foreign_colour_density",
+                format!("must be in [0, 1), got {}", self.foreign_colour_density),
+            );
         }
         if !(self.floor_contact_m.is_finite() && self.floor_contact_m >= 0.0) {
             return bad(

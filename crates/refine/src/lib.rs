@@ -18,7 +18,8 @@
 //! nearest clustered points and its own label ([`reassign_noise_weighted`]), and `noise =
 //! "probability"` weighs that own label by the parser's probability of it
 //! ([`PointEvidence::label_probs`]). After the steps, `floor_contact_m` gives lower-leg
-//! points on the floor back to the background ([`floor`]).
+//! points on the floor back to the background ([`floor`]), and `foreign_colour_density`
+//! arm labels on colours the person does not wear ([`colour`]).
 //!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).
@@ -26,6 +27,7 @@
 //!   person's point list, which keeps the cloud's order).
 //! - Nothing here depends on point order beyond that numbering: ties are broken by index.
 
+pub mod colour;
 pub mod config;
 pub mod dbscan;
 pub mod floor;
@@ -364,6 +366,15 @@ pub fn refine_variants_with(
     cfg.validate()?;
     cloud.validate()?;
     let PointEvidence { voted, label_probs } = evidence;
+    let colours = match &cloud.colors {
+        _ if cfg.foreign_colour_density == 0.0 => None,
+        Some(c) => Some(c.as_slice()),
+        None => {
+            return Err(RefineError::NoColours {
+                density: cfg.foreign_colour_density,
+            });
+        }
+    };
     if let Some(p) = label_probs
         && p.len() != cloud.len()
     {
@@ -466,6 +477,16 @@ pub fn refine_variants_with(
                         ));
                     }
                     refinements.push(apply_steps(structure, pos, lab, probs, doubted, last, cfg));
+                }
+                if let Some(colours) = colours {
+                    let colours: Vec<[u8; 3]> = idx.iter().map(|&i| colours[i as usize]).collect();
+                    for r in &mut refinements {
+                        colour::drop_foreign_arms(
+                            &mut r.point_labels,
+                            &colours,
+                            cfg.foreign_colour_density,
+                        );
+                    }
                 }
                 if let Some(r) = refinements.last() {
                     tracing::debug!(

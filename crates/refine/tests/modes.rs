@@ -780,3 +780,68 @@ fn merge_into_background_takes_a_patch_on_a_wall_but_never_a_foot_on_the_floor()
     assert!(all(&s, &out, patch, Class::Background), "patch on the wall");
     assert!(all(&s, &out, foot, Class::LowerLegs), "foot on the floor");
 }
+
+#[test]
+fn foreign_colours_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm() {
+    let mut s = Scene::default();
+    let torso = slab_body(&mut s);
+    // An arm held out from the body's side, and an orange bar (a robot link) the parser
+    // also called forearm, touching the hand: one forearm cluster with it.
+    let upper = part(
+        &mut s,
+        [0.17, -0.04, 1.2],
+        [0.21, 0.0, 1.48],
+        Class::UpperArms,
+    );
+    let forearm = part(
+        &mut s,
+        [0.21, -0.04, 1.2],
+        [0.45, 0.0, 1.24],
+        Class::LowerArms,
+    );
+    let bar = part(
+        &mut s,
+        [0.47, -0.1, 1.16],
+        [0.55, 0.3, 1.24],
+        Class::LowerArms,
+    );
+    let mut cloud = s.cloud();
+    let (skin, shirt, orange) = ([200, 150, 120], [40, 60, 160], [215, 115, 15]);
+    let mut colours = vec![skin; cloud.len()];
+    for (p, c) in [
+        (torso, shirt),
+        (upper, shirt),
+        (forearm, skin),
+        (bar, orange),
+    ] {
+        colours[s.parts[p].clone()].fill(c);
+    }
+    cloud.colors = Some(colours);
+    let boxes = [PersonBox {
+        id: 0,
+        center_m: [0.15, 0.1, 1.2],
+        half_extents_m: [0.5, 0.5, 0.6],
+        yaw_rad: 0.0,
+    }];
+    let off = contact("M-R-N");
+    let on = RefineConfig {
+        foreign_colour_density: 0.03,
+        ..off.clone()
+    };
+    let run = |cfg: &RefineConfig| refine(&cloud, &boxes, cfg).expect("valid").cloud.labels;
+    // Off: the bar is part of the arm's chain and stays forearm.
+    let out = run(&off);
+    assert!(all(&s, &out, bar, Class::LowerArms));
+    // On: the bar is background; the arm (shirt sleeve, skin forearm) stays.
+    let out = run(&on);
+    assert!(all(&s, &out, bar, Class::Background), "the orange bar");
+    assert!(all(&s, &out, forearm, Class::LowerArms), "the skin forearm");
+    assert!(all(&s, &out, upper, Class::UpperArms), "the sleeve");
+    assert!(all(&s, &out, torso, Class::Torso));
+
+    // Without colours the mode cannot run: a clear error, not a silent skip.
+    cloud.colors = None;
+    let err = refine(&cloud, &boxes, &on).expect_err("no colours");
+    assert!(matches!(err, RefineError::NoColours { .. }), "{err}");
+    assert!(err.to_string().contains("foreign_colour_density"), "{err}");
+}

@@ -143,7 +143,13 @@ pub(crate) struct Header {
     pub(crate) data_offset: usize,
     /// Number of header lines (data line numbers continue from here).
     pub(crate) lines: usize,
+    /// A comment says the colours are the class palette ([`PALETTE_COMMENT`]), not the
+    /// camera's.
+    pub(crate) palette_colours: bool,
 }
+
+/// What bodyseg's PLY comment says when red, green and blue are the class palette.
+pub(crate) const PALETTE_COMMENT: &str = "red green blue = class palette";
 
 /// Parses the header at the start of `bytes`.
 pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError> {
@@ -158,6 +164,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         path: path.to_path_buf(),
     };
     let mut encoding = None;
+    let mut palette_colours = false;
     let mut elements: Vec<Element> = Vec::new();
     let mut pos = 0;
     let mut line_no = 0;
@@ -181,7 +188,8 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         };
         let rest: Vec<&str> = words.collect();
         match keyword {
-            "comment" | "obj_info" => {}
+            "comment" => palette_colours |= text.contains(PALETTE_COMMENT),
+            "obj_info" => {}
             "end_header" => break,
             "format" => {
                 let [fmt, _version] = rest[..] else {
@@ -274,6 +282,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         elements,
         data_offset: pos,
         lines: line_no,
+        palette_colours,
     })
 }
 

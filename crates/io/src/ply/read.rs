@@ -51,7 +51,7 @@ pub fn read_ply(path: &Path) -> Result<LabeledCloud, IoError> {
 /// |---|---|---|---|
 /// | `x`, `y`, `z` | yes | [`LabeledCloud::positions_m`] (`f32`, metres) | finite in `f32` |
 /// | `label` | yes | [`LabeledCloud::labels`] | 0..=6, or 255 = unknown |
-/// | `red`, `green`, `blue` | no (all three or ignored) | [`LabeledCloud::colors`] | integer types 0..=255; float types 0..=1, scaled by 255 and rounded |
+/// | `red`, `green`, `blue` | no (all three or ignored) | [`LabeledCloud::colors`] (none when a comment says `red green blue = class palette`, as bodyseg writes by default) | integer types 0..=255; float types 0..=1, scaled by 255 and rounded |
 /// | `camera` | no (absent: 0) | [`PointOrigin::camera`] | 0..=255 |
 /// | `pixel` | no (absent: the vertex index) | [`PointOrigin::pixel`] | 0..=2³²−1 |
 ///
@@ -84,7 +84,7 @@ pub fn parse_ply(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
     let data = &bytes[header.data_offset..];
     let (before, rest) = header.elements.split_at(vi);
     let (vertex, after) = (&rest[0], &rest[1..]);
-    match header.encoding {
+    let mut cloud = match header.encoding {
         Encoding::Ascii => {
             let mut lines = AsciiLines {
                 data,
@@ -98,11 +98,16 @@ pub fn parse_ply(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
             for e in after {
                 skip_ascii(&mut lines, e, path)?;
             }
-            Ok(cloud)
+            cloud
         }
-        Encoding::BinaryLittleEndian => binary::<false>(data, before, vertex, after, &plan, path),
-        Encoding::BinaryBigEndian => binary::<true>(data, before, vertex, after, &plan, path),
+        Encoding::BinaryLittleEndian => binary::<false>(data, before, vertex, after, &plan, path)?,
+        Encoding::BinaryBigEndian => binary::<true>(data, before, vertex, after, &plan, path)?,
+    };
+    // bodyseg's own files may colour the points by class: that is no camera colour.
+    if header.palette_colours {
+        cloud.colors = None;
     }
+    Ok(cloud)
 }
 
 /// Which vertex property feeds each role, and its type.

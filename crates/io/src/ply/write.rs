@@ -98,7 +98,7 @@ fn encode(cloud: &LabeledCloud, opts: &PlyWriteOptions, w: &mut dyn Write) -> io
         PlyFormat::Ascii => "ascii",
     };
     let colour_source = match opts.colors {
-        PlyColors::Palette => "class palette",
+        PlyColors::Palette => "class palette", // read back as no colours (PALETTE_COMMENT)
         PlyColors::Camera => "camera colour",
     };
     write!(
