@@ -6,10 +6,12 @@
 //! `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`. `refine_modes` prices
 //! the modes beside the paper's (issue 8: contact graph, coverage tree, weighted noise,
 //! and all three; probability noise and its wide vote for doubted labels with made-up
-//! parser probabilities, doubted in strips) on the 100k cloud.
+//! parser probabilities, doubted in strips) on the 100k cloud; `foreign_colours` the
+//! foreign-colour step alone on it.
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
+use bodyseg_refine::colour::drop_foreign_arms;
 use bodyseg_refine::{
     DbscanParams, GraphMode, NoiseMode, PointEvidence, RefineConfig, TreeMode, dbscan, refine,
     refine_variants_with,
@@ -158,9 +160,45 @@ fn bench_refine_modes(c: &mut Criterion) {
     g.finish();
 }
 
+/// `foreign_colour_density`'s step alone on the 100k cloud: head skin, torso shirt, arms in
+/// shirt or skin with every tenth arm point orange (an object to drop).
+fn bench_foreign_colours(c: &mut Criterion) {
+    let mut g = c.benchmark_group("foreign_colours");
+    let n = 100_000;
+    let p = human_cloud(n, SEED);
+    let colours: Vec<[u8; 3]> = p
+        .cloud
+        .labels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| match l.id() {
+            1 => [200, 150, 120],
+            3 | 4 if i % 10 == 0 => [215, 115, 15],
+            3 | 4 if i % 2 == 0 => [200, 150, 120],
+            _ => [40, 60, 160],
+        })
+        .collect();
+    // The references: every head and torso point (in a run, the tree's clusters of them).
+    let of = |id: u8| -> Vec<u32> {
+        (0..n as u32)
+            .filter(|&i| p.cloud.labels[i as usize].id() == id)
+            .collect()
+    };
+    let (head, torso) = (of(1), of(2));
+    g.throughput(Throughput::Elements(n as u64));
+    g.bench_with_input(BenchmarkId::new("drop_foreign_arms", n), &p, |b, p| {
+        b.iter(|| {
+            let mut labels = p.cloud.labels.clone();
+            drop_foreign_arms(black_box(&mut labels), &colours, &[&head, &torso], 0.02);
+            labels
+        })
+    });
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default();
-    targets = bench_dbscan, bench_refine, bench_refine_modes
+    targets = bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colours
 }
 criterion_main!(benches);

@@ -38,7 +38,7 @@ pub enum RefineError {
     },
     /// `foreign_colour_density` > 0 on a cloud without camera colours.
     #[error(
-        "refine.foreign_colour_density = {density} needs the cloud's camera colours, and this cloud has none: set it to 0, or give a cloud with colours (bodyseg run / convert add them)"
+        "refine.foreign_colour_density = {density} needs the points' camera colours, and this cloud has none (a PLY's red, green, blue are read unless bodyseg wrote them as its class palette): set it to 0, or give a cloud with camera colours"
     )]
     NoColours {
         /// The configured density.
