@@ -189,7 +189,13 @@ fn bench_foreign_colours(c: &mut Criterion) {
     g.bench_with_input(BenchmarkId::new("drop_foreign_arms", n), &p, |b, p| {
         b.iter(|| {
             let mut labels = p.cloud.labels.clone();
-            drop_foreign_arms(black_box(&mut labels), &colours, &[&head, &torso], 0.02);
+            drop_foreign_arms(
+                black_box(&mut labels),
+                &colours,
+                &[&head, &torso],
+                0.02,
+                bodyseg_core::Label::BACKGROUND,
+            );
             labels
         })
     });

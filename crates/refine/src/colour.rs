@@ -55,7 +55,8 @@ fn srgb_to_linear(x: u8) -> f32 {
 /// Every upper- or lower-arm label (of one person's points, `labels`, with their camera
 /// colours `colours`) whose colour is rare on each of the `references` (lists of indices into
 /// `labels`: in a run, the person's head-labelled points and the body tree's torso cluster)
-/// becomes background. Rare:
+/// becomes `foreign`: background, or in a run unknown, which lets another person whose box
+/// holds the point keep it as theirs (see `fuse_labels`). Rare:
 /// less than `min_density` of the reference's points have a chromaticity within one bin of
 /// the point's (3 × 3 bins of [`CHROMA_BINS`] per axis, ±0.02). A reference of fewer than
 /// [`MIN_REFERENCE_POINTS`] points counts for nothing; with none, nothing changes. Arm points
@@ -75,6 +76,7 @@ pub fn drop_foreign_arms(
     colours: &[[u8; 3]],
     references: &[&[u32]],
     min_density: f32,
+    foreign: Label,
 ) {
     assert_eq!(labels.len(), colours.len(), "one colour per label");
     let n = CHROMA_BINS;
@@ -109,7 +111,7 @@ pub fn drop_foreign_arms(
             density >= min_density
         });
         if !worn {
-            *l = Label::BACKGROUND;
+            *l = foreign;
         }
     }
 }
@@ -129,7 +131,13 @@ mod tests {
 
     fn drop(labels: &mut [Label], colours: &[[u8; 3]], min_density: f32) {
         let [head, torso] = refs();
-        drop_foreign_arms(labels, colours, &[&head, &torso], min_density);
+        drop_foreign_arms(
+            labels,
+            colours,
+            &[&head, &torso],
+            min_density,
+            Label::BACKGROUND,
+        );
     }
 
     /// A person: a skin face under dark hair, a blue shirt on the torso, and `arm` arm
@@ -188,7 +196,13 @@ mod tests {
         colours.push(green);
         let before = labels.clone();
         let torso: Vec<u32> = (0..49).collect();
-        drop_foreign_arms(&mut labels, &colours, &[&[], &torso], 0.03);
+        drop_foreign_arms(
+            &mut labels,
+            &colours,
+            &[&[], &torso],
+            0.03,
+            Label::BACKGROUND,
+        );
         assert_eq!(labels, before);
     }
 
@@ -210,7 +224,13 @@ mod tests {
         // Were the patch part of the torso reference, orange would be worn.
         let head: Vec<u32> = (0..120).collect();
         let torso: Vec<u32> = (120..420).chain(450..490).collect();
-        drop_foreign_arms(&mut labels, &colours, &[&head, &torso], 0.03);
+        drop_foreign_arms(
+            &mut labels,
+            &colours,
+            &[&head, &torso],
+            0.03,
+            Label::BACKGROUND,
+        );
         assert!(labels[420..450].iter().all(|&x| x == l(Class::LowerArms)));
     }
 

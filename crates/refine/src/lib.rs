@@ -64,7 +64,9 @@ pub struct PersonRefinement {
     pub labels_after_merge: Vec<Label>,
     /// Cluster labels after R (equal to the above when R is off or the tree is invalid).
     pub labels_after_remove: Vec<Label>,
-    /// Final per-point labels of the person's points (never unknown).
+    /// Final per-point labels of the person's points: never unknown, except where
+    /// `foreign_colour_density` found an arm label of a colour this person does not wear
+    /// (it abstains: the fuse gives the point another person's label, or background).
     pub point_labels: Vec<Label>,
 }
 
@@ -498,6 +500,9 @@ pub fn refine_variants_with(
                             &colours,
                             &[&head, &torso],
                             cfg.foreign_colour_density,
+                            // Unknown: this person abstains; another whose box holds the
+                            // point (a hand reaching into it) may keep it.
+                            Label::UNKNOWN,
                         );
                     }
                 }
@@ -610,20 +615,27 @@ fn fuse_labels(
         for (k, &i) in idx.iter().enumerate() {
             let i = i as usize;
             let l = r.point_labels[k];
+            let take = |labels: &mut [Label], clusters: &mut [Option<(u32, u32)>]| {
+                labels[i] = l;
+                if with_clusters {
+                    clusters[i] = r
+                        .clustering
+                        .cluster_of
+                        .get(k)
+                        .copied()
+                        .flatten()
+                        .map(|c| (p as u32, c));
+                }
+            };
             match seen[i] {
                 NONE => {
-                    labels[i] = l;
+                    take(&mut labels, &mut clusters);
                     seen[i] = AGREE;
-                    if with_clusters {
-                        clusters[i] = r
-                            .clustering
-                            .cluster_of
-                            .get(k)
-                            .copied()
-                            .flatten()
-                            .map(|c| (p as u32, c));
-                    }
                 }
+                // Unknown is a person abstaining (a colour it does not wear): the others
+                // decide; when all abstain, background (below).
+                AGREE if l.is_unknown() => {}
+                AGREE if labels[i].is_unknown() => take(&mut labels, &mut clusters),
                 AGREE if labels[i] != l => seen[i] = DISAGREE,
                 _ => {}
             }
@@ -645,10 +657,16 @@ fn fuse_labels(
             };
         }
     }
+    for l in &mut labels {
+        if l.is_unknown() {
+            *l = Label::BACKGROUND;
+        }
+    }
     (labels, clusters)
 }
 
-/// The label that the person whose box centre is nearest (horizontally) gave point `i`.
+/// The label that the person whose box centre is nearest (horizontally) gave point `i`
+/// (people who abstained, unknown, left out; background when all did).
 fn nearest_box_label(
     p: Vec3,
     i: u32,
@@ -657,7 +675,9 @@ fn nearest_box_label(
 ) -> Label {
     let mut best: Option<(f32, Label)> = None;
     for (b, (idx, r)) in boxes.iter().zip(people) {
-        if let Ok(k) = idx.binary_search(&i) {
+        if let Ok(k) = idx.binary_search(&i)
+            && !r.point_labels[k].is_unknown()
+        {
             let dx = p[0] - b.center_m[0];
             let dy = p[1] - b.center_m[1];
             let d2 = dx * dx + dy * dy;

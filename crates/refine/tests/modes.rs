@@ -845,3 +845,71 @@ fn foreign_colours_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm
     assert!(matches!(err, RefineError::NoColours { .. }), "{err}");
     assert!(err.to_string().contains("foreign_colour_density"), "{err}");
 }
+
+#[test]
+fn foreign_colours_leave_a_hand_reaching_into_another_persons_box_to_its_owner() {
+    // Person A at x = 0 (skin A, blue shirt); person B at x = 0.8 (skin B, green shirt), its
+    // forearm reaching into A's box, nearer A's box centre than B's. Half of the forearm's
+    // points have no projected label (DSA left them unknown), so where A and B disagree the
+    // projected label cannot settle it.
+    let mut s = Scene::default();
+    let torso_a = slab_body(&mut s);
+    let torso_b = part(&mut s, [0.65, -0.1, 0.9], [0.95, 0.1, 1.5], Class::Torso);
+    let head_b = s.add(ball([0.8, 0.0, 1.6], 0.08, 0.02, l(Class::Head)));
+    let upper_b = part(
+        &mut s,
+        [0.45, -0.04, 1.2],
+        [0.63, 0.0, 1.24],
+        Class::UpperArms,
+    );
+    let forearm_b = part(
+        &mut s,
+        [0.21, -0.04, 1.2],
+        [0.43, 0.0, 1.24],
+        Class::LowerArms,
+    );
+    let mut cloud = s.cloud();
+    let forearm = s.parts[forearm_b].clone();
+    // (Its hand end only: next to B's upper arm, N would give them B's upper-arm label.)
+    for i in forearm.clone().step_by(2) {
+        if cloud.positions_m[i][0] < 0.35 {
+            cloud.labels[i] = Label::UNKNOWN;
+        }
+    }
+    let (skin_a, shirt_a) = ([200, 150, 120], [40, 60, 160]);
+    let (skin_b, shirt_b) = ([170, 110, 70], [40, 160, 60]);
+    let mut colours = vec![skin_a; cloud.len()];
+    for (p, c) in [
+        (torso_a, shirt_a),
+        (torso_b, shirt_b),
+        (head_b, skin_b),
+        (upper_b, shirt_b),
+        (forearm_b, skin_b),
+    ] {
+        colours[s.parts[p].clone()].fill(c);
+    }
+    cloud.colors = Some(colours);
+    let boxes = [
+        PersonBox {
+            id: 0,
+            center_m: [0.0, 0.0, 1.0],
+            half_extents_m: [0.45, 0.3, 1.0],
+            yaw_rad: 0.0,
+        },
+        PersonBox {
+            id: 1,
+            center_m: [0.8, 0.0, 1.0],
+            half_extents_m: [0.65, 0.3, 1.0],
+            yaw_rad: 0.0,
+        },
+    ];
+    let cfg = RefineConfig {
+        foreign_colour_density: 0.03,
+        ..contact("M-N")
+    };
+    let out = refine(&cloud, &boxes, &cfg).expect("valid").cloud.labels;
+    // A does not wear B's skin and abstains; B does and keeps its forearm.
+    assert!(all(&s, &out, forearm_b, Class::LowerArms), "B's forearm");
+    assert!(all(&s, &out, upper_b, Class::UpperArms));
+    assert!(all(&s, &out, torso_a, Class::Torso));
+}
