@@ -9,9 +9,9 @@ use bodyseg_calib::{
     BackProjectOptions, CloudFrame, Intrinsics, Pose, RgbdCamera, Rig, back_project,
     read_iai_kinect2,
 };
-use bodyseg_core::{Class, Label, LabelImage, PointOrigin};
+use bodyseg_core::{Class, Label, LabelImage, LabeledCloud, PointOrigin};
 use bodyseg_project::{
-    CameraImages, FrameProjector, ProjectConfig, ProjectError, ProjectMode, project_frame,
+    CameraImages, FrameProjector, Hits, ProjectConfig, ProjectError, ProjectMode, project_frame,
     project_labels,
 };
 
@@ -778,11 +778,9 @@ fn project_frame_equals_back_project_then_project_labels() {
     );
 }
 
-/// `Hits::label_probs_into`: each labelled point reads the probability at its own colour
-/// pixel (here: left half of camera 0's image unsure, camera 1's image without
-/// probabilities); 1 where that says nothing.
-#[test]
-fn label_probabilities_follow_each_point_to_its_colour_pixel() {
+/// Two cameras of [`simple_camera`]'s model at the same place (the second named "second"),
+/// each with its own fixture of [`SIMPLE_SCENE`]: `(camera 0, rig, fixture 0, fixture 1)`.
+fn two_cameras() -> (RgbdCamera, Rig, Fixture, Fixture) {
     let cam0 = simple_camera();
     let mut cam1 = simple_camera();
     cam1.name = "second".into();
@@ -791,6 +789,31 @@ fn label_probabilities_follow_each_point_to_its_colour_pixel() {
     };
     let f0 = fixture(cam0.clone(), &SIMPLE_SCENE);
     let f1 = fixture(cam1, &SIMPLE_SCENE);
+    (cam0, rig, f0, f1)
+}
+
+/// Projects `images` naively, keeping where the points land.
+fn project_naive_keeping_hits(rig: &Rig, images: &[CameraImages<'_>]) -> (LabeledCloud, Hits) {
+    let projector = FrameProjector::new(rig).expect("valid rig");
+    let (mut cloud, mut hits) = Default::default();
+    projector
+        .project_frame_keeping_hits(
+            images,
+            &BackProjectOptions::default(),
+            &ProjectConfig::naive(),
+            &mut cloud,
+            &mut hits,
+        )
+        .expect("valid frame");
+    (cloud, hits)
+}
+
+/// `Hits::label_probs_into`: each labelled point reads the probability at its own colour
+/// pixel (here: left half of camera 0's image unsure, camera 1's image without
+/// probabilities); 1 where that says nothing.
+#[test]
+fn label_probabilities_follow_each_point_to_its_colour_pixel() {
+    let (cam0, rig, f0, f1) = two_cameras();
     let labels0 = left_half_unsure(&f0.labels);
     let w = labels0.width as usize;
     let images = [
@@ -804,18 +827,8 @@ fn label_probabilities_follow_each_point_to_its_colour_pixel() {
         },
     ];
     // Naive: every point's label is its pixel's, so the probability always applies.
-    let cfg = ProjectConfig::naive();
-    let projector = FrameProjector::new(&rig).expect("valid rig");
-    let (mut cloud, mut hits, mut probs) = Default::default();
-    projector
-        .project_frame_keeping_hits(
-            &images,
-            &BackProjectOptions::default(),
-            &cfg,
-            &mut cloud,
-            &mut hits,
-        )
-        .expect("valid frame");
+    let (cloud, hits) = project_naive_keeping_hits(&rig, &images);
+    let mut probs = Vec::new();
     hits.label_probs_into(&cloud, &images, &mut probs);
     assert_eq!(probs.len(), cloud.len());
     let n0 = f0.points.len();
@@ -841,14 +854,7 @@ fn label_probabilities_follow_each_point_to_its_colour_pixel() {
 /// camera's image (here: camera 0's left half red, right half green; camera 1's blue).
 #[test]
 fn point_colours_are_read_at_each_points_colour_pixel() {
-    let cam0 = simple_camera();
-    let mut cam1 = simple_camera();
-    cam1.name = "second".into();
-    let rig = Rig {
-        cameras: vec![cam0.clone(), cam1.clone()],
-    };
-    let f0 = fixture(cam0.clone(), &SIMPLE_SCENE);
-    let f1 = fixture(cam1, &SIMPLE_SCENE);
+    let (cam0, rig, f0, f1) = two_cameras();
     let images = [
         CameraImages {
             depth_raw: &f0.depth_raw,
@@ -866,17 +872,7 @@ fn point_colours_are_read_at_each_points_colour_pixel() {
         .collect();
     let colour0 = bodyseg_core::RgbImage::new(w, h, rgb0).expect("size");
     let colour1 = bodyseg_core::RgbImage::new(w, h, blue.repeat((w * h) as usize)).expect("size");
-    let projector = FrameProjector::new(&rig).expect("valid rig");
-    let (mut cloud, mut hits) = Default::default();
-    projector
-        .project_frame_keeping_hits(
-            &images,
-            &BackProjectOptions::default(),
-            &ProjectConfig::naive(),
-            &mut cloud,
-            &mut hits,
-        )
-        .expect("valid frame");
+    let (cloud, hits) = project_naive_keeping_hits(&rig, &images);
     let colours = hits.colors_of(&cloud, &[&colour0, &colour1]);
     assert_eq!(colours.len(), cloud.len());
     let n0 = f0.points.len();
