@@ -129,6 +129,16 @@ struct Fixture {
     labels: LabelImage,
 }
 
+impl Fixture {
+    /// Its raw depth and label image, as a frame's camera images.
+    fn images(&self) -> CameraImages<'_> {
+        CameraImages {
+            depth_raw: &self.depth_raw,
+            labels: &self.labels,
+        }
+    }
+}
+
 fn fixture(camera: RgbdCamera, scene: &Scene) -> Fixture {
     let (depth_raw, truth_px) = render_depth(&camera, scene);
     let labels = render_labels(&camera, scene);
@@ -654,16 +664,7 @@ fn project_frame_concatenates_cameras_in_world_frame() {
         ..SIMPLE_SCENE
     };
     let f1 = fixture(cam1, &far);
-    let images = [
-        CameraImages {
-            depth_raw: &f0.depth_raw,
-            labels: &f0.labels,
-        },
-        CameraImages {
-            depth_raw: &f1.depth_raw,
-            labels: &f1.labels,
-        },
-    ];
+    let images = [f0.images(), f1.images()];
     let cfg = ProjectConfig::default();
     let cloud =
         project_frame(&rig, &images, &BackProjectOptions::default(), &cfg).expect("valid frame");
@@ -855,16 +856,7 @@ fn label_probabilities_follow_each_point_to_its_colour_pixel() {
 #[test]
 fn point_colours_are_read_at_each_points_colour_pixel() {
     let (cam0, rig, f0, f1) = two_cameras();
-    let images = [
-        CameraImages {
-            depth_raw: &f0.depth_raw,
-            labels: &f0.labels,
-        },
-        CameraImages {
-            depth_raw: &f1.depth_raw,
-            labels: &f1.labels,
-        },
-    ];
+    let images = [f0.images(), f1.images()];
     let (w, h) = (f0.labels.width, f0.labels.height);
     let (red, green, blue) = ([200, 10, 10], [10, 200, 10], [10, 10, 200]);
     let rgb0: Vec<u8> = (0..h)
