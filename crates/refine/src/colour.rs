@@ -54,20 +54,17 @@ fn srgb_to_linear(x: u8) -> f32 {
 
 /// Every upper- or lower-arm label (of one person's points, `labels`, with their camera
 /// colours `colours`) whose colour is rare on each of the `references` (lists of indices into
-/// `labels`: in a run, the person's head-labelled points and the body tree's torso cluster)
-/// becomes `foreign`: background, or in a run unknown, which lets another person whose box
-/// holds the point keep it as theirs (see `fuse_labels`). Rare:
-/// less than `min_density` of the reference's points have a chromaticity within one bin of
-/// the point's (3 × 3 bins of [`CHROMA_BINS`] per axis, ±0.02). A reference of fewer than
-/// [`MIN_REFERENCE_POINTS`] points counts for nothing; with none, nothing changes. Arm points
-/// darker than [`MIN_BRIGHTNESS`] are not judged.
+/// `labels`: in a run, the person's head-labelled and torso-labelled points) becomes
+/// `foreign`: background, or in a run unknown, which lets another person whose box holds the
+/// point keep it as theirs (see `fuse_labels`). Rare: less than `min_density` of the
+/// reference's points have a chromaticity within one bin of the point's (3 × 3 bins of
+/// [`CHROMA_BINS`] per axis, ±0.02). A reference of fewer than [`MIN_REFERENCE_POINTS`]
+/// points counts for nothing; with none, nothing changes. Arm points darker than
+/// [`MIN_BRIGHTNESS`] are not judged.
 ///
-/// Why the tree's torso cluster and not every torso label: the parser labels patches of what
-/// touches the person at waist height torso too (a robot link beside the waist), and those
-/// points would make the object's colour one the person wears. (Found on benchmark sequence
-/// robot_cell 2011; on the tune sets the two choices are within 0.2 BIoU.) Head labels
-/// rarely land on objects, and the tree's head cluster can miss the face (hair and face
-/// split), so the head is its labels.
+/// The references are labels, not the body tree's clusters: the tree's torso cluster was
+/// tried (a robot link's patch labelled torso would not count) and was no better on the tune
+/// sets, and where boxes overlap the tree's root can be the other person's torso.
 ///
 /// # Panics
 /// When `colours` and `labels` differ in length, or a reference index is out of range.

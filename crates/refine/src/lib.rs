@@ -483,18 +483,15 @@ pub fn refine_variants_with(
                 if let Some(colours) = colours {
                     let colours: Vec<[u8; 3]> = idx.iter().map(|&i| colours[i as usize]).collect();
                     for r in &mut refinements {
-                        // What the person surely wears: its head-labelled points, and the
-                        // tree's torso cluster (the torso label also lands on patches of what
-                        // touches the person at waist height, a robot link; a head's rarely).
-                        let head_label = Label::from(bodyseg_core::Class::Head);
-                        let head: Vec<u32> = (0..r.point_labels.len() as u32)
-                            .filter(|&i| r.point_labels[i as usize] == head_label)
-                            .collect();
-                        let torso: Vec<u32> = r.tree.root.map_or_else(Vec::new, |root| {
-                            (0..r.clustering.cluster_of.len() as u32)
-                                .filter(|&i| r.clustering.cluster_of[i as usize] == Some(root))
+                        // What the person wears: its head- and torso-labelled points.
+                        let of = |class: bodyseg_core::Class| -> Vec<u32> {
+                            let label = Label::from(class);
+                            (0..r.point_labels.len() as u32)
+                                .filter(|&i| r.point_labels[i as usize] == label)
                                 .collect()
-                        });
+                        };
+                        let head = of(bodyseg_core::Class::Head);
+                        let torso = of(bodyseg_core::Class::Torso);
                         colour::drop_foreign_arms(
                             &mut r.point_labels,
                             &colours,
