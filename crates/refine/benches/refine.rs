@@ -178,13 +178,6 @@ fn bench_foreign_colours(c: &mut Criterion) {
             _ => [40, 60, 160],
         })
         .collect();
-    // The references: every head and torso point (in a run, the tree's clusters of them).
-    let of = |id: u8| -> Vec<u32> {
-        (0..n as u32)
-            .filter(|&i| p.cloud.labels[i as usize].id() == id)
-            .collect()
-    };
-    let (head, torso) = (of(1), of(2));
     g.throughput(Throughput::Elements(n as u64));
     g.bench_with_input(BenchmarkId::new("drop_foreign_arms", n), &p, |b, p| {
         b.iter(|| {
@@ -192,7 +185,6 @@ fn bench_foreign_colours(c: &mut Criterion) {
             drop_foreign_arms(
                 black_box(&mut labels),
                 &colours,
-                &[&head, &torso],
                 0.02,
                 bodyseg_core::Label::BACKGROUND,
             );

@@ -53,42 +53,45 @@ fn srgb_to_linear(x: u8) -> f32 {
 }
 
 /// Every upper- or lower-arm label (of one person's points, `labels`, with their camera
-/// colours `colours`) whose colour is rare on each of the `references` (lists of indices into
-/// `labels`: in a run, the person's head-labelled and torso-labelled points) becomes
+/// colours `colours`) whose colour is rare on the person's head and on its torso becomes
 /// `foreign`: background, or in a run unknown, which lets another person whose box holds the
-/// point keep it as theirs (see `fuse_labels`). Rare: less than `min_density` of the
-/// reference's points have a chromaticity within one bin of the point's (3 × 3 bins of
-/// [`CHROMA_BINS`] per axis, ±0.02). A reference of fewer than [`MIN_REFERENCE_POINTS`]
-/// points counts for nothing; with none, nothing changes. Arm points darker than
-/// [`MIN_BRIGHTNESS`] are not judged.
+/// point keep it as theirs (see `fuse_labels`). Rare: less than `min_density` of the head's
+/// points, and less than that fraction of the torso's, have a chromaticity within one bin of
+/// the point's (3 × 3 bins of [`CHROMA_BINS`] per axis, ±0.02). A head or torso of fewer
+/// than [`MIN_REFERENCE_POINTS`] points counts for nothing; with neither, nothing changes.
+/// Arm points darker than [`MIN_BRIGHTNESS`] are not judged.
 ///
-/// The references are labels, not the body tree's clusters: the tree's torso cluster was
-/// tried (a robot link's patch labelled torso would not count) and was no better on the tune
-/// sets, and where boxes overlap the tree's root can be the other person's torso.
+/// The references are the head and torso labels, not the body tree's clusters: the tree's
+/// torso cluster was tried (a robot link's patch labelled torso would not count) and was no
+/// better on the tune sets, and where boxes overlap the tree's root can be the other
+/// person's torso.
 ///
 /// # Panics
-/// When `colours` and `labels` differ in length, or a reference index is out of range.
+/// When `colours` and `labels` differ in length.
 pub fn drop_foreign_arms(
     labels: &mut [Label],
     colours: &[[u8; 3]],
-    references: &[&[u32]],
     min_density: f32,
     foreign: Label,
 ) {
     assert_eq!(labels.len(), colours.len(), "one colour per label");
     let n = CHROMA_BINS;
     // Per reference part: the fraction of its points in each bin.
-    let references: Vec<Vec<f32>> = references
-        .iter()
-        .filter(|points| points.len() >= MIN_REFERENCE_POINTS)
-        .map(|points| {
+    let references: Vec<Vec<f32>> = [Class::Head, Class::Torso]
+        .into_iter()
+        .filter_map(|class| {
+            let label = Label::from(class);
             let mut hist = vec![0f32; n * n];
-            for &i in *points {
-                let (r, g) = chroma_bin(colours[i as usize]);
+            let mut count = 0usize;
+            for (_, &c) in labels.iter().zip(colours).filter(|(l, _)| **l == label) {
+                let (r, g) = chroma_bin(c);
                 hist[r * n + g] += 1.0;
+                count += 1;
             }
-            hist.iter_mut().for_each(|h| *h /= points.len() as f32);
-            hist
+            (count >= MIN_REFERENCE_POINTS).then(|| {
+                hist.iter_mut().for_each(|h| *h /= count as f32);
+                hist
+            })
         })
         .collect();
     if references.is_empty() {
@@ -121,20 +124,8 @@ mod tests {
         Label::from(c)
     }
 
-    /// The reference lists of [`person`]'s scene: head points 0..120, torso 120..420.
-    fn refs() -> [Vec<u32>; 2] {
-        [(0..120).collect(), (120..420).collect()]
-    }
-
     fn drop(labels: &mut [Label], colours: &[[u8; 3]], min_density: f32) {
-        let [head, torso] = refs();
-        drop_foreign_arms(
-            labels,
-            colours,
-            &[&head, &torso],
-            min_density,
-            Label::BACKGROUND,
-        );
+        drop_foreign_arms(labels, colours, min_density, Label::BACKGROUND);
     }
 
     /// A person: a skin face under dark hair, a blue shirt on the torso, and `arm` arm
@@ -192,43 +183,28 @@ mod tests {
         let mut colours = vec![[40, 60, 160]; 49];
         colours.push(green);
         let before = labels.clone();
-        let torso: Vec<u32> = (0..49).collect();
-        drop_foreign_arms(
-            &mut labels,
-            &colours,
-            &[&[], &torso],
-            0.03,
-            Label::BACKGROUND,
-        );
+        drop(&mut labels, &colours, 0.03);
         assert_eq!(labels, before);
     }
 
     #[test]
-    fn only_the_reference_points_say_what_is_worn() {
-        // A robot link labelled lower arm, and a patch of it the parser called torso (not in
-        // the tree's torso cluster, so not in the references).
+    fn every_torso_label_counts_as_worn() {
+        // A parcel labelled lower arm, and a part of it the parser called torso: with 40 of
+        // the torso's 340 points its colour is worn (a known limit); with 5 of 305 it is not.
         let orange = [215, 115, 15];
-        let (mut labels, mut colours) = person(&[(Class::LowerArms, orange, 30)]);
-        labels.extend([l(Class::Torso); 40]);
-        colours.extend([orange; 40]);
-        let mut judged = labels.clone();
-        drop(&mut judged, &colours, 0.03);
-        assert!(judged[420..450].iter().all(|&x| x == Label::BACKGROUND));
-        assert!(
-            judged[450..].iter().all(|&x| x == l(Class::Torso)),
-            "never judged"
-        );
-        // Were the patch part of the torso reference, orange would be worn.
-        let head: Vec<u32> = (0..120).collect();
-        let torso: Vec<u32> = (120..420).chain(450..490).collect();
-        drop_foreign_arms(
-            &mut labels,
-            &colours,
-            &[&head, &torso],
-            0.03,
-            Label::BACKGROUND,
-        );
-        assert!(labels[420..450].iter().all(|&x| x == l(Class::LowerArms)));
+        for (patch, kept) in [(40, true), (5, false)] {
+            let (mut labels, mut colours) = person(&[(Class::LowerArms, orange, 30)]);
+            labels.extend(vec![l(Class::Torso); patch]);
+            colours.extend(vec![orange; patch]);
+            drop(&mut labels, &colours, 0.03);
+            let want = if kept {
+                l(Class::LowerArms)
+            } else {
+                Label::BACKGROUND
+            };
+            assert!(labels[420..450].iter().all(|&x| x == want), "patch {patch}");
+            assert!(labels[450..].iter().all(|&x| x == l(Class::Torso)));
+        }
     }
 
     #[test]

@@ -483,19 +483,9 @@ pub fn refine_variants_with(
                 if let Some(colours) = colours {
                     let colours: Vec<[u8; 3]> = idx.iter().map(|&i| colours[i as usize]).collect();
                     for r in &mut refinements {
-                        // What the person wears: its head- and torso-labelled points.
-                        let of = |class: bodyseg_core::Class| -> Vec<u32> {
-                            let label = Label::from(class);
-                            (0..r.point_labels.len() as u32)
-                                .filter(|&i| r.point_labels[i as usize] == label)
-                                .collect()
-                        };
-                        let head = of(bodyseg_core::Class::Head);
-                        let torso = of(bodyseg_core::Class::Torso);
                         colour::drop_foreign_arms(
                             &mut r.point_labels,
                             &colours,
-                            &[&head, &torso],
                             cfg.foreign_colour_density,
                             // Unknown: this person abstains; another whose box holds the
                             // point (a hand reaching into it) may keep it.
