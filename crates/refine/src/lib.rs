@@ -41,7 +41,7 @@ pub use graph::{
     build_graph_contact, cluster_features,
 };
 pub use steps::{
-    WideVote, doubtful_as_unknown, merge_nodes, reassign_doubted_wide, reassign_noise,
+    Vote, doubtful_as_unknown, merge_nodes, reassign_doubted_wide, reassign_noise,
     reassign_noise_weighted, remove_nodes, restore_bridged,
 };
 
@@ -213,7 +213,7 @@ pub fn apply_steps(
                     &is_noise,
                     doubted,
                     label_probs,
-                    WideVote {
+                    Vote {
                         k: cfg.noise_doubt_k,
                         radius_m: cfg.noise_doubt_radius_m,
                         self_weight: cfg.noise_self_weight,
@@ -221,18 +221,25 @@ pub fn apply_steps(
                 );
                 (doubted, labels)
             });
+        // The narrow vote is not asked for the points the wide one relabels.
+        let narrow: Option<Vec<bool>> = wide
+            .as_ref()
+            .map(|(doubted, _)| doubted.iter().map(|&d| !d).collect());
         point_labels = match cfg.noise {
             NoiseMode::Nearest => reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m),
             NoiseMode::Weighted | NoiseMode::Probability => reassign_noise_weighted(
                 positions_m,
                 &point_labels,
                 &is_noise,
+                narrow.as_deref(),
                 // Noise points keep their starting label until here, so `label_probs[i]`
                 // is the probability of the label that votes.
                 label_probs.filter(|_| cfg.noise == NoiseMode::Probability),
-                cfg.eps_m,
-                cfg.noise_k,
-                cfg.noise_self_weight,
+                Vote {
+                    k: cfg.noise_k,
+                    radius_m: cfg.eps_m,
+                    self_weight: cfg.noise_self_weight,
+                },
             ),
         };
         if let Some((doubted, wide)) = wide {

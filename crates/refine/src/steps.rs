@@ -212,9 +212,9 @@ pub fn reassign_noise(
     out
 }
 
-/// Who votes in [`reassign_doubted_wide`].
+/// Who votes in N's votes ([`reassign_noise_weighted`], [`reassign_doubted_wide`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WideVote {
+pub struct Vote {
     /// About this many nearest clustered points vote.
     pub k: usize,
     /// They lie within this distance, metres, which also scales their weight
@@ -224,15 +224,16 @@ pub struct WideVote {
     pub self_weight: f32,
 }
 
-/// N, weighted (`noise = "weighted"`): every point with `is_noise[i]` takes the label
-/// with the largest vote among the `k` nearest points with `!is_noise` within `eps_m`
-/// (ties between points: the smaller index), each voting for its label with weight
-/// `1 / (1 + (d / eps_m)²)` (1 on the point, ½ at `eps_m`), plus the point's own label —
-/// the parser's, unless unknown — with weight `self_weight` (as many voters lying on the
-/// point). Ties between labels go to the nearest voter's label. A noise point with no
-/// clustered point within `eps_m` has no neighbourhood to be corrected by: it keeps its own
-/// label, unless that is unknown or `self_weight` is 0 (then the nearest clustered point's
-/// label, as in [`reassign_noise`]).
+/// N, weighted (`noise = "weighted"`): every point with `is_noise[i]` (and `relabel[i]`,
+/// when given: the others keep their label) takes the label with the largest vote among the
+/// `vote.k` nearest points with `!is_noise` within `vote.radius_m` (`eps_m` in a run; ties
+/// between points: the smaller index), each voting for its label with weight
+/// `1 / (1 + (d / radius_m)²)` (1 on the point, ½ at the radius), plus the point's own
+/// label — the parser's, unless unknown — with weight `vote.self_weight` (as many voters
+/// lying on the point). Ties between labels go to the nearest voter's label. A noise point
+/// with no clustered point within the radius has no neighbourhood to be corrected by: it
+/// keeps its own label, unless that is unknown or `self_weight` is 0 (then the nearest
+/// clustered point's label, as in [`reassign_noise`]).
 ///
 /// With `label_probs` (`noise = "probability"`: the parser's probability of each point's
 /// own label, one per point) the own label weighs `self_weight × label_probs[i]` (clamped
@@ -248,11 +249,15 @@ pub fn reassign_noise_weighted(
     positions_m: &[Vec3],
     labels: &[Label],
     is_noise: &[bool],
+    relabel: Option<&[bool]>,
     label_probs: Option<&[f32]>,
-    eps_m: f32,
-    k: usize,
-    self_weight: f32,
+    vote: Vote,
 ) -> Vec<Label> {
+    let Vote {
+        k,
+        radius_m: eps_m,
+        self_weight,
+    } = vote;
     let clustered: Vec<u32> = (0..positions_m.len() as u32)
         .filter(|&i| !is_noise[i as usize])
         .collect();
@@ -265,7 +270,7 @@ pub fn reassign_noise_weighted(
     let weight = |d2: f32| 1.0 / (1.0 + d2 / r2);
     let (mut voters, mut cells) = (Vec::new(), Vec::new());
     for i in 0..positions_m.len() {
-        if !is_noise[i] {
+        if !is_noise[i] || relabel.is_some_and(|r| !r[i]) {
             continue;
         }
         let q = positions_m[i];
@@ -335,7 +340,7 @@ pub fn reassign_doubted_wide(
     is_noise: &[bool],
     relabel: &[bool],
     label_probs: Option<&[f32]>,
-    vote: WideVote,
+    vote: Vote,
 ) -> Vec<Label> {
     let clustered: Vec<u32> = (0..positions_m.len() as u32)
         .filter(|&i| !is_noise[i as usize])
@@ -344,7 +349,7 @@ pub fn reassign_doubted_wide(
         return labels.to_vec();
     }
     const C: usize = bodyseg_core::NUM_CLASSES;
-    let WideVote {
+    let Vote {
         k,
         radius_m,
         self_weight,
@@ -919,7 +924,7 @@ mod tests {
         let n = pos.len();
         let is_noise: Vec<bool> = (0..n).map(|i| i >= 43).collect();
         let relabel: Vec<bool> = (0..n).map(|i| i >= 44).collect();
-        let vote = |k| WideVote {
+        let vote = |k| Vote {
             k,
             radius_m: 0.3,
             self_weight: 1.0,
@@ -932,6 +937,17 @@ mod tests {
         // The nearest cell only: the torso points'.
         let out = reassign_doubted_wide(&pos, &labels, &is_noise, &relabel, None, vote(1));
         assert_eq!(&out[44..], &[torso, torso]);
+        // The narrow vote asks the same points only: the nearest (torso) within 3 cm.
+        let narrow = Vote {
+            k: 16,
+            radius_m: 0.03,
+            self_weight: 1.0,
+        };
+        let out = reassign_noise_weighted(&pos, &labels, &is_noise, Some(&relabel), None, narrow);
+        assert_eq!(out[43], Label::UNKNOWN, "narrow, not asked: unchanged");
+        assert_eq!(&out[44..], &[torso, torso]);
+        let all = reassign_noise_weighted(&pos, &labels, &is_noise, None, None, narrow);
+        assert_eq!(all[43], torso, "narrow, every noise point");
     }
 
     /// A tiny xorshift so this unit test needs no dev-dependency.

@@ -413,7 +413,12 @@ fn probability_noise_lets_an_unsure_label_yield_and_a_sure_one_hold() {
     let labels = vec![l(Class::Head), l(Class::Torso)];
     let is_noise = [true, false];
     let run = |probs: Option<&[f32]>| {
-        bodyseg_refine::reassign_noise_weighted(&pos, &labels, &is_noise, probs, 0.03, 16, 1.0)[0]
+        let vote = bodyseg_refine::Vote {
+            k: 16,
+            radius_m: 0.03,
+            self_weight: 1.0,
+        };
+        bodyseg_refine::reassign_noise_weighted(&pos, &labels, &is_noise, None, probs, vote)[0]
     };
     assert_eq!(run(None), l(Class::Head), "own label 1.0 against 0.8");
     assert_eq!(run(Some(&[1.0, 1.0])), l(Class::Head), "sure: holds");
