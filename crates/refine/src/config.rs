@@ -381,6 +381,20 @@ impl RefineConfig {
     /// Checks every field's range; the error names the field.
     pub fn validate(&self) -> Result<(), RefineError> {
         let bad = |field, problem: String| Err(RefineError::InvalidConfig { field, problem });
+        let non_negative = |field, v: f32| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                bad(field, format!("must be a finite number >= 0, got {v}"))
+            }
+        };
+        let below_one = |field, v: f32| {
+            if (0.0..1.0).contains(&v) {
+                Ok(())
+            } else {
+                bad(field, format!("must be in [0, 1), got {v}"))
+            }
+        };
         if !(self.eps_m.is_finite() && self.eps_m > 0.0) {
             return bad(
                 "eps_m",
@@ -399,15 +413,7 @@ impl RefineConfig {
                 ),
             );
         }
-        if !(self.inside_tolerance.is_finite() && self.inside_tolerance >= 0.0) {
-            return bad(
-                "inside_tolerance",
-                format!(
-                    "must be a finite number >= 0, got {}",
-                    self.inside_tolerance
-                ),
-            );
-        }
+        non_negative("inside_tolerance", self.inside_tolerance)?;
         if !(self.contact_gap_m.is_finite() && self.contact_gap_m > 0.0) {
             return bad(
                 "contact_gap_m",
@@ -423,45 +429,14 @@ impl RefineConfig {
         if self.noise_k < 1 {
             return bad("noise_k", "must be >= 1, got 0".into());
         }
-        if !(self.noise_self_weight.is_finite() && self.noise_self_weight >= 0.0) {
-            return bad(
-                "noise_self_weight",
-                format!(
-                    "must be a finite number >= 0, got {}",
-                    self.noise_self_weight
-                ),
-            );
-        }
-        if !(0.0..1.0).contains(&self.noise_doubt_ratio) {
-            return bad(
-                "noise_doubt_ratio",
-                format!("must be in [0, 1), got {}", self.noise_doubt_ratio),
-            );
-        }
-        if !(self.noise_doubt_radius_m.is_finite() && self.noise_doubt_radius_m >= 0.0) {
-            return bad(
-                "noise_doubt_radius_m",
-                format!(
-                    "must be a finite number >= 0, got {}",
-                    self.noise_doubt_radius_m
-                ),
-            );
-        }
+        non_negative("noise_self_weight", self.noise_self_weight)?;
+        below_one("noise_doubt_ratio", self.noise_doubt_ratio)?;
+        non_negative("noise_doubt_radius_m", self.noise_doubt_radius_m)?;
         if self.noise_doubt_k < 1 {
             return bad("noise_doubt_k", "must be >= 1, got 0".into());
         }
-        if !(0.0..1.0).contains(&self.foreign_colour_density) {
-            return bad(
-                "foreign_colour_density",
-                format!("must be in [0, 1), got {}", self.foreign_colour_density),
-            );
-        }
-        if !(self.floor_contact_m.is_finite() && self.floor_contact_m >= 0.0) {
-            return bad(
-                "floor_contact_m",
-                format!("must be a finite number >= 0, got {}", self.floor_contact_m),
-            );
-        }
+        below_one("foreign_colour_density", self.foreign_colour_density)?;
+        non_negative("floor_contact_m", self.floor_contact_m)?;
         Ok(())
     }
 
@@ -528,6 +503,50 @@ mod tests {
             ..Default::default()
         });
         assert!(e.starts_with("refine.noise_self_weight must be"), "{e}");
+        // The shared range checks name each of their fields.
+        for (field, c) in [
+            (
+                "inside_tolerance",
+                RefineConfig {
+                    inside_tolerance: -0.1,
+                    ..Default::default()
+                },
+            ),
+            (
+                "noise_doubt_ratio",
+                RefineConfig {
+                    noise_doubt_ratio: 1.0,
+                    ..Default::default()
+                },
+            ),
+            (
+                "noise_doubt_radius_m",
+                RefineConfig {
+                    noise_doubt_radius_m: f32::INFINITY,
+                    ..Default::default()
+                },
+            ),
+            (
+                "foreign_colour_density",
+                RefineConfig {
+                    foreign_colour_density: -0.01,
+                    ..Default::default()
+                },
+            ),
+            (
+                "floor_contact_m",
+                RefineConfig {
+                    floor_contact_m: -1.0,
+                    ..Default::default()
+                },
+            ),
+        ] {
+            let e = message(c);
+            assert!(
+                e.starts_with(&format!("refine.{field} must be")),
+                "{field}: {e}"
+            );
+        }
         assert!(RefineConfig::default().validate().is_ok());
     }
 }
