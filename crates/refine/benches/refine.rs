@@ -7,14 +7,14 @@
 //! the modes beside the paper's (issue 8: contact graph, coverage tree, weighted noise,
 //! and all three; probability noise and its wide vote for doubted labels with made-up
 //! parser probabilities, doubted in strips) on the 100k cloud; `foreign_colours` the
-//! foreign-colour step alone on it.
+//! foreign-colour step alone on it; `smooth_labels` the 5 cm smoothing alone on it.
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
 use bodyseg_refine::colour::drop_foreign_arms;
 use bodyseg_refine::{
     DbscanParams, GraphMode, NoiseMode, PointEvidence, RefineConfig, TreeMode, dbscan, refine,
-    refine_variants_with,
+    refine_variants_with, smooth_labels,
 };
 use bodyseg_testkit::human_cloud;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -194,9 +194,23 @@ fn bench_foreign_colours(c: &mut Criterion) {
     g.finish();
 }
 
+/// `smooth_radius_m`'s step alone (5 cm, as configs/benchmarks/improved.toml) on the 100k
+/// cloud.
+fn bench_smooth(c: &mut Criterion) {
+    let mut g = c.benchmark_group("smooth_labels");
+    g.sample_size(10);
+    let n = 100_000;
+    let p = human_cloud(n, SEED);
+    g.throughput(Throughput::Elements(n as u64));
+    g.bench_with_input(BenchmarkId::from_parameter(n), &p, |b, p| {
+        b.iter(|| smooth_labels(black_box(&p.cloud.positions_m), &p.cloud.labels, 0.05))
+    });
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default();
-    targets = bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colours
+    targets = bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colours, bench_smooth
 }
 criterion_main!(benches);

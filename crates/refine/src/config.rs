@@ -329,6 +329,11 @@ pub struct RefineConfig {
     /// height of the person's lowest background points) become background, metres; 0 =
     /// off (default, the paper). Not run in Reference ([`crate::floor::floor_contact`]).
     pub floor_contact_m: f32,
+    /// After the steps (and floor contact), every body-labelled point takes the body label
+    /// most body-labelled points within this radius carry, metres ([`crate::smooth_labels`]:
+    /// islands of another part too small for M, ragged part boundaries); 0 = off (default,
+    /// the paper). Not run in Reference.
+    pub smooth_radius_m: f32,
     /// Steps to run: `reference`, `M`, `N`, `M-N`, `M-R-N` (default) or any other mix.
     pub steps: Steps,
     /// Keep the labels of body points outside every box (default false: they are outliers
@@ -369,6 +374,7 @@ impl Default for RefineConfig {
             remove_through_noise: false,
             vote: VoteMode::Off,
             floor_contact_m: 0.0,
+            smooth_radius_m: 0.0,
             steps: Steps::MRN,
             keep_outside_boxes: false,
             merge_into_background: false,
@@ -437,6 +443,7 @@ impl RefineConfig {
         }
         below_one("foreign_colour_density", self.foreign_colour_density)?;
         non_negative("floor_contact_m", self.floor_contact_m)?;
+        non_negative("smooth_radius_m", self.smooth_radius_m)?;
         Ok(())
     }
 
@@ -537,6 +544,13 @@ mod tests {
                 "floor_contact_m",
                 RefineConfig {
                     floor_contact_m: -1.0,
+                    ..Default::default()
+                },
+            ),
+            (
+                "smooth_radius_m",
+                RefineConfig {
+                    smooth_radius_m: f32::NAN,
                     ..Default::default()
                 },
             ),

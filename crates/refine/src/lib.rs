@@ -18,8 +18,9 @@
 //! nearest clustered points and its own label ([`reassign_noise_weighted`]), and `noise =
 //! "probability"` weighs that own label by the parser's probability of it
 //! ([`PointEvidence::label_probs`]). After the steps, `floor_contact_m` gives lower-leg
-//! points on the floor back to the background ([`floor`]), and `foreign_colour_density`
-//! arm labels on colours the person does not wear ([`colour`]).
+//! points on the floor back to the background ([`floor`]), `smooth_radius_m` gives each
+//! body point the body label most points around it carry ([`smooth_labels`]), and
+//! `foreign_colour_density` arm labels on colours the person does not wear ([`colour`]).
 //!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).
@@ -42,7 +43,7 @@ pub use graph::{
 };
 pub use steps::{
     Vote, doubtful_as_unknown, merge_nodes, reassign_doubted_wide, reassign_noise,
-    reassign_noise_weighted, remove_nodes, restore_bridged,
+    reassign_noise_weighted, remove_nodes, restore_bridged, smooth_labels,
 };
 
 use bodyseg_core::math::Vec3;
@@ -252,6 +253,9 @@ pub fn apply_steps(
     }
     if cfg.floor_contact_m > 0.0 {
         point_labels = floor::floor_contact(positions_m, &point_labels, cfg.floor_contact_m);
+    }
+    if cfg.smooth_radius_m > 0.0 {
+        point_labels = smooth_labels(positions_m, &point_labels, cfg.smooth_radius_m);
     }
     // Nothing leaves refinement unknown: an unknown point nobody relabelled is background.
     for l in &mut point_labels {

@@ -1,8 +1,9 @@
 //! The M, R and N steps (ALGORITHM.md §5.4–§5.6), each a plain function.
 
 use crate::graph::{BodyTree, ClusterFeatures, Graph};
-use bodyseg_core::Label;
 use bodyseg_core::math::{Vec3, dist2};
+use bodyseg_core::{Label, NUM_CLASSES};
+use std::collections::HashMap;
 
 /// M — merge_nodes: every cluster that is not a tree node and lies inside at least one
 /// cluster of a different label takes the label of the largest such container (ties: the
@@ -110,7 +111,7 @@ pub fn restore_bridged(
     let key = |p: Vec3| p.map(|x| (x / cell_m).floor() as i32);
     // Cells holding body points, then their components (flood fill over 26 neighbours).
     const UNSEEN: u32 = u32::MAX;
-    let mut component: std::collections::HashMap<[i32; 3], u32> = Default::default();
+    let mut component: HashMap<[i32; 3], u32> = HashMap::default();
     for ((p, c), l) in positions_m.iter().zip(cluster_of).zip(own) {
         let body = match c {
             Some(c) => before[*c as usize].is_body(),
@@ -283,7 +284,7 @@ pub fn reassign_noise_weighted(
             }
             continue;
         };
-        let mut votes = [0f32; bodyseg_core::NUM_CLASSES];
+        let mut votes = [0f32; NUM_CLASSES];
         for &(d2, j) in &voters {
             if let Some(c) = labels[j as usize].class() {
                 votes[usize::from(c.id())] += weight(d2);
@@ -308,9 +309,6 @@ pub fn reassign_noise_weighted(
     }
     out
 }
-
-/// Cells of a wide vote ([`reassign_doubted_wide`]) per radius.
-const WIDE_VOTE_CELLS: f32 = 8.0;
 
 /// N for the labels the parser doubted (`noise = "probability"` with
 /// `noise_doubt_radius_m > 0`): every point with `relabel[i]` (a noise point) takes the
@@ -348,71 +346,26 @@ pub fn reassign_doubted_wide(
     if clustered.is_empty() || !relabel.iter().any(|&r| r) {
         return labels.to_vec();
     }
-    const C: usize = bodyseg_core::NUM_CLASSES;
     let Vote {
         k,
         radius_m,
         self_weight,
     } = vote;
-    let side = radius_m / WIDE_VOTE_CELLS;
-    let key = |p: Vec3| p.map(|x| (x / side).floor() as i32);
-    let mut cell_of: std::collections::HashMap<[i32; 3], u32> = Default::default();
-    let mut sums: Vec<[f64; 3]> = Vec::new();
-    let mut counts: Vec<[u32; C]> = Vec::new();
-    for &i in &clustered {
-        let p = positions_m[i as usize];
-        let next = sums.len() as u32;
-        let c = *cell_of.entry(key(p)).or_insert(next) as usize;
-        if c == sums.len() {
-            sums.push([0.0; 3]);
-            counts.push([0; C]);
-        }
-        for a in 0..3 {
-            sums[c][a] += f64::from(p[a]);
-        }
-        if let Some(class) = labels[i as usize].class() {
-            counts[c][usize::from(class.id())] += 1;
-        }
-    }
-    let centroids: Vec<Vec3> = sums
-        .iter()
-        .zip(&counts)
-        .map(|(s, n)| {
-            let n = f64::from(n.iter().sum::<u32>().max(1));
-            s.map(|x| (x / n) as f32)
-        })
-        .collect();
-    let cells: Vec<u32> = (0..centroids.len() as u32).collect();
-    let per_cell = clustered.len() as f32 / centroids.len().max(1) as f32;
-    let k_cells = ((k as f32 / per_cell).ceil() as usize).max(1);
-    let index = NnIndex::new(&centroids, &cells, radius_m / 3.0);
-    let r2 = radius_m * radius_m;
-    let weight = |d2: f32| 1.0 / (1.0 + d2 / r2);
+    let cells = LabelCells::new(positions_m, labels, &clustered, radius_m, k);
     let mut out = labels.to_vec();
-    let (mut voters, mut scratch) = (Vec::new(), Vec::new());
+    let mut scratch = CellScratch::default();
     let mut nearest_point: Option<Vec<Label>> = None;
     // The votes of the cells around each cell holding noise, asked from its centre: the
     // noise points of one cell share them (they differ only by their own label).
-    let mut cell_votes: std::collections::HashMap<[i32; 3], Option<[f32; C]>> = Default::default();
+    let mut cell_votes: HashMap<[i32; 3], Option<[f32; NUM_CLASSES]>> = HashMap::default();
     for i in 0..positions_m.len() {
         if !(is_noise[i] && relabel[i]) {
             continue;
         }
-        let at = key(positions_m[i]);
-        let around = *cell_votes.entry(at).or_insert_with(|| {
-            let centre = at.map(|x| (x as f32 + 0.5) * side);
-            index.knn_within(centre, k_cells, r2, &mut voters, &mut scratch);
-            (!voters.is_empty()).then(|| {
-                let mut votes = [0f32; C];
-                for &(d2, c) in &voters {
-                    let w = weight(d2);
-                    for (v, &n) in votes.iter_mut().zip(&counts[c as usize]) {
-                        *v += w * n as f32;
-                    }
-                }
-                votes
-            })
-        });
+        let at = cells.key(positions_m[i]);
+        let around = *cell_votes
+            .entry(at)
+            .or_insert_with(|| cells.votes_around(at, &mut scratch));
         let Some(mut votes) = around else {
             if labels[i].is_unknown() || self_weight == 0.0 {
                 let nearest = nearest_point
@@ -429,18 +382,223 @@ pub fn reassign_doubted_wide(
             });
             votes[c] += self_weight * p;
         }
-        // Ties: the own label, then the smaller class id.
-        let mut best = own;
-        for (c, &v) in votes.iter().enumerate() {
-            if best.is_none_or(|b| v > votes[b]) && v > 0.0 {
-                best = Some(c);
-            }
-        }
-        if let Some(b) = best {
+        if let Some(b) = winner(&votes, own) {
             out[i] = Label::from_id(b as u8).unwrap_or(labels[i]);
         }
     }
     out
+}
+
+/// S — smooth_labels (`smooth_radius_m`): every body-labelled point takes the body label
+/// most body-labelled points within `radius_m` carry (each weighing
+/// `1 / (1 + (d / radius_m)²)`, the point itself included; ties keep its own). All points
+/// are judged on the labels as given, so the result does not depend on order. Background
+/// and unknown points neither vote nor change: a body point never becomes background here.
+///
+/// Why: after M, R and N a person's labels still hold islands of another part smaller than
+/// a cluster the steps act on (a few centimetres of upper arm on the torso, a patch of
+/// lower leg on the thigh), and the parser's part boundaries are ragged; the surface around
+/// a point says better which part it lies on. A vote over body labels only, so that the
+/// floor or a wall does not outvote a foot or a hand. Measured on the tune sets of
+/// configs/benchmarks/improved.toml.
+///
+/// How: as [`reassign_doubted_wide`], the body points are counted per label in cells of
+/// `radius_m / 8`, and the points of one cell share the vote asked from its centre.
+pub fn smooth_labels(positions_m: &[Vec3], labels: &[Label], radius_m: f32) -> Vec<Label> {
+    smooth_labels_with(positions_m, labels, radius_m, true)
+}
+
+/// [`smooth_labels`], asking every point's vote when `skip_single_class` is false (the
+/// tests check that skipping changes nothing).
+fn smooth_labels_with(
+    positions_m: &[Vec3],
+    labels: &[Label],
+    radius_m: f32,
+    skip_single_class: bool,
+) -> Vec<Label> {
+    let body: Vec<u32> = (0..positions_m.len() as u32)
+        .filter(|&i| labels[i as usize].is_body())
+        .collect();
+    if body.is_empty() || radius_m <= 0.0 {
+        return labels.to_vec();
+    }
+    // Every cell within the radius votes.
+    let cells = LabelCells::new(positions_m, labels, &body, radius_m, usize::MAX);
+    // Most of a body lies farther than the radius from any other part: there the vote can
+    // only name the own label, so it is not asked. The classes of the cells per block of
+    // side a little over the radius, placed by their centroids (the voters): every voter
+    // within the radius of a cell's centre lies in the 3×3×3 blocks around the centre's
+    // block (the margin keeps rounding from breaking that).
+    let block_m = radius_m * 1.01;
+    let block_of = |p: Vec3| p.map(|x| (x / block_m).floor() as i32);
+    let mut classes_in: HashMap<[i32; 3], u16> = HashMap::default();
+    for (centroid, counts) in cells.centroids.iter().zip(&cells.counts) {
+        let present = (0..NUM_CLASSES)
+            .filter(|&c| counts[c] > 0.0)
+            .fold(0u16, |m, c| m | 1 << c);
+        *classes_in.entry(block_of(*centroid)).or_default() |= present;
+    }
+    let mut classes_around: HashMap<[i32; 3], u16> = HashMap::default();
+    let mut out = labels.to_vec();
+    let mut scratch = CellScratch::default();
+    let mut cell_votes: HashMap<[i32; 3], Option<[f32; NUM_CLASSES]>> = HashMap::default();
+    for &i in &body {
+        let i = i as usize;
+        let at = cells.key(positions_m[i]);
+        let b = block_of(cells.centre(at));
+        let around = *classes_around.entry(b).or_insert_with(|| {
+            let mut m = 0;
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let n = [b[0] + dx, b[1] + dy, b[2] + dz];
+                        m |= classes_in.get(&n).copied().unwrap_or(0);
+                    }
+                }
+            }
+            m
+        });
+        if skip_single_class && around.count_ones() == 1 {
+            continue; // Only the point's own class within reach.
+        }
+        let around = *cell_votes
+            .entry(at)
+            .or_insert_with(|| cells.votes_around(at, &mut scratch));
+        let own = labels[i].class().map(|c| usize::from(c.id()));
+        if let Some(b) = around.and_then(|v| winner(&v, own)) {
+            out[i] = Label::from_id(b as u8).unwrap_or(labels[i]);
+        }
+    }
+    out
+}
+
+/// The class with the largest vote (> 0); ties go to `own`, then to the smaller class id.
+fn winner(votes: &[f32; NUM_CLASSES], own: Option<usize>) -> Option<usize> {
+    let mut best = own;
+    for (c, &v) in votes.iter().enumerate() {
+        if best.is_none_or(|b| v > votes[b]) && v > 0.0 {
+            best = Some(c);
+        }
+    }
+    best
+}
+
+/// Cells of a wide vote ([`reassign_doubted_wide`], [`smooth_labels`]) per radius.
+const WIDE_VOTE_CELLS: f32 = 8.0;
+
+/// Voters counted per label in cells of `radius_m / WIDE_VOTE_CELLS`, for the wide votes:
+/// each cell votes from its centroid with its counts, weighing `1 / (1 + (d / radius)²)`.
+struct LabelCells {
+    side_m: f32,
+    r2: f32,
+    /// Nearest cells asked per vote (about `k` voters); `usize::MAX`: every cell within
+    /// the radius.
+    k_cells: usize,
+    /// Per cell, its voters per class (counts, as f32 to weigh them).
+    counts: Vec<[f32; NUM_CLASSES]>,
+    /// Where each cell votes from: the mean of its voters.
+    centroids: Vec<Vec3>,
+    /// Over the cells' centroids.
+    index: NnIndex,
+}
+
+/// Buffers reused between [`LabelCells::votes_around`] calls.
+#[derive(Default)]
+struct CellScratch {
+    voters: Vec<(f32, u32)>,
+    cells: Vec<(f32, u32)>,
+}
+
+impl LabelCells {
+    /// Counts the labels of `voters` (point indices, at least one) per cell; a vote asks
+    /// the nearest cells holding about `k` of them within `radius_m` (`usize::MAX`: all).
+    fn new(
+        positions_m: &[Vec3],
+        labels: &[Label],
+        voters: &[u32],
+        radius_m: f32,
+        k: usize,
+    ) -> Self {
+        let side_m = radius_m / WIDE_VOTE_CELLS;
+        let key = |p: Vec3| p.map(|x| (x / side_m).floor() as i32);
+        let mut cell_of: HashMap<[i32; 3], u32> = HashMap::default();
+        let mut sums: Vec<[f64; 3]> = Vec::new();
+        let mut counts: Vec<[f32; NUM_CLASSES]> = Vec::new();
+        for &i in voters {
+            let p = positions_m[i as usize];
+            let next = sums.len() as u32;
+            let c = *cell_of.entry(key(p)).or_insert(next) as usize;
+            if c == sums.len() {
+                sums.push([0.0; 3]);
+                counts.push([0.0; NUM_CLASSES]);
+            }
+            for a in 0..3 {
+                sums[c][a] += f64::from(p[a]);
+            }
+            if let Some(class) = labels[i as usize].class() {
+                counts[c][usize::from(class.id())] += 1.0;
+            }
+        }
+        let centroids: Vec<Vec3> = sums
+            .iter()
+            .zip(&counts)
+            .map(|(s, n)| {
+                let n = f64::from(n.iter().sum::<f32>().max(1.0));
+                s.map(|x| (x / n) as f32)
+            })
+            .collect();
+        let ids: Vec<u32> = (0..centroids.len() as u32).collect();
+        let per_cell = voters.len() as f32 / centroids.len().max(1) as f32;
+        Self {
+            side_m,
+            r2: radius_m * radius_m,
+            k_cells: if k == usize::MAX {
+                usize::MAX
+            } else {
+                ((k as f32 / per_cell).ceil() as usize).max(1)
+            },
+            counts,
+            index: NnIndex::new(&centroids, &ids, radius_m / 3.0),
+            centroids,
+        }
+    }
+
+    /// The cell key of a position.
+    fn key(&self, p: Vec3) -> [i32; 3] {
+        p.map(|x| (x / self.side_m).floor() as i32)
+    }
+
+    /// The centre of cell `at`, where its vote is asked from.
+    fn centre(&self, at: [i32; 3]) -> Vec3 {
+        at.map(|x| (x as f32 + 0.5) * self.side_m)
+    }
+
+    /// The votes per class of the cells around cell `at`, asked from its centre; `None`
+    /// when no cell lies within the radius.
+    fn votes_around(&self, at: [i32; 3], s: &mut CellScratch) -> Option<[f32; NUM_CLASSES]> {
+        let centre = self.centre(at);
+        let mut votes = [0f32; NUM_CLASSES];
+        let mut any = false;
+        let mut vote = |d2: f32, c: u32| {
+            let w = 1.0 / (1.0 + d2 / self.r2);
+            for (v, &n) in votes.iter_mut().zip(&self.counts[c as usize]) {
+                *v += w * n;
+            }
+            any = true;
+        };
+        if self.k_cells == usize::MAX {
+            // Every cell within the radius votes, in no particular order: no list to keep.
+            self.index
+                .for_each_within(centre, self.r2, &mut s.cells, &mut vote);
+        } else {
+            self.index
+                .knn_within(centre, self.k_cells, self.r2, &mut s.voters, &mut s.cells);
+            for &(d2, c) in &s.voters {
+                vote(d2, c);
+            }
+        }
+        any.then_some(votes)
+    }
 }
 
 /// Value at quantile `q` in [0, 1] of `v`, which must not be empty: the element of rank
@@ -463,7 +621,7 @@ pub(crate) fn quantile(v: &mut [f32], q: f64) -> f32 {
 /// probabilities. Relative to each label's median only the points the parser doubted more
 /// than it usually doubts that part go (tuning in `configs/benchmarks/improved.toml`).
 pub fn doubtful_as_unknown(labels: &[Label], probs: &[f32], ratio: f32) -> Vec<Label> {
-    let mut by_class: [Vec<f32>; bodyseg_core::NUM_CLASSES] = Default::default();
+    let mut by_class: [Vec<f32>; NUM_CLASSES] = Default::default();
     for (l, &p) in labels.iter().zip(probs) {
         if let Some(c) = l.class()
             && !p.is_nan()
@@ -737,20 +895,49 @@ impl NnIndex {
         best.map(|(_, j)| j)
     }
 
-    /// The at most `k` indexed points nearest to `q` within squared distance `r2`, as
-    /// `(squared distance, id)` sorted by distance then id, into `out`. Every cell within
-    /// reach of `r2` is searched, nearest first (3×3×3 when `r2` is at most a cell's side
-    /// squared: the narrow N; wider for the cell centroids of [`reassign_doubted_wide`]);
-    /// `cells` is scratch.
-    fn knn_within(
+    /// Every indexed point within squared distance `r2` of `q`, as `(squared distance,
+    /// id)` in no particular order (the same for the same query), into `out`: for votes
+    /// that sum all of them ([`smooth_labels`]); `cells` is scratch.
+    #[cfg(test)]
+    fn within(&self, q: Vec3, r2: f32, out: &mut Vec<(f32, u32)>, cells: &mut Vec<(f32, u32)>) {
+        out.clear();
+        self.for_each_within(q, r2, cells, |d2, j| out.push((d2, j)));
+    }
+
+    /// Calls `f(squared distance, id)` for every indexed point within `r2` of `q`, in the
+    /// order of [`Self::within`]; `cells` is scratch.
+    fn for_each_within(
         &self,
         q: Vec3,
-        k: usize,
         r2: f32,
-        out: &mut Vec<(f32, u32)>,
         cells: &mut Vec<(f32, u32)>,
+        f: impl FnMut(f32, u32),
     ) {
-        out.clear();
+        self.cells_within(q, r2, cells);
+        self.for_each_in_cells(q, r2, cells, f);
+    }
+
+    /// Calls `f(squared distance, id)` for every point of `cells` within `r2` of `q`.
+    fn for_each_in_cells(
+        &self,
+        q: Vec3,
+        r2: f32,
+        cells: &[(f32, u32)],
+        mut f: impl FnMut(f32, u32),
+    ) {
+        for &(_, c) in cells {
+            let r = self.cell_start[c as usize] as usize..self.cell_start[c as usize + 1] as usize;
+            for (&j, &p) in self.items[r.clone()].iter().zip(&self.pts[r]) {
+                let d2 = dist2(q, p);
+                if d2 <= r2 {
+                    f(d2, j);
+                }
+            }
+        }
+    }
+
+    /// The non-empty cells whose box lies within `r2` of `q`, as (squared distance, cell).
+    fn cells_within(&self, q: Vec3, r2: f32, cells: &mut Vec<(f32, u32)>) {
         cells.clear();
         let kc = [0, 1, 2].map(|a| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32);
         let reach = ((r2.sqrt() * self.inv_side).ceil() as i32).max(1);
@@ -773,7 +960,36 @@ impl NnIndex {
                 }
             }
         }
-        cells.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    }
+
+    /// The at most `k` indexed points nearest to `q` within squared distance `r2`, as
+    /// `(squared distance, id)` sorted by distance then id, into `out`. Every cell within
+    /// reach of `r2` is searched, nearest first (3×3×3 when `r2` is at most a cell's side
+    /// squared: the narrow N; wider for the cell centroids of [`reassign_doubted_wide`]);
+    /// `cells` is scratch.
+    fn knn_within(
+        &self,
+        q: Vec3,
+        k: usize,
+        r2: f32,
+        out: &mut Vec<(f32, u32)>,
+        cells: &mut Vec<(f32, u32)>,
+    ) {
+        out.clear();
+        self.cells_within(q, r2, cells);
+        let by_distance = |a: &(f32, u32), b: &(f32, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+        let held: usize = cells
+            .iter()
+            .map(|&(_, c)| (self.cell_start[c as usize + 1] - self.cell_start[c as usize]) as usize)
+            .sum();
+        if held <= k {
+            // Every point within r2 is kept: gather, then one sort (the sorted insertion
+            // below costs O(n·k)).
+            self.for_each_in_cells(q, r2, cells, |d2, j| out.push((d2, j)));
+            out.sort_unstable_by(by_distance);
+            return;
+        }
+        cells.sort_unstable_by(by_distance);
         for &(d, c) in cells.iter() {
             if out.len() == k && out.last().is_some_and(|&(w, _)| d > w) {
                 break;
@@ -888,8 +1104,13 @@ mod tests {
             let (mut out, mut cells) = (Vec::new(), Vec::new());
             for _ in 0..20 {
                 let q = [rng() * 0.7 - 0.1, rng() * 0.6 - 0.1, rng() * 0.5 - 0.1];
-                // Within one cell's side, and (a wide N) beyond it.
-                for (k, r) in [(1 + case % 9, eps), (5 + 7 * (case % 13), 2.6 * eps)] {
+                // Within one cell's side, beyond it (a wide N), and every point within reach
+                // (smoothing: k larger than the cells hold).
+                for (k, r) in [
+                    (1 + case % 9, eps),
+                    (5 + 7 * (case % 13), 2.6 * eps),
+                    (usize::MAX / 2, 2.6 * eps),
+                ] {
                     index.knn_within(q, k, r * r, &mut out, &mut cells);
                     let mut want: Vec<(f32, u32)> = idx
                         .iter()
@@ -897,6 +1118,10 @@ mod tests {
                         .filter(|&(d2, _)| d2 <= r * r)
                         .collect();
                     want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                    let mut all = Vec::new();
+                    index.within(q, r * r, &mut all, &mut cells);
+                    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                    assert_eq!(all, want, "case {case}, all within {r}");
                     want.truncate(k);
                     assert_eq!(out, want, "case {case}, k {k}, r {r}");
                 }
@@ -948,6 +1173,116 @@ mod tests {
         assert_eq!(&out[44..], &[torso, torso]);
         let all = reassign_noise_weighted(&pos, &labels, &is_noise, None, None, narrow);
         assert_eq!(all[43], torso, "narrow, every noise point");
+    }
+
+    #[test]
+    fn smoothing_gives_islands_to_the_part_around_them_and_never_touches_background() {
+        use bodyseg_core::Class;
+        let torso = Label::from(Class::Torso);
+        let arm = Label::from(Class::UpperArms);
+        let leg = Label::from(Class::LowerLegs);
+        // A 30 x 30 torso patch, 1 cm apart, holding a 2 x 2 island of upper arm.
+        let mut pos = Vec::new();
+        let mut labels = Vec::new();
+        for i in 0..30 {
+            for j in 0..30 {
+                pos.push([i as f32 * 0.01, j as f32 * 0.01, 1.0]);
+                let island = (14..16).contains(&i) && (14..16).contains(&j);
+                labels.push(if island { arm } else { torso });
+            }
+        }
+        // A foot: 6 lower-leg points on a floor of 400 background points, 1 m away from
+        // the torso; and an unknown point inside the torso patch.
+        for i in 0..20 {
+            for j in 0..20 {
+                pos.push([3.0 + i as f32 * 0.01, j as f32 * 0.01, 0.0]);
+                labels.push(Label::BACKGROUND);
+            }
+        }
+        for k in 0..6 {
+            pos.push([3.1 + 0.005 * k as f32, 0.1, 0.005]);
+            labels.push(leg);
+        }
+        pos.push([0.105, 0.105, 1.0]);
+        labels.push(Label::UNKNOWN);
+        let out = smooth_labels(&pos, &labels, 0.05);
+        for (i, (o, l)) in out.iter().zip(&labels).enumerate() {
+            if *l == arm {
+                assert_eq!(*o, torso, "island point {i} goes to the torso around it");
+            } else {
+                assert_eq!(o, l, "point {i} ({l:?}) keeps its label");
+            }
+        }
+        // The result does not depend on the order of the points.
+        let rev_pos: Vec<Vec3> = pos.iter().rev().copied().collect();
+        let rev_labels: Vec<Label> = labels.iter().rev().copied().collect();
+        let rev_out: Vec<Label> = smooth_labels(&rev_pos, &rev_labels, 0.05)
+            .into_iter()
+            .rev()
+            .collect();
+        assert_eq!(rev_out, out);
+        // Off: unchanged.
+        assert_eq!(smooth_labels(&pos, &labels, 0.0), labels);
+    }
+
+    #[test]
+    fn smoothing_skips_only_votes_that_cannot_change_a_label() {
+        let mut rng = bodyseg_testkit_free_rng(11);
+        let mut moved_cases = 0;
+        for case in 0..30 {
+            // Parts as slabs along x with islands and strays of other parts, some
+            // background and unknown, at several densities and radii.
+            let n = 2000 + 397 * case;
+            let width = 0.05 + 0.01 * (case % 7) as f32;
+            let mut pos = Vec::with_capacity(n);
+            let mut labels = Vec::with_capacity(n);
+            for _ in 0..n {
+                let p = [rng() * 0.6, rng() * 0.3, rng() * 0.2];
+                let slab = (p[0] / width) as u8 % 6 + 1;
+                let r = rng();
+                let id = if r < 0.05 {
+                    0
+                } else if r < 0.08 {
+                    1 + (rng() * 6.0) as u8 % 6
+                } else {
+                    slab
+                };
+                pos.push(p);
+                labels.push(if r > 0.99 {
+                    Label::UNKNOWN
+                } else {
+                    Label::from_id_or_unknown(id)
+                });
+            }
+            let radius = 0.02 + 0.01 * (case % 5) as f32;
+            let fast = smooth_labels_with(&pos, &labels, radius, true);
+            let slow = smooth_labels_with(&pos, &labels, radius, false);
+            assert_eq!(fast, slow, "case {case}");
+            moved_cases += usize::from(slow != labels);
+        }
+        assert!(
+            moved_cases >= 20,
+            "the vote moved labels in {moved_cases} of 30 cases"
+        );
+    }
+
+    #[test]
+    fn smoothing_keeps_a_straight_boundary_between_two_parts() {
+        let torso = Label::from(bodyseg_core::Class::Torso);
+        let arm = Label::from(bodyseg_core::Class::UpperArms);
+        // Two halves of a plane: a point's own half always holds the larger vote (the
+        // boundary column is nearer its own side's points), so nothing moves.
+        let mut pos = Vec::new();
+        let mut labels = Vec::new();
+        for i in 0..40 {
+            for j in 0..20 {
+                pos.push([i as f32 * 0.01 + 0.0005, j as f32 * 0.01, 1.0]);
+                labels.push(if i < 20 { torso } else { arm });
+            }
+        }
+        let out = smooth_labels(&pos, &labels, 0.05);
+        let moved = out.iter().zip(&labels).filter(|(a, b)| a != b).count();
+        assert!(moved <= 4, "{moved} points crossed a straight boundary");
     }
 
     /// A tiny xorshift so this unit test needs no dev-dependency.
