@@ -104,6 +104,37 @@ fn labels_and_file_modes_on_a_recording() {
     );
     assert_ok(&out, "boxes --mode file");
     assert_eq!(read_boxes(&d.join("file.json")).expect("file"), truth);
+    // Geometry mode on a recording splits by the points' colours too: it reads the colour
+    // images, and says which one is missing.
+    let geometry = |out: &str| {
+        [
+            "boxes",
+            "--recording",
+            "rec",
+            "--frame",
+            "000000",
+            "--mode",
+            "geometry",
+            "--out",
+            out,
+        ]
+        .map(String::from)
+    };
+    let args = geometry("geometry.json");
+    let out = bodyseg(d, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_ok(&out, "boxes --mode geometry --recording");
+    let found = read_boxes(&d.join("geometry.json")).expect("geometry");
+    assert!(
+        match_boxes(&truth.boxes, &found.boxes).is_good(),
+        "{found:?}"
+    );
+    std::fs::remove_file(d.join("rec/cam0/color/000000.png")).expect("colour image");
+    let args = geometry("none.json");
+    assert_fails(
+        d,
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["cam0", "000000.png"],
+    );
 }
 
 /// Asserts exit status 1, one `error:` line holding every needle, no new file.

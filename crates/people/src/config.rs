@@ -132,6 +132,11 @@ pub struct BoxesConfig {
     /// continuous column; a robot arm's elbow or a raised hand is not. In [0, 1].
     /// Default 0.7.
     pub min_column_fill: f32,
+    /// Geometry mode: use the points' colours, where the cloud has them, in the split
+    /// between people and what is nobody's (a robot): the robot's part spreads cheaply
+    /// only through colours no person there wears, so a sleeve or a hand reaching along
+    /// a robot link stays its owner's. false = positions only. Default true.
+    pub colour_split: bool,
 }
 
 impl Default for BoxesConfig {
@@ -156,6 +161,7 @@ impl Default for BoxesConfig {
             max_reach_m: 0.9,
             column_radius_m: 0.2,
             min_column_fill: 0.7,
+            colour_split: true,
         }
     }
 }

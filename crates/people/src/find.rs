@@ -18,7 +18,11 @@ pub fn find_boxes(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Result<PersonBoxes
     cloud.validate()?;
     let boxes = match cfg.mode {
         BoxMode::Labels => labels_mode(cloud, cfg),
-        BoxMode::Geometry => geometry_mode(&cloud.positions_m, cfg),
+        BoxMode::Geometry => geometry_mode(
+            &cloud.positions_m,
+            cloud.colors.as_deref().filter(|_| cfg.colour_split),
+            cfg,
+        ),
         BoxMode::File => return Err(PeopleError::FileMode),
     };
     Ok(PersonBoxes {
@@ -566,7 +570,11 @@ pub(crate) fn fit_ground(centers: &[Vec3], cfg: &BoxesConfig) -> Option<Plane> {
 /// Geometry mode: voxels → RANSAC ground plane removed → clusters → heads (height
 /// maxima with a continuous column below) → split between heads and what no person can
 /// own ([`split_people`]) → size filters → boxes on the ground plane. Labels are not used.
-fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
+fn geometry_mode(
+    positions: &[Vec3],
+    colors: Option<&[[u8; 3]]>,
+    cfg: &BoxesConfig,
+) -> Vec<PersonBox> {
     let all = voxelize(
         positions.iter().enumerate().map(|(i, &p)| (i, p, 0)),
         cfg.voxel_m,
@@ -597,6 +605,7 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
         .collect();
     let graph = Graph::new(&all.centers, cfg.person_gap_m);
     let index = VoxelPoints::new(&all);
+    let chroma = colors.map(|c| voxel_chroma(&all, c));
     let mut boxes = Vec::new();
     for cluster in graph.components(&all.centers, &keep) {
         if cluster.len() < cfg.min_voxels {
@@ -606,7 +615,15 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
         if heads.is_empty() {
             continue;
         }
-        let groups = split_people(&graph, &cluster, &heads, &all.centers, &heights, cfg);
+        let groups = split_people(
+            &graph,
+            &cluster,
+            &heads,
+            &all.centers,
+            &heights,
+            chroma.as_deref(),
+            cfg,
+        );
         for group in groups {
             let id = boxes.len() as u32;
             // No labels: the yaw follows all the person's voxels. (A band of heights below
@@ -653,13 +670,17 @@ fn geometry_mode(positions: &[Vec3], cfg: &BoxesConfig) -> Vec<PersonBox> {
 /// person's own arm, nearer their head than anything that is not them, stays theirs. A
 /// path leaving a head sideways within [`HEAD_CONTACT_DEPTH_M`] of its top pays
 /// [`CONTACT_PENALTY_M`], so an arm touching the side of a neighbour's head or neck stays
-/// its owner's.
+/// its owner's. With the points' colours (`chroma`, [`voxel_chroma`]), the part that is
+/// nobody's spreads at [`FOREIGN_COLOUR_SCALE`] instead into voxels of a person's colours
+/// that it does not wear itself ([`person_coloured`]): a person's arm lying along a robot
+/// link is then theirs, as it is not on positions alone.
 fn split_people(
     graph: &Graph,
     cluster: &[u32],
     heads: &[u32],
     centers: &[Vec3],
     heights: &[f32],
+    chroma: Option<&[Option<u16>]>,
     cfg: &BoxesConfig,
 ) -> Vec<Vec<u32>> {
     let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
@@ -713,10 +734,7 @@ fn split_people(
                 )
             })
             .collect();
-        // What is nobody's spreads at NOBODY_LENGTH_SCALE of the cost (see there).
-        let mut scale = vec![1.0; heads.len()];
-        scale.push(NOBODY_LENGTH_SCALE);
-        let owner = graph.split_scaled(centers, cluster, &seeds, &scale, |i, j| {
+        let penalty = |i: u32, j: u32| {
             let (pi, pj) = (centers[i as usize], centers[j as usize]);
             let (hi, hj) = (heights[i as usize], heights[j as usize]);
             let leaves = head_at.iter().any(|&(top, band)| {
@@ -726,7 +744,42 @@ fn split_people(
                     && xy_dist(pj, top) > HEAD_CONTACT_RADIUS_M
             });
             if leaves { CONTACT_PENALTY_M } else { 0.0 }
-        });
+        };
+        // What is nobody's spreads at NOBODY_LENGTH_SCALE of the cost (see there).
+        let nobody = heads.len();
+        let plain = |g: usize, _: u32| {
+            if g == nobody {
+                NOBODY_LENGTH_SCALE
+            } else {
+                1.0
+            }
+        };
+        let mut owner = graph.split_scaled(centers, cluster, &seeds, plain, penalty);
+        // With colours, again, the part that is nobody's now spreading slowly through a
+        // person's colours that the part it claimed on positions hardly wears
+        // (person_coloured).
+        if let Some(chroma) = chroma {
+            let claimed: Vec<u32> = cluster
+                .iter()
+                .zip(&owner)
+                .filter(|&(_, &g)| g == nobody)
+                .map(|(&j, _)| j)
+                .collect();
+            let foreign = person_coloured(
+                chroma,
+                cluster,
+                heads,
+                centers,
+                &claimed,
+                cfg.column_radius_m,
+            );
+            let scale = |g: usize, j: u32| match (g == nobody, foreign[j as usize]) {
+                (false, _) => 1.0,
+                (true, true) => FOREIGN_COLOUR_SCALE,
+                (true, false) => NOBODY_LENGTH_SCALE,
+            };
+            owner = graph.split_scaled(centers, cluster, &seeds, scale, penalty);
+        }
         for (&i, &g) in cluster.iter().zip(&owner) {
             // Group `heads.len()` is nobody's: dropped.
             if let Some(group) = groups.get_mut(g) {
@@ -758,6 +811,120 @@ fn split_people(
 /// of the box study: `robot_cell` geometry 700–703 80% → 96%, 500–503 96% → 97%, 400–403
 /// 87% (one frame lost, one won), no other cell changed.
 const NOBODY_LENGTH_SCALE: f32 = 0.5;
+/// Geometry mode's split with colours: the part that is nobody's spreads into a voxel of a
+/// person's colour ([`person_coloured`]: a sleeve or a hand reaching along a robot link)
+/// at this fraction of a person's cost instead of [`NOBODY_LENGTH_SCALE`].
+const FOREIGN_COLOUR_SCALE: f32 = 1.5;
+/// A colour is a person's when at least this fraction of the coloured voxels in the column
+/// below their head share its chromaticity bin or a neighbouring one ([`person_coloured`]).
+const PERSON_COLOUR_DENSITY: f32 = 0.03;
+/// A colour is the robot's (what the part that is nobody's claims on positions) at this
+/// fraction of that part's coloured voxels: higher than a person's, since the arm it may
+/// have taken along a link is part of it ([`person_coloured`]).
+const NOBODY_COLOUR_DENSITY: f32 = 0.2;
+/// Chromaticity bins per unit (linear r/(r+g+b), g/(r+g+b)).
+const CHROMA_BINS: usize = 50;
+
+/// Per voxel, its points' mean colour as a linear-RGB chromaticity bin
+/// (`r_bin * CHROMA_BINS + g_bin`); `None` where it is too dark to tell (black: no colour).
+fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
+    // sRGB to linear, once per byte value.
+    let lin: Vec<f32> = (0..256)
+        .map(|v| {
+            let c = v as f32 / 255.0;
+            if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            }
+        })
+        .collect();
+    let mut sums = vec![[0f32; 3]; all.centers.len()];
+    for (&i, &v) in all.points.iter().zip(&all.point_voxel) {
+        if let Some(c) = colors.get(i as usize) {
+            for a in 0..3 {
+                sums[v as usize][a] += lin[usize::from(c[a])];
+            }
+        }
+    }
+    sums.iter()
+        .zip(&all.counts)
+        .map(|(s, &n)| {
+            let total = s[0] + s[1] + s[2];
+            // Darker than ~sRGB 60 on average: shading, not a colour.
+            if total < 0.045 * 3.0 * n as f32 {
+                return None;
+            }
+            let bin = |x: f32| ((x / total * CHROMA_BINS as f32) as usize).min(CHROMA_BINS - 1);
+            Some((bin(s[0]) * CHROMA_BINS + bin(s[1])) as u16)
+        })
+        .collect()
+}
+
+/// Per voxel of `cluster` (indexed by voxel): whether the part that is nobody's spreads
+/// into it at [`FOREIGN_COLOUR_SCALE`]: its colour is one of a person's — at least
+/// [`PERSON_COLOUR_DENSITY`] of the coloured voxels within `column_radius_m` of a head's
+/// vertical (head, shirt, trousers: where nothing but the person stands) share its
+/// chromaticity bin or a neighbouring one — and not one of what the part that is nobody's
+/// claimed on positions alone (`claimed`; [`NOBODY_COLOUR_DENSITY`]). That part is mostly
+/// the robot, so its colours are the robot's; an arm it took along a link is a small share
+/// of it. A sleeve or a hand reaching along a robot link then stays its owner's, while the
+/// link, of the robot's colour, is still claimed from the pedestal at
+/// [`NOBODY_LENGTH_SCALE`]. Where the robot wears a person's colour the split is as
+/// without colours.
+fn person_coloured(
+    chroma: &[Option<u16>],
+    cluster: &[u32],
+    heads: &[u32],
+    centers: &[Vec3],
+    claimed: &[u32],
+    column_radius_m: f32,
+) -> Vec<bool> {
+    let histogram = |members: &mut dyn Iterator<Item = u32>| {
+        let mut hist = vec![0u32; CHROMA_BINS * CHROMA_BINS];
+        let mut total = 0u32;
+        for j in members {
+            if let Some(b) = chroma[j as usize] {
+                hist[usize::from(b)] += 1;
+                total += 1;
+            }
+        }
+        (hist, total)
+    };
+    // Whether at least `density` of a histogram's voxels lie within a bin of `b`.
+    let common = |(hist, total): &(Vec<u32>, u32), b: u16, density: f32| {
+        let (r, g) = (usize::from(b) / CHROMA_BINS, usize::from(b) % CHROMA_BINS);
+        let mut n = 0;
+        for rr in r.saturating_sub(1)..=(r + 1).min(CHROMA_BINS - 1) {
+            for gg in g.saturating_sub(1)..=(g + 1).min(CHROMA_BINS - 1) {
+                n += hist[rr * CHROMA_BINS + gg];
+            }
+        }
+        *total > 0 && n as f32 >= density * *total as f32
+    };
+    let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let people: Vec<(Vec<u32>, u32)> = heads
+        .iter()
+        .map(|&h| {
+            let top = centers[h as usize];
+            histogram(
+                &mut cluster
+                    .iter()
+                    .copied()
+                    .filter(|&j| xy_dist(centers[j as usize], top) <= column_radius_m),
+            )
+        })
+        .collect();
+    let nobody = histogram(&mut claimed.iter().copied());
+    let mut out = vec![false; chroma.len()];
+    for &j in cluster {
+        if let Some(b) = chroma[j as usize] {
+            out[j as usize] = people.iter().any(|p| common(p, b, PERSON_COLOUR_DENSITY))
+                && !common(&nobody, b, NOBODY_COLOUR_DENSITY);
+        }
+    }
+    out
+}
 /// How far beyond a person's reach (`max_reach_m`, [`LEG_RADIUS_M`]) a voxel must lie to
 /// seed the part of a cluster that is nobody's, metres: a hand stretched a little past
 /// the reach limit is cut, but does not pull the person's forearm away with it.
@@ -1150,6 +1317,57 @@ fn column_slices(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_a_person_s_colours_the_robot_does_not_wear_slow_the_robot_s_spread() {
+        let bin = |r: usize, g: usize| Some((r * CHROMA_BINS + g) as u16);
+        // A person at x = 0 (head 0, then 20 voxels in the column: 10 shirt, 10 skin) and
+        // beside them, 1 m away, a robot of 40 voxels: 39 orange, one (under the density)
+        // in the shirt's colour.
+        let (shirt, skin, orange) = (bin(15, 15), bin(25, 17), bin(32, 16));
+        let mut centers = vec![[0.0, 0.0, 1.8]];
+        let mut chroma = vec![skin];
+        for k in 0..20 {
+            centers.push([0.05, 0.0, 1.6 - 0.05 * k as f32]);
+            chroma.push(if k < 10 { shirt } else { skin });
+        }
+        for k in 0..40 {
+            centers.push([1.0, 0.0, 0.1 + 0.025 * k as f32]);
+            chroma.push(if k == 0 { shirt } else { orange });
+        }
+        // Then the voxels to judge, all out of every column and seed: a sleeve (shirt), a
+        // hand (a bin beside the skin's), a robot link (orange), one too dark, one of a
+        // colour nobody wears.
+        let judged = [shirt, bin(26, 17), orange, None, bin(10, 30)];
+        for c in judged {
+            centers.push([0.5, 0.0, 1.2]);
+            chroma.push(c);
+        }
+        let cluster: Vec<u32> = (0..centers.len() as u32).collect();
+        let robot: Vec<u32> = (21..61).collect();
+        let got = person_coloured(&chroma, &cluster, &[0], &centers, &robot, 0.2);
+        assert_eq!(&got[61..], &[true, true, false, false, false]);
+        // A shirt of the robot's colour: nothing is slowed any more than without colours.
+        let mut same = chroma.clone();
+        for c in &mut same[1..11] {
+            *c = orange;
+        }
+        same[61] = orange;
+        let got = person_coloured(&same, &cluster, &[0], &centers, &robot, 0.2);
+        assert_eq!(&got[61..], &[false, true, false, false, false]);
+        // Nothing claimed with a colour (a dark pedestal alone): a person's colours slow it.
+        let dark: Vec<Option<u16>> = (0..chroma.len())
+            .map(|j| {
+                if robot.contains(&(j as u32)) {
+                    None
+                } else {
+                    chroma[j]
+                }
+            })
+            .collect();
+        let got = person_coloured(&dark, &cluster, &[0], &centers, &robot, 0.2);
+        assert_eq!(&got[61..], &[true, true, false, false, false]);
+    }
 
     /// Voxel centres at (`x`, 0, z) for every z in `z_m`.
     fn line(out: &mut Vec<Vec3>, x: f32, z_m: &[f32]) {

@@ -262,18 +262,18 @@ impl Graph {
         seeds: &[Vec<u32>],
         penalty: impl Fn(u32, u32) -> f32,
     ) -> Vec<usize> {
-        self.split_scaled(centers, members, seeds, &[], penalty)
+        self.split_scaled(centers, members, seeds, |_, _| 1.0, penalty)
     }
 
-    /// [`Graph::split_with`] where group k's edge lengths count `scale[k]` times (1 for a
-    /// group beyond `scale`): a group that spreads more cheaply claims more of what lies
-    /// between it and the others.
+    /// [`Graph::split_with`] where group g's edge lengths into voxel j count `scale(g, j)`
+    /// times: a group that spreads more cheaply claims more of what lies between it and
+    /// the others.
     pub fn split_scaled(
         &self,
         centers: &[Vec3],
         members: &[u32],
         seeds: &[Vec<u32>],
-        scale: &[f32],
+        scale: impl Fn(usize, u32) -> f32,
         penalty: impl Fn(u32, u32) -> f32,
     ) -> Vec<usize> {
         use std::cmp::Reverse;
@@ -306,8 +306,7 @@ impl Graph {
                 if kj >= members.len() {
                     continue;
                 }
-                let nd =
-                    d + scale.get(g).copied().unwrap_or(1.0) * d2.sqrt() + penalty(members[k], j);
+                let nd = d + scale(g, j) * d2.sqrt() + penalty(members[k], j);
                 if nd < best[kj].0 {
                     best[kj] = (nd, g);
                     heap.push(Reverse((OrdF32(nd), kj, g)));

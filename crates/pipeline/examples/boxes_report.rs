@@ -1,5 +1,6 @@
 //! Issue 6's report: person boxes found in synthetic recordings of the three presets, per
-//! mode (labels with the simulated parser's predicted labels; geometry, labels unused),
+//! mode (labels with the simulated parser's predicted labels; geometry, labels unused,
+//! with the points' colours and without them),
 //! against the true boxes: the fraction of frames where every person is matched by
 //! exactly one box with 3D IoU ≥ 0.5 (exact oriented-box IoU) and no box is extra.
 //!
@@ -11,6 +12,14 @@ use bodyseg_people::{BoxMode, BoxesConfig};
 use bodyseg_pipeline::box_stats;
 use bodyseg_synth::{Synth, preset};
 
+/// A row's mode: geometry without colours is the same split on positions only.
+fn row_name(cfg: &BoxesConfig) -> String {
+    match (cfg.mode, cfg.colour_split) {
+        (BoxMode::Geometry, false) => "geometry (no colours)".into(),
+        (mode, _) => mode.name().into(),
+    }
+}
+
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
     let frames: usize = args.next().and_then(|n| n.parse().ok()).unwrap_or(25);
@@ -21,6 +30,11 @@ fn main() -> anyhow::Result<()> {
         BoxesConfig::default(),
         BoxesConfig {
             mode: BoxMode::Geometry,
+            ..BoxesConfig::default()
+        },
+        BoxesConfig {
+            mode: BoxMode::Geometry,
+            colour_split: false,
             ..BoxesConfig::default()
         },
     ];
@@ -40,7 +54,7 @@ fn main() -> anyhow::Result<()> {
         for (cfg, s) in configs.iter().zip(&totals) {
             println!(
                 "| {name} | {} | {} | {:.1}% | {} | {} | {} | {:.3} |",
-                cfg.mode.name(),
+                row_name(cfg),
                 s.frames,
                 100.0 * s.good_fraction(),
                 s.people,
@@ -51,7 +65,7 @@ fn main() -> anyhow::Result<()> {
             if !s.bad_frames.is_empty() {
                 eprintln!(
                     "{name} {}: bad (seed*10000+frame) {:?}",
-                    cfg.mode.name(),
+                    row_name(cfg),
                     s.bad_frames
                 );
             }

@@ -4,9 +4,9 @@
 use crate::projection_study::{camera_images, parsing_images};
 use anyhow::Result;
 use bodyseg_calib::BackProjectOptions;
-use bodyseg_core::{LabeledCloud, PersonBox};
+use bodyseg_core::{LabeledCloud, PersonBox, RgbImage};
 use bodyseg_people::{BoxesConfig, box_iou, find_boxes};
-use bodyseg_project::{FrameProjector, ProjectConfig};
+use bodyseg_project::{FrameProjector, Hits, ProjectConfig};
 use bodyseg_synth::{Synth, SynthFrame};
 
 /// A found box matches a true one when their IoU is at least this (issue 6).
@@ -137,13 +137,31 @@ pub fn study_frame(
     index: usize,
 ) -> Result<(SynthFrame, LabeledCloud)> {
     let frame = synth.frame(index);
-    let labels = parsing_images(synth.written_rig(), &frame);
+    let rig = synth.written_rig();
+    let labels = parsing_images(rig, &frame);
     let images = camera_images(&frame, &labels);
-    let cloud = projector.project_frame(
+    let mut cloud = LabeledCloud::default();
+    let mut hits = Hits::default();
+    projector.project_frame_keeping_hits(
         &images,
         &BackProjectOptions::default(),
         &ProjectConfig::default(),
+        &mut cloud,
+        &mut hits,
     )?;
+    // The points' camera colours, as a coloured cloud (a PCD) would have them.
+    let colour: Vec<RgbImage> = rig
+        .cameras
+        .iter()
+        .zip(&frame.cameras)
+        .map(|(camera, images)| RgbImage {
+            width: camera.color.width,
+            height: camera.color.height,
+            rgb: images.color.clone(),
+        })
+        .collect();
+    let colour: Vec<&RgbImage> = colour.iter().collect();
+    cloud.colors = Some(hits.colors_of(&cloud, &colour));
     Ok((frame, cloud))
 }
 

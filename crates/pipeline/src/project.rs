@@ -2,15 +2,16 @@
 //! labelled world-frame PLY.
 
 use crate::config::PipelineConfig;
-use crate::frame_files::{read_depth, read_parsing};
+use crate::frame_files::{read_color, read_depth, read_parsing};
 use crate::fs::write_text;
 use crate::refine::resolved_config_path;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
-use bodyseg_core::{LabelImage, LabeledCloud};
+use bodyseg_core::{LabelImage, LabeledCloud, RgbImage};
 use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
-use bodyseg_project::{CameraImages, ProjectMode};
+use bodyseg_people::BoxMode;
+use bodyseg_project::{CameraImages, FrameProjector, Hits, ProjectMode};
 use std::path::{Path, PathBuf};
 
 /// What [`project_file`] reads, writes and how.
@@ -71,6 +72,8 @@ pub fn parsing_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
 struct CameraFiles {
     depth: DepthImage,
     labels: LabelImage,
+    /// Read only when the points' colours are wanted (geometry-mode boxes).
+    colour: Option<RgbImage>,
 }
 
 /// Reads and checks one camera's depth and parsing PNGs.
@@ -81,7 +84,17 @@ fn read_camera(rig: &Rig, index: usize, opts: &ProjectOptions) -> Result<CameraF
         .with_context(|| format!("camera {name} of rig.toml"))?;
     let (depth, _) = read_depth(&opts.recording, camera, &opts.frame)?;
     let (labels, _) = read_parsing(&opts.recording, camera, &opts.frame)?;
-    Ok(CameraFiles { depth, labels })
+    let boxes = &opts.config.boxes;
+    let colour = if boxes.mode == BoxMode::Geometry && boxes.colour_split {
+        Some(read_color(&opts.recording, camera, &opts.frame)?.0)
+    } else {
+        None
+    };
+    Ok(CameraFiles {
+        depth,
+        labels,
+        colour,
+    })
 }
 
 /// Checks that a frame stem names a file, not a path.
@@ -124,8 +137,32 @@ pub(crate) fn read_and_project(opts: &ProjectOptions) -> Result<(Rig, LabeledClo
                 labels: &c.labels,
             })
             .collect();
-        bodyseg_project::project_frame(&rig, &images, &cfg.backproject.options(), &cfg.project)
-            .with_context(|| format!("{}: frame {}", opts.recording.display(), opts.frame))
+        let context = || format!("{}: frame {}", opts.recording.display(), opts.frame);
+        let colour: Option<Vec<&RgbImage>> = cameras.iter().map(|c| c.colour.as_ref()).collect();
+        let Some(colour) = colour else {
+            return bodyseg_project::project_frame(
+                &rig,
+                &images,
+                &cfg.backproject.options(),
+                &cfg.project,
+            )
+            .with_context(context);
+        };
+        // Geometry-mode boxes split people from what is nobody's by colour too.
+        let (mut cloud, mut hits) = (LabeledCloud::default(), Hits::default());
+        FrameProjector::new(&rig)
+            .and_then(|p| {
+                p.project_frame_keeping_hits(
+                    &images,
+                    &cfg.backproject.options(),
+                    &cfg.project,
+                    &mut cloud,
+                    &mut hits,
+                )
+            })
+            .with_context(context)?;
+        cloud.colors = Some(hits.colors_of(&cloud, &colour));
+        Ok(cloud)
     })?;
     let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
     let mode = cfg.project.mode;

@@ -315,10 +315,12 @@ impl FrameProcessor {
         self.segmenter.is_some()
     }
 
-    /// Whether the refinement needs the points' camera colours (then the colour images are
-    /// read, and sampled where the points land).
+    /// Whether the refinement or the box finder needs the points' camera colours (then the
+    /// colour images are read, and sampled where the points land): foreign colours, and
+    /// geometry mode's split between people and what is nobody's.
     fn needs_colours(&self) -> bool {
         self.config.refine.foreign_colour_density > 0.0
+            || (self.config.boxes.mode == BoxMode::Geometry && self.config.boxes.colour_split)
     }
 
     /// Reads and decodes one frame's images and runs the parser (stages `read`, `parse`).

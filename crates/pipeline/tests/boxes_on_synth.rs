@@ -6,8 +6,9 @@
 //! 4 apart; `cargo test --release -p bodyseg-pipeline --test boxes_on_synth -- --ignored`).
 //! Frames are spread by `BODYSEG_BOXES_SEED` (default 100) for the quick test.
 
-use bodyseg_people::{BoxMode, BoxesConfig};
-use bodyseg_pipeline::{BoxStats, box_stats};
+use bodyseg_people::{BoxMode, BoxesConfig, find_boxes};
+use bodyseg_pipeline::{BoxStats, box_stats, match_boxes, study_frame};
+use bodyseg_project::FrameProjector;
 use bodyseg_synth::{Synth, preset};
 
 fn configs() -> [BoxesConfig; 2] {
@@ -81,4 +82,33 @@ fn labels_mode_finds_people_whose_legs_the_cameras_miss() {
         "bad frames {:?}",
         stats[0].bad_frames
     );
+}
+
+#[test]
+fn geometry_mode_keeps_an_arm_reaching_along_a_robot_link_by_its_colour() {
+    // robot_cell seed 1101, frames 12 and 20: a person beside the robot reaches towards
+    // it, the forearm along the robot's forearm link. On positions alone the robot's part,
+    // spreading from its pedestal, takes the arm (box IoU 0.40 in frame 20); with the
+    // points' colours it spreads slowly through the person's sleeve and skin colours,
+    // which the orange robot does not wear.
+    let synth = Synth::new(preset("robot_cell").expect("preset"), 1101).expect("synth");
+    let projector = FrameProjector::new(synth.written_rig()).expect("projector");
+    let cfg = BoxesConfig {
+        mode: BoxMode::Geometry,
+        ..BoxesConfig::default()
+    };
+    for index in [12, 20] {
+        let (frame, mut cloud) = study_frame(&synth, &projector, index).expect("frame");
+        assert!(cloud.colors.is_some(), "the study's clouds carry colours");
+        let with = find_boxes(&cloud, &cfg).expect("boxes");
+        let m = match_boxes(&frame.boxes.boxes, &with.boxes);
+        assert!(m.is_good(), "frame {index} with colours: {m:?}");
+        cloud.colors = None;
+        let without = find_boxes(&cloud, &cfg).expect("boxes");
+        let m = match_boxes(&frame.boxes.boxes, &without.boxes);
+        assert!(
+            !m.is_good(),
+            "frame {index}: good without colours too, {m:?}"
+        );
+    }
 }
