@@ -87,26 +87,8 @@ fn labels_and_file_modes_on_a_recording() {
     let m = match_boxes(&truth.boxes, &found.boxes);
     assert!(m.is_good(), "{m:?}");
     assert_eq!(found.frame, "000000");
-    // File mode reads the recording's own boxes back.
-    let out = bodyseg(
-        d,
-        &[
-            "boxes",
-            "--recording",
-            "rec",
-            "--frame",
-            "000000",
-            "--mode",
-            "file",
-            "--out",
-            "file.json",
-        ],
-    );
-    assert_ok(&out, "boxes --mode file");
-    assert_eq!(read_boxes(&d.join("file.json")).expect("file"), truth);
-    // Geometry mode on a recording splits by the points' colours too: it reads the colour
-    // images, and says which one is missing.
-    let geometry = |out: &str| {
+    // `bodyseg boxes` on frame 000000 of the recording in another mode.
+    let args = |mode: &'static str, out: &'static str| {
         [
             "boxes",
             "--recording",
@@ -114,14 +96,18 @@ fn labels_and_file_modes_on_a_recording() {
             "--frame",
             "000000",
             "--mode",
-            "geometry",
+            mode,
             "--out",
             out,
         ]
-        .map(String::from)
     };
-    let args = geometry("geometry.json");
-    let out = bodyseg(d, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    // File mode reads the recording's own boxes back.
+    let out = bodyseg(d, &args("file", "file.json"));
+    assert_ok(&out, "boxes --mode file");
+    assert_eq!(read_boxes(&d.join("file.json")).expect("file"), truth);
+    // Geometry mode on a recording splits by the points' colours too: it reads the colour
+    // images, and says which one is missing.
+    let out = bodyseg(d, &args("geometry", "geometry.json"));
     assert_ok(&out, "boxes --mode geometry --recording");
     let found = read_boxes(&d.join("geometry.json")).expect("geometry");
     assert!(
@@ -129,12 +115,7 @@ fn labels_and_file_modes_on_a_recording() {
         "{found:?}"
     );
     std::fs::remove_file(d.join("rec/cam0/color/000000.png")).expect("colour image");
-    let args = geometry("none.json");
-    assert_fails(
-        d,
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-        &["cam0", "000000.png"],
-    );
+    assert_fails(d, &args("geometry", "none.json"), &["cam0", "000000.png"]);
 }
 
 /// Asserts exit status 1, one `error:` line holding every needle, no new file.

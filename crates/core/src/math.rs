@@ -26,3 +26,53 @@ pub fn dist(a: Vec3, b: Vec3) -> f32 {
 pub fn is_finite(p: Vec3) -> bool {
     p[0].is_finite() & p[1].is_finite() & p[2].is_finite()
 }
+
+/// Chromaticity bins per axis: r / (r + g + b) and g / (r + g + b) of linear RGB, each in
+/// [0, 1], in bins of 0.02. Shared by the refinement's foreign colours and geometry-mode
+/// boxes, so both read a colour alike.
+pub const CHROMA_BINS: usize = 50;
+
+/// Linear value of an 8-bit sRGB channel (IEC 61966-2-1).
+pub fn srgb_to_linear(x: u8) -> f32 {
+    let c = f32::from(x) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The chromaticity bin of a linear-RGB colour (or a sum of them), as
+/// `r_bin * CHROMA_BINS + g_bin`: shading scales a surface's linear RGB, which keeps this
+/// bin, while sRGB's gamma moves a saturated colour's ratios as it darkens. The sum must be
+/// positive.
+pub fn chroma_bin(linear: [f32; 3]) -> usize {
+    let s = linear[0] + linear[1] + linear[2];
+    let bin = |x: f32| ((x / s * CHROMA_BINS as f32) as usize).min(CHROMA_BINS - 1);
+    bin(linear[0]) * CHROMA_BINS + bin(linear[1])
+}
+
+/// The bins within one bin of `bin` on each axis (3 × 3, fewer at the edges), r-major.
+pub fn near_chroma_bins(bin: usize) -> impl Iterator<Item = usize> {
+    let (r, g) = (bin / CHROMA_BINS, bin % CHROMA_BINS);
+    let near = |x: usize| x.saturating_sub(1)..=(x + 1).min(CHROMA_BINS - 1);
+    near(r).flat_map(move |i| near(g).map(move |j| i * CHROMA_BINS + j))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chromaticity_keeps_its_bin_under_shading_and_neighbours_stay_in_range() {
+        let orange = [215u8, 115, 15].map(srgb_to_linear);
+        let shaded = orange.map(|x| x * 0.3);
+        assert_eq!(chroma_bin(orange), chroma_bin(shaded));
+        assert_ne!(chroma_bin(orange), chroma_bin([1.0, 1.0, 1.0]));
+        assert_eq!(chroma_bin([1.0, 0.0, 0.0]), (CHROMA_BINS - 1) * CHROMA_BINS);
+        let corner: Vec<usize> = near_chroma_bins(0).collect();
+        assert_eq!(corner, vec![0, 1, CHROMA_BINS, CHROMA_BINS + 1]);
+        assert_eq!(near_chroma_bins(CHROMA_BINS + 1).count(), 9);
+        assert!((srgb_to_linear(255) - 1.0).abs() < 1e-6 && srgb_to_linear(0) == 0.0);
+    }
+}

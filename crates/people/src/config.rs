@@ -167,6 +167,12 @@ impl Default for BoxesConfig {
 }
 
 impl BoxesConfig {
+    /// Whether box finding reads the points' colours (geometry mode with `colour_split`):
+    /// then a pipeline samples them from the colour images.
+    pub fn uses_colours(&self) -> bool {
+        self.mode == BoxMode::Geometry && self.colour_split
+    }
+
     /// Checks every field's range; the error names the field (`boxes.voxel_m must be a
     /// finite number > 0, got 0`).
     ///

@@ -3,7 +3,7 @@
 use crate::config::{BoxMode, BoxesConfig, PeopleError};
 use crate::fit::{fit_box, principal_yaw};
 use crate::voxel::{Graph, Voxels, voxelize};
-use bodyseg_core::math::Vec3;
+use bodyseg_core::math::{CHROMA_BINS, Vec3, chroma_bin, near_chroma_bins, srgb_to_linear};
 use bodyseg_core::{Class, LabeledCloud, PersonBox, PersonBoxes};
 use rustc_hash::{FxHashMap, FxHashSet};
 
@@ -20,7 +20,7 @@ pub fn find_boxes(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Result<PersonBoxes
         BoxMode::Labels => labels_mode(cloud, cfg),
         BoxMode::Geometry => geometry_mode(
             &cloud.positions_m,
-            cloud.colors.as_deref().filter(|_| cfg.colour_split),
+            cloud.colors.as_deref().filter(|_| cfg.uses_colours()),
             cfg,
         ),
         BoxMode::File => return Err(PeopleError::FileMode),
@@ -773,12 +773,15 @@ fn split_people(
                 &claimed,
                 cfg.column_radius_m,
             );
-            let scale = |g: usize, j: u32| match (g == nobody, foreign[j as usize]) {
-                (false, _) => 1.0,
-                (true, true) => FOREIGN_COLOUR_SCALE,
-                (true, false) => NOBODY_LENGTH_SCALE,
-            };
-            owner = graph.split_scaled(centers, cluster, &seeds, scale, penalty);
+            // Nothing of a person's colour that nobody's part does not wear: the same split.
+            if cluster.iter().any(|&j| foreign[j as usize]) {
+                let scale = |g: usize, j: u32| match (g == nobody, foreign[j as usize]) {
+                    (false, _) => 1.0,
+                    (true, true) => FOREIGN_COLOUR_SCALE,
+                    (true, false) => NOBODY_LENGTH_SCALE,
+                };
+                owner = graph.split_scaled(centers, cluster, &seeds, scale, penalty);
+            }
         }
         for (&i, &g) in cluster.iter().zip(&owner) {
             // Group `heads.len()` is nobody's: dropped.
@@ -822,23 +825,11 @@ const PERSON_COLOUR_DENSITY: f32 = 0.03;
 /// fraction of that part's coloured voxels: higher than a person's, since the arm it may
 /// have taken along a link is part of it ([`person_coloured`]).
 const NOBODY_COLOUR_DENSITY: f32 = 0.2;
-/// Chromaticity bins per unit (linear r/(r+g+b), g/(r+g+b)).
-const CHROMA_BINS: usize = 50;
-
-/// Per voxel, its points' mean colour as a linear-RGB chromaticity bin
-/// (`r_bin * CHROMA_BINS + g_bin`); `None` where it is too dark to tell (black: no colour).
+/// Per voxel, its points' mean colour as a linear-RGB chromaticity bin ([`chroma_bin`]);
+/// `None` where it is too dark to tell (black: no colour).
 fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
     // sRGB to linear, once per byte value.
-    let lin: Vec<f32> = (0..256)
-        .map(|v| {
-            let c = v as f32 / 255.0;
-            if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
-        })
-        .collect();
+    let lin: Vec<f32> = (0..=255).map(srgb_to_linear).collect();
     let mut sums = vec![[0f32; 3]; all.centers.len()];
     for (&i, &v) in all.points.iter().zip(&all.point_voxel) {
         if let Some(c) = colors.get(i as usize) {
@@ -855,8 +846,7 @@ fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
             if total < 0.045 * 3.0 * n as f32 {
                 return None;
             }
-            let bin = |x: f32| ((x / total * CHROMA_BINS as f32) as usize).min(CHROMA_BINS - 1);
-            Some((bin(s[0]) * CHROMA_BINS + bin(s[1])) as u16)
+            Some(chroma_bin(*s) as u16)
         })
         .collect()
 }
@@ -893,13 +883,7 @@ fn person_coloured(
     };
     // Whether at least `density` of a histogram's voxels lie within a bin of `b`.
     let common = |(hist, total): &(Vec<u32>, u32), b: u16, density: f32| {
-        let (r, g) = (usize::from(b) / CHROMA_BINS, usize::from(b) % CHROMA_BINS);
-        let mut n = 0;
-        for rr in r.saturating_sub(1)..=(r + 1).min(CHROMA_BINS - 1) {
-            for gg in g.saturating_sub(1)..=(g + 1).min(CHROMA_BINS - 1) {
-                n += hist[rr * CHROMA_BINS + gg];
-            }
-        }
+        let n: u32 = near_chroma_bins(usize::from(b)).map(|k| hist[k]).sum();
         *total > 0 && n as f32 >= density * *total as f32
     };
     let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);

@@ -10,7 +10,6 @@ use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
 use bodyseg_core::{LabelImage, LabeledCloud, RgbImage};
 use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
-use bodyseg_people::BoxMode;
 use bodyseg_project::{CameraImages, FrameProjector, Hits, ProjectMode};
 use std::path::{Path, PathBuf};
 
@@ -84,8 +83,7 @@ fn read_camera(rig: &Rig, index: usize, opts: &ProjectOptions) -> Result<CameraF
         .with_context(|| format!("camera {name} of rig.toml"))?;
     let (depth, _) = read_depth(&opts.recording, camera, &opts.frame)?;
     let (labels, _) = read_parsing(&opts.recording, camera, &opts.frame)?;
-    let boxes = &opts.config.boxes;
-    let colour = if boxes.mode == BoxMode::Geometry && boxes.colour_split {
+    let colour = if opts.config.boxes.uses_colours() {
         Some(read_color(&opts.recording, camera, &opts.frame)?.0)
     } else {
         None

@@ -319,8 +319,7 @@ impl FrameProcessor {
     /// colour images are read, and sampled where the points land): foreign colours, and
     /// geometry mode's split between people and what is nobody's.
     fn needs_colours(&self) -> bool {
-        self.config.refine.foreign_colour_density > 0.0
-            || (self.config.boxes.mode == BoxMode::Geometry && self.config.boxes.colour_split)
+        self.config.refine.foreign_colour_density > 0.0 || self.config.boxes.uses_colours()
     }
 
     /// Reads and decodes one frame's images and runs the parser (stages `read`, `parse`).

@@ -12,11 +12,8 @@
 //! over a shirt whose front shows), are arms of a colour the head and torso do not have,
 //! and become background; switch it off (0) for such people.
 
+use bodyseg_core::math::{CHROMA_BINS, chroma_bin, near_chroma_bins, srgb_to_linear};
 use bodyseg_core::{Class, Label};
-
-/// Chromaticity bins per axis (r / (r + g + b) and g / (r + g + b) of linear RGB, each in
-/// [0, 1]).
-pub const CHROMA_BINS: usize = 50;
 
 /// Points a head or torso needs to serve as a colour reference.
 pub const MIN_REFERENCE_POINTS: usize = 50;
@@ -32,24 +29,9 @@ pub const MIN_BRIGHTNESS: u8 = 100;
 /// pixel does not jump between bins.
 const LINEAR_FLOOR: f32 = 0.002;
 
-/// Chromaticity bin (r bin, g bin) of an 8-bit sRGB colour, taken in linear RGB: shading
-/// scales a surface's linear RGB, which keeps its linear chromaticity, while sRGB's gamma
-/// moves a saturated colour's sRGB ratios as it darkens.
-fn chroma_bin(c: [u8; 3]) -> (usize, usize) {
-    let [r, g, b] = c.map(|x| srgb_to_linear(x) + LINEAR_FLOOR);
-    let s = r + g + b;
-    let bin = |x: f32| ((x / s * CHROMA_BINS as f32) as usize).min(CHROMA_BINS - 1);
-    (bin(r), bin(g))
-}
-
-/// Linear value of an 8-bit sRGB channel (IEC 61966-2-1).
-fn srgb_to_linear(x: u8) -> f32 {
-    let c = f32::from(x) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
+/// Chromaticity bin of an 8-bit sRGB colour, in linear RGB ([`chroma_bin`]).
+fn colour_bin(c: [u8; 3]) -> usize {
+    chroma_bin(c.map(|x| srgb_to_linear(x) + LINEAR_FLOOR))
 }
 
 /// Every upper- or lower-arm label (of one person's points, `labels`, with their camera
@@ -84,8 +66,7 @@ pub fn drop_foreign_arms(
             let mut hist = vec![0f32; n * n];
             let mut count = 0usize;
             for (_, &c) in labels.iter().zip(colours).filter(|(l, _)| **l == label) {
-                let (r, g) = chroma_bin(c);
-                hist[r * n + g] += 1.0;
+                hist[colour_bin(c)] += 1.0;
                 count += 1;
             }
             (count >= MIN_REFERENCE_POINTS).then(|| {
@@ -102,12 +83,9 @@ pub fn drop_foreign_arms(
         if !arms.contains(l) || c.iter().all(|&x| x < MIN_BRIGHTNESS) {
             continue;
         }
-        let (r, g) = chroma_bin(c);
-        let near = |x: usize| x.saturating_sub(1)..=(x + 1).min(n - 1);
+        let b = colour_bin(c);
         let worn = references.iter().any(|hist| {
-            let density: f32 = near(r)
-                .flat_map(|i| near(g).map(move |j| hist[i * n + j]))
-                .sum();
+            let density: f32 = near_chroma_bins(b).map(|k| hist[k]).sum();
             density >= min_density
         });
         if !worn {

@@ -895,37 +895,18 @@ impl NnIndex {
         best.map(|(_, j)| j)
     }
 
-    /// Every indexed point within squared distance `r2` of `q`, as `(squared distance,
-    /// id)` in no particular order (the same for the same query), into `out`: for votes
-    /// that sum all of them ([`smooth_labels`]); `cells` is scratch.
-    #[cfg(test)]
-    fn within(&self, q: Vec3, r2: f32, out: &mut Vec<(f32, u32)>, cells: &mut Vec<(f32, u32)>) {
-        out.clear();
-        self.for_each_within(q, r2, cells, |d2, j| out.push((d2, j)));
-    }
-
-    /// Calls `f(squared distance, id)` for every indexed point within `r2` of `q`, in the
-    /// order of [`Self::within`]; `cells` is scratch.
+    /// Calls `f(squared distance, id)` for every indexed point within `r2` of `q`, in no
+    /// particular order (the same for the same query): for votes that sum all of them
+    /// ([`smooth_labels`]); `cells` is scratch.
     fn for_each_within(
         &self,
         q: Vec3,
         r2: f32,
         cells: &mut Vec<(f32, u32)>,
-        f: impl FnMut(f32, u32),
-    ) {
-        self.cells_within(q, r2, cells);
-        self.for_each_in_cells(q, r2, cells, f);
-    }
-
-    /// Calls `f(squared distance, id)` for every point of `cells` within `r2` of `q`.
-    fn for_each_in_cells(
-        &self,
-        q: Vec3,
-        r2: f32,
-        cells: &[(f32, u32)],
         mut f: impl FnMut(f32, u32),
     ) {
-        for &(_, c) in cells {
+        self.cells_within(q, r2, cells);
+        for &(_, c) in cells.iter() {
             let r = self.cell_start[c as usize] as usize..self.cell_start[c as usize + 1] as usize;
             for (&j, &p) in self.items[r.clone()].iter().zip(&self.pts[r]) {
                 let d2 = dist2(q, p);
@@ -977,19 +958,7 @@ impl NnIndex {
     ) {
         out.clear();
         self.cells_within(q, r2, cells);
-        let by_distance = |a: &(f32, u32), b: &(f32, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-        let held: usize = cells
-            .iter()
-            .map(|&(_, c)| (self.cell_start[c as usize + 1] - self.cell_start[c as usize]) as usize)
-            .sum();
-        if held <= k {
-            // Every point within r2 is kept: gather, then one sort (the sorted insertion
-            // below costs O(n·k)).
-            self.for_each_in_cells(q, r2, cells, |d2, j| out.push((d2, j)));
-            out.sort_unstable_by(by_distance);
-            return;
-        }
-        cells.sort_unstable_by(by_distance);
+        cells.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         for &(d, c) in cells.iter() {
             if out.len() == k && out.last().is_some_and(|&(w, _)| d > w) {
                 break;
@@ -1119,7 +1088,7 @@ mod tests {
                         .collect();
                     want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                     let mut all = Vec::new();
-                    index.within(q, r * r, &mut all, &mut cells);
+                    index.for_each_within(q, r * r, &mut cells, |d2, j| all.push((d2, j)));
                     all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                     assert_eq!(all, want, "case {case}, all within {r}");
                     want.truncate(k);
