@@ -127,9 +127,9 @@ fn head_on_top(
 }
 
 /// Checks one person candidate (its voxels) against the size limits and fits its box
-/// around its raw points. The box's yaw is the principal horizontal axis of the voxels
-/// labelled torso in `voxel_labels` (class ids per voxel; labels mode) when there are at
-/// least [`MIN_TORSO_VOXELS`] of them, else of all the voxels: the trunk (shoulders and
+/// around its raw points. The box's yaw is the principal horizontal axis of its `trunk`
+/// voxels (labels mode: those labelled torso; geometry mode: [`trunk_voxels`]) when there
+/// are at least [`MIN_TORSO_VOXELS`] of them, else of all the voxels: the trunk (shoulders and
 /// hips wider than deep) follows the facing direction, which the true boxes are aligned
 /// with, while a pointing, reaching or handing-over arm turns the axis of the whole body
 /// towards itself. Torso alone, not with the legs: they stride along the facing direction
@@ -138,6 +138,7 @@ fn head_on_top(
 fn person_box(
     id: u32,
     group: &[u32],
+    trunk: &[u32],
     voxel_labels: Option<&[u8]>,
     centers: &[Vec3],
     index: &VoxelPoints,
@@ -172,21 +173,13 @@ fn person_box(
         );
         return None;
     }
-    let xy_of = |v: u32| [centers[v as usize][0], centers[v as usize][1]];
-    let torso = Class::Torso.id();
-    let torso_xy: Vec<[f32; 2]> = voxel_labels.map_or_else(Vec::new, |labels| {
-        group
-            .iter()
-            .filter(|&&v| labels[v as usize] == torso)
-            .map(|&v| xy_of(v))
-            .collect()
-    });
-    let yaw = if torso_xy.len() >= MIN_TORSO_VOXELS {
-        principal_yaw(&torso_xy)
+    let xy_of = |v: &u32| [centers[*v as usize][0], centers[*v as usize][1]];
+    let yaw_from = if trunk.len() >= MIN_TORSO_VOXELS {
+        trunk
     } else {
-        let voxel_xy: Vec<[f32; 2]> = group.iter().map(|&v| xy_of(v)).collect();
-        principal_yaw(&voxel_xy)
+        group
     };
+    let yaw = principal_yaw(&yaw_from.iter().map(xy_of).collect::<Vec<_>>());
     let mut xy = Vec::new();
     let mut top = f32::NEG_INFINITY;
     for &v in group {
@@ -345,11 +338,18 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
     }
     groups.sort_by_key(|g| g.first().copied());
     let mut boxes = Vec::new();
+    let torso = Class::Torso.id();
     for group in groups {
         let id = boxes.len() as u32;
+        let trunk: Vec<u32> = group
+            .iter()
+            .copied()
+            .filter(|&j| v.labels[j as usize] == torso)
+            .collect();
         if let Some(b) = person_box(
             id,
             &group,
+            &trunk,
             Some(&v.labels),
             &v.centers,
             &index,
@@ -624,15 +624,13 @@ fn geometry_mode(
             chroma.as_deref(),
             cfg,
         );
-        for group in groups {
+        for (head, group) in groups {
             let id = boxes.len() as u32;
-            // No labels: the yaw follows all the person's voxels. (A band of heights below
-            // the chest as the trunk moved borderline boxes of people handing over
-            // both ways on held-out seeds, with no net gain; so did that band within
-            // 0.3 m of the head's vertical: mean IoU up, hand-over frames lost.)
+            let trunk = trunk_voxels(&group, head, &all.centers, &heights);
             if let Some(b) = person_box(
                 id,
                 &group,
+                &trunk,
                 None,
                 &all.centers,
                 &index,
@@ -682,7 +680,7 @@ fn split_people(
     heights: &[f32],
     chroma: Option<&[Option<u16>]>,
     cfg: &BoxesConfig,
-) -> Vec<Vec<u32>> {
+) -> Vec<(u32, Vec<u32>)> {
     let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
     // A person's seed: their head, and their lower legs (so legs beside a box or a
     // pedestal stay theirs: the feet are far from the head along the graph).
@@ -800,9 +798,39 @@ fn split_people(
             d <= cfg.max_reach_m && (heights[j as usize] >= legs_below || d <= LEG_RADIUS_M)
         });
     }
-    groups.sort_by_key(|g| g.first().copied());
+    let mut groups: Vec<(u32, Vec<u32>)> = heads.iter().copied().zip(groups).collect();
+    groups.sort_by_key(|(_, g)| g.first().copied());
     groups
 }
+
+/// Geometry mode: the voxels of `group` that are most likely its trunk, whose principal
+/// horizontal axis gives the box's yaw as labels mode's torso does ([`person_box`]):
+/// those between [`TRUNK_LOW_FRACTION`] and [`TRUNK_HIGH_FRACTION`] of the head's height
+/// (hips to chest) within [`TRUNK_RADIUS_M`] of its vertical. Arms hanging at the sides
+/// are across the facing direction, as the shoulders and hips; a reaching or pointing
+/// arm leaves the radius; the legs, striding along the facing direction, are below.
+fn trunk_voxels(group: &[u32], head: u32, centers: &[Vec3], heights: &[f32]) -> Vec<u32> {
+    let (top, top_h) = (centers[head as usize], heights[head as usize]);
+    let (lo, hi) = (TRUNK_LOW_FRACTION * top_h, TRUNK_HIGH_FRACTION * top_h);
+    group
+        .iter()
+        .copied()
+        .filter(|&j| {
+            let (c, h) = (centers[j as usize], heights[j as usize]);
+            h >= lo && h <= hi && (c[0] - top[0]).hypot(c[1] - top[1]) <= TRUNK_RADIUS_M
+        })
+        .collect()
+}
+
+/// Geometry mode's trunk ([`trunk_voxels`]) from this fraction of the head's height up
+/// (the hips are at ≈ 0.53 of a person's height; the hands hanging at the sides are
+/// below ≈ 0.4).
+const TRUNK_LOW_FRACTION: f32 = 0.5;
+/// ... up to this fraction (the shoulders' top is at ≈ 0.82–0.85, the neck above).
+const TRUNK_HIGH_FRACTION: f32 = 0.85;
+/// ... within this distance of the head's vertical, metres (half a shoulder width, ≈ 0.2
+/// m, and the voxels' centroids).
+const TRUNK_RADIUS_M: f32 = 0.25;
 
 /// Geometry mode's split: the part of a cluster no person can own spreads along the
 /// graph at this fraction of the length a person's spreads at. It is anchored far from
