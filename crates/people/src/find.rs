@@ -275,13 +275,13 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
             (c.is_body() && p[2] > cfg.ground_tol_m).then_some((i, p, c.id()))
         });
     let v = voxelize(body, cfg.voxel_m);
-    let graph = Graph::new(&v.centers, cfg.person_gap_m);
     let index = VoxelPoints::new(&v);
     let dense: Vec<bool> = v
         .counts
         .iter()
         .map(|&c| c >= cfg.min_voxel_points)
         .collect();
+    let graph = Graph::new(&v.centers, cfg.person_gap_m, &dense);
     // Each voxel's person (0, 1, ... in the order found), u32::MAX for none.
     let mut owner = vec![u32::MAX; v.centers.len()];
     let mut people = 0u32;
@@ -603,7 +603,7 @@ fn geometry_mode(
                 && n >= cfg.min_voxel_points
         })
         .collect();
-    let graph = Graph::new(&all.centers, cfg.person_gap_m);
+    let graph = Graph::new(&all.centers, cfg.person_gap_m, &keep);
     let index = VoxelPoints::new(&all);
     let chroma = colors.map(|c| voxel_chroma(&all, c));
     let mut boxes = Vec::new();
