@@ -2,8 +2,8 @@
 //! Kinect v2 cameras with two people (the handover preset: every depth pixel of the three
 //! cameras back-projected, ≈ 0.5 M points, labelled with the per-pixel truth). Geometry
 //! mode is measured beside it, on positions only and with colours (`geometry_colours`:
-//! made-up colours per class, as the crate may not sample camera images: the second split
-//! pass is what costs).
+//! made-up colours per class, as the crate may not sample camera images; the colour split
+//! runs a second Dijkstra over each cluster with something nobody's beside its people).
 //!
 //! `cargo bench -p bodyseg-people --bench boxes`
 

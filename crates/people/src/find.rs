@@ -55,6 +55,11 @@ impl Plane {
     }
 }
 
+/// Horizontal distance of two points, metres.
+fn xy_dist(a: Vec3, b: Vec3) -> f32 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
 /// Index of each voxel's points (compressed rows).
 struct VoxelPoints {
     start: Vec<u32>,
@@ -229,7 +234,7 @@ fn part_seeds(
         return Vec::new();
     }
     let mut patches: Vec<Vec<u32>> = graph
-        .components(&v.centers, &keep)
+        .components(&keep)
         .into_iter()
         .filter(|c| c.len() >= min_voxels)
         .collect();
@@ -285,7 +290,7 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
     // Each voxel's person (0, 1, ... in the order found), u32::MAX for none.
     let mut owner = vec![u32::MAX; v.centers.len()];
     let mut people = 0u32;
-    for cluster in graph.components(&v.centers, &dense) {
+    for cluster in graph.components(&dense) {
         if cluster.len() < cfg.min_voxels {
             continue;
         }
@@ -403,7 +408,7 @@ fn attach_limb_fragments(graph: &Graph, v: &Voxels, dense: &[bool], owner: &mut 
         .zip(&v.labels)
         .map(|(&d, &l)| d && (l == upper_arm || l == lower_arm))
         .collect();
-    let pieces = graph.components_along(&v.centers, &arm, |i, j| {
+    let pieces = graph.components_along(&arm, |i, j| {
         adjacent_parts(v.labels[i as usize], v.labels[j as usize])
     });
     let hangs_on_torso = |piece: &[u32]| {
@@ -411,7 +416,7 @@ fn attach_limb_fragments(graph: &Graph, v: &Voxels, dense: &[bool], owner: &mut 
             let i = i as usize;
             let mut found = false;
             if v.labels[i] == upper_arm {
-                graph.for_neighbors(i, v.centers[i], |j, _| {
+                graph.for_neighbors(i, |j, _| {
                     found |= dense[j as usize] && v.labels[j as usize] == torso;
                 });
             }
@@ -607,7 +612,7 @@ fn geometry_mode(
     let index = VoxelPoints::new(&all);
     let chroma = colors.map(|c| voxel_chroma(&all, c));
     let mut boxes = Vec::new();
-    for cluster in graph.components(&all.centers, &keep) {
+    for cluster in graph.components(&keep) {
         if cluster.len() < cfg.min_voxels {
             continue;
         }
@@ -681,7 +686,6 @@ fn split_people(
     chroma: Option<&[Option<u16>]>,
     cfg: &BoxesConfig,
 ) -> Vec<(u32, Vec<u32>)> {
-    let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
     // A person's seed: their head, and their lower legs (so legs beside a box or a
     // pedestal stay theirs: the feet are far from the head along the graph).
     let is_seed = |j: u32, head: u32, d: f32| {
@@ -755,8 +759,9 @@ fn split_people(
         let mut owner = graph.split_scaled(centers, cluster, &seeds, plain, penalty);
         // With colours, again, the part that is nobody's now spreading slowly through a
         // person's colours that the part it claimed on positions hardly wears
-        // (person_coloured).
-        if let Some(chroma) = chroma {
+        // (person_coloured). Only its costs change: with no seed (people touching, nothing
+        // beyond their reach) the split would be the same.
+        if let Some(chroma) = chroma.filter(|_| !seeds[nobody].is_empty()) {
             let claimed: Vec<u32> = cluster
                 .iter()
                 .zip(&owner)
@@ -817,7 +822,7 @@ fn trunk_voxels(group: &[u32], head: u32, centers: &[Vec3], heights: &[f32]) -> 
         .copied()
         .filter(|&j| {
             let (c, h) = (centers[j as usize], heights[j as usize]);
-            h >= lo && h <= hi && (c[0] - top[0]).hypot(c[1] - top[1]) <= TRUNK_RADIUS_M
+            h >= lo && h <= hi && xy_dist(c, top) <= TRUNK_RADIUS_M
         })
         .collect()
 }
@@ -856,8 +861,8 @@ const PERSON_COLOUR_DENSITY: f32 = 0.03;
 /// a bin or two from a grey robot joint (`robot_cell` 1101: shirt bin (15, 17), joints
 /// (15–16, 15–16)), and counted with its neighbours the joints made the shirt the robot's.
 /// Against 20% with the neighbours, on the twelve seed groups of the box study:
-/// `robot_cell` geometry 1100–1103 82% → 85%, 700–703 95% → 96%, no other group changed
-/// (10% and 5% alike on 1100–1103).
+/// `robot_cell` geometry 1100–1103 82% → 85%, 700–703 95% → 96%, no other group's frames
+/// changed (10% and 5% alike on 1100–1103).
 const NOBODY_COLOUR_DENSITY: f32 = 0.1;
 /// Per voxel, its points' mean colour as a linear-RGB chromaticity bin ([`chroma_bin`]);
 /// `None` where it is too dark to tell (black: no colour).
@@ -920,7 +925,6 @@ fn person_coloured(
         let n: u32 = near_chroma_bins(usize::from(b)).map(|k| hist[k]).sum();
         *total > 0 && n as f32 >= density * *total as f32
     };
-    let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
     let people: Vec<(Vec<u32>, u32)> = heads
         .iter()
         .map(|&h| {
@@ -1052,7 +1056,6 @@ fn find_heads(
             .then(a.cmp(&b))
     });
     let r = (cfg.head_separation_m * inv).ceil() as i32;
-    let xy_dist = |a: Vec3, b: Vec3| (a[0] - b[0]).hypot(a[1] - b[1]);
     // The cluster's voxels in horizontal cells as wide as the widest column radius, so
     // that a column test reads the 3 × 3 cells around a top instead of the whole cluster
     // (a wall or a shelf has hundreds of candidate tops).
@@ -1148,7 +1151,7 @@ fn find_heads(
         // head: a neighbour's head or a raised arm beside it (touching it only through
         // the shoulders, lower down) does not.
         let band = h - HEAD_HEIGHT_M;
-        let blob = graph.grow(centers, v, |j| {
+        let blob = graph.grow(v, |j| {
             keep[j as usize]
                 && heights[j as usize] >= band
                 && xy_dist(centers[j as usize], p) < cfg.head_separation_m
@@ -1236,14 +1239,14 @@ fn reaching_limbs(
     let p = centers[top as usize];
     let h = heights[top as usize];
     let band = h - HEAD_HEIGHT_M;
-    let xy = |j: u32| (centers[j as usize][0] - p[0]).hypot(centers[j as usize][1] - p[1]);
+    let xy = |j: u32| xy_dist(centers[j as usize], p);
     let mut seen: FxHashSet<u32> = FxHashSet::default();
     let mut foreign = FxHashSet::default();
     for &s in blob {
         if xy(s) <= limit || seen.contains(&s) {
             continue;
         }
-        let branch = graph.grow(centers, s, |j| {
+        let branch = graph.grow(s, |j| {
             keep[j as usize] && heights[j as usize] >= band && {
                 let d = xy(j);
                 d > limit && d <= cfg.max_reach_m
@@ -1327,7 +1330,7 @@ fn column_slices(
     let mut lowest = f32::INFINITY;
     for &j in voxels {
         let (q, hj) = (centers[j as usize], heights[j as usize]);
-        if hj >= from_m && (q[0] - p[0]).hypot(q[1] - p[1]) <= radius(hj) {
+        if hj >= from_m && xy_dist(q, p) <= radius(hj) {
             lowest = lowest.min(hj);
             if let Some(c) = counts.get_mut(((hj - from_m) / COLUMN_SLICE_M) as usize) {
                 *c += 1;

@@ -6,7 +6,7 @@ use anyhow::Result;
 use bodyseg_calib::BackProjectOptions;
 use bodyseg_core::{LabeledCloud, PersonBox, RgbImage};
 use bodyseg_people::{BoxesConfig, box_iou, find_boxes};
-use bodyseg_project::{FrameProjector, Hits, ProjectConfig};
+use bodyseg_project::{FrameProjector, ProjectConfig};
 use bodyseg_synth::{Synth, SynthFrame};
 
 /// A found box matches a true one when their IoU is at least this (issue 6).
@@ -140,15 +140,6 @@ pub fn study_frame(
     let rig = synth.written_rig();
     let labels = parsing_images(rig, &frame);
     let images = camera_images(&frame, &labels);
-    let mut cloud = LabeledCloud::default();
-    let mut hits = Hits::default();
-    projector.project_frame_keeping_hits(
-        &images,
-        &BackProjectOptions::default(),
-        &ProjectConfig::default(),
-        &mut cloud,
-        &mut hits,
-    )?;
     // The points' camera colours, as a coloured cloud (a PCD) would have them.
     let colour: Vec<RgbImage> = rig
         .cameras
@@ -161,7 +152,12 @@ pub fn study_frame(
         })
         .collect();
     let colour: Vec<&RgbImage> = colour.iter().collect();
-    cloud.colors = Some(hits.colors_of(&cloud, &colour));
+    let cloud = projector.project_frame_coloured(
+        &images,
+        &colour,
+        &BackProjectOptions::default(),
+        &ProjectConfig::default(),
+    )?;
     Ok((frame, cloud))
 }
 

@@ -10,7 +10,7 @@ use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
 use bodyseg_core::{LabelImage, LabeledCloud, RgbImage};
 use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
-use bodyseg_project::{CameraImages, FrameProjector, Hits, ProjectMode};
+use bodyseg_project::{CameraImages, FrameProjector, ProjectMode};
 use std::path::{Path, PathBuf};
 
 /// What [`project_file`] reads, writes and how.
@@ -135,32 +135,18 @@ pub(crate) fn read_and_project(opts: &ProjectOptions) -> Result<(Rig, LabeledClo
                 labels: &c.labels,
             })
             .collect();
-        let context = || format!("{}: frame {}", opts.recording.display(), opts.frame);
         let colour: Option<Vec<&RgbImage>> = cameras.iter().map(|c| c.colour.as_ref()).collect();
-        let Some(colour) = colour else {
-            return bodyseg_project::project_frame(
-                &rig,
-                &images,
-                &cfg.backproject.options(),
-                &cfg.project,
-            )
-            .with_context(context);
-        };
-        // Geometry-mode boxes split people from what is nobody's by colour too.
-        let (mut cloud, mut hits) = (LabeledCloud::default(), Hits::default());
-        FrameProjector::new(&rig)
-            .and_then(|p| {
-                p.project_frame_keeping_hits(
-                    &images,
-                    &cfg.backproject.options(),
-                    &cfg.project,
-                    &mut cloud,
-                    &mut hits,
-                )
-            })
-            .with_context(context)?;
-        cloud.colors = Some(hits.colors_of(&cloud, &colour));
-        Ok(cloud)
+        let context = || format!("{}: frame {}", opts.recording.display(), opts.frame);
+        let projector = FrameProjector::new(&rig).with_context(context)?;
+        let backproject = cfg.backproject.options();
+        match colour {
+            // Geometry-mode boxes split people from what is nobody's by colour too.
+            Some(colour) => {
+                projector.project_frame_coloured(&images, &colour, &backproject, &cfg.project)
+            }
+            None => projector.project_frame(&images, &backproject, &cfg.project),
+        }
+        .with_context(context)
     })?;
     let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
     let mode = cfg.project.mode;

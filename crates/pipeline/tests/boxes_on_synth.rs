@@ -88,7 +88,7 @@ fn labels_mode_finds_people_whose_legs_the_cameras_miss() {
 fn geometry_mode_keeps_an_arm_reaching_along_a_robot_link_by_its_colour() {
     // robot_cell seed 1101, frames 12 and 20: a person beside the robot reaches towards
     // it, the forearm along the robot's forearm link. On positions alone the robot's part,
-    // spreading from its pedestal, takes the arm (box IoU 0.40 in frame 20); with the
+    // spreading from its pedestal, takes the arm (box IoU 0.48 and 0.46); with the
     // points' colours it spreads slowly through the person's sleeve and skin colours,
     // which the orange robot does not wear.
     let synth = Synth::new(preset("robot_cell").expect("preset"), 1101).expect("synth");

@@ -38,7 +38,7 @@ pub use config::{MAX_RADIUS_PX, ProjectConfig, ProjectError, ProjectMode};
 pub use dsa::project_labels;
 
 use bodyseg_calib::{BackProjectOptions, CalibError, RgbdCamera, Rig, RigBackProjector};
-use bodyseg_core::{Label, LabelImage, LabeledCloud, PointOrigin};
+use bodyseg_core::{Label, LabelImage, LabeledCloud, PointOrigin, RgbImage};
 use std::sync::Mutex;
 
 use rayon::prelude::*;
@@ -201,6 +201,22 @@ impl FrameProjector {
             hits.clear();
         }
         result
+    }
+
+    /// [`FrameProjector::project_frame`] with every point's camera colour in the cloud's
+    /// `colors`: the colour at its colour pixel in its camera's image (`colour[camera]`,
+    /// [`Hits::colors_of`]; black where it has none), as a coloured cloud (a PCD) has them.
+    pub fn project_frame_coloured(
+        &self,
+        images: &[CameraImages<'_>],
+        colour: &[&RgbImage],
+        opts: &BackProjectOptions,
+        cfg: &ProjectConfig,
+    ) -> Result<LabeledCloud, ProjectError> {
+        let (mut cloud, mut hits) = (LabeledCloud::default(), Hits::default());
+        self.project_frame_keeping_hits(images, opts, cfg, &mut cloud, &mut hits)?;
+        cloud.colors = Some(hits.colors_of(&cloud, colour));
+        Ok(cloud)
     }
 
     /// The checks of every frame's inputs: the configurations, one camera's images per
