@@ -134,8 +134,9 @@ pub struct BoxesConfig {
     pub min_column_fill: f32,
     /// Geometry mode: use the points' colours, where the cloud has them, in the split
     /// between people and what is nobody's (a robot): the robot's part spreads cheaply
-    /// only through colours no person there wears, so a sleeve or a hand reaching along
-    /// a robot link stays its owner's. false = positions only. Default true.
+    /// only through its own colours (those it wears more than the people there) and pays
+    /// to step into a person's, so a sleeve or a hand reaching along a robot link stays
+    /// its owner's. false = positions only. Default true.
     pub colour_split: bool,
 }
 

@@ -267,19 +267,20 @@ impl Graph {
         seeds: &[Vec<u32>],
         penalty: impl Fn(u32, u32) -> f32,
     ) -> Vec<usize> {
-        self.split_scaled(centers, members, seeds, |_, _| 1.0, penalty)
+        self.split_scaled(centers, members, seeds, |_, _| 1.0, |_, i, j| penalty(i, j))
     }
 
     /// [`Graph::split_with`] where group g's edge lengths into voxel j count `scale(g, j)`
-    /// times: a group that spreads more cheaply claims more of what lies between it and
-    /// the others.
+    /// times and its edge from i to j pays `penalty(g, i, j)` metres more: a group that
+    /// spreads more cheaply claims more of what lies between it and the others, and one
+    /// that pays to cross a boundary (a colour edge) claims less of what lies beyond it.
     pub fn split_scaled(
         &self,
         centers: &[Vec3],
         members: &[u32],
         seeds: &[Vec<u32>],
         scale: impl Fn(usize, u32) -> f32,
-        penalty: impl Fn(u32, u32) -> f32,
+        penalty: impl Fn(usize, u32, u32) -> f32,
     ) -> Vec<usize> {
         use std::cmp::Reverse;
         use std::collections::BinaryHeap;
@@ -311,7 +312,7 @@ impl Graph {
                 if kj >= members.len() {
                     continue;
                 }
-                let nd = d + scale(g, j) * d2.sqrt() + penalty(members[k], j);
+                let nd = d + scale(g, j) * d2.sqrt() + penalty(g, members[k], j);
                 if nd < best[kj].0 {
                     best[kj] = (nd, g);
                     heap.push(Reverse((OrdF32(nd), kj, g)));
