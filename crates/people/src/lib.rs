@@ -32,10 +32,12 @@
 //!
 //! A box is the person's points' horizontal extent along their principal horizontal axis
 //! (its yaw; labels mode takes the axis of the torso-labelled voxels alone, as the trunk
-//! follows the facing direction whichever way the arms point) plus `box_margin_m` on each
+//! follows the facing direction whichever way the arms point; geometry mode that of the
+//! trunk, hips to chest beside the head, or for two people of one cluster whose heads are
+//! closer than 0.6 m the line between their heads) plus `box_margin_m` on each
 //! side, from the floor up to the top plus `box_margin_m` — the shape of bodyseg-synth's
 //! true boxes, which are aligned with the facing direction. [`box_iou`] scores a box
-//! against another exactly.
+//! against another exactly, [`match_boxes`] a frame's found boxes against its true ones.
 //!
 //! # Conventions
 //! - Input clouds are in a z-up frame in metres (bodyseg's world frame). Labels mode takes
@@ -48,11 +50,13 @@
 mod config;
 mod find;
 mod fit;
+mod matching;
 mod voxel;
 
 pub use config::{BoxMode, BoxesConfig, PeopleError};
 pub use find::find_boxes;
 pub use fit::box_iou;
+pub use matching::{FrameMatch, MATCH_IOU, match_boxes};
 
 #[doc(no_inline)]
 pub use bodyseg_core::{PersonBox, PersonBoxes};

@@ -4,7 +4,7 @@
 //! with the simulated parser's predicted labels, through the projection.)
 
 use bodyseg_core::LabeledCloud;
-use bodyseg_people::{BoxMode, BoxesConfig, PeopleError, box_iou, find_boxes};
+use bodyseg_people::{BoxMode, BoxesConfig, PeopleError, box_iou, find_boxes, match_boxes};
 use bodyseg_synth::{Synth, SynthFrame, preset};
 
 fn cloud(synth: &Synth, frame: &SynthFrame) -> LabeledCloud {
@@ -24,22 +24,12 @@ fn every_person_gets_one_box_in_both_modes() {
                     ..BoxesConfig::default()
                 };
                 let found = find_boxes(&cloud, &cfg).expect("boxes");
-                let truth = &frame.boxes.boxes;
-                assert_eq!(
-                    found.boxes.len(),
-                    truth.len(),
-                    "{name} frame {index} {}: {found:?}",
+                let m = match_boxes(&frame.boxes.boxes, &found.boxes);
+                assert!(
+                    m.is_good(),
+                    "{name} frame {index} {}: {m:?}, {found:?}",
                     mode.name()
                 );
-                for t in truth {
-                    let hits = found.boxes.iter().filter(|f| box_iou(t, f) >= 0.5).count();
-                    assert_eq!(
-                        hits,
-                        1,
-                        "{name} frame {index} {}: {t:?} vs {found:?}",
-                        mode.name()
-                    );
-                }
                 // Deterministic: the same cloud gives the same boxes.
                 assert_eq!(find_boxes(&cloud, &cfg).expect("boxes"), found);
             }
@@ -96,8 +86,8 @@ fn a_pointing_arm_past_a_shorter_head_stays_its_owner_s_without_labels() {
 }
 
 /// Geometry mode on frames `indices` of a synthetic recording: every true person is
-/// matched by exactly one found box with IoU ≥ 0.5, and there is no other box (the
-/// box study's good frame).
+/// matched by exactly one found box with IoU ≥ 0.5, one to one, and there is no other box
+/// (the box study's good frame, [`match_boxes`]).
 fn every_person_matched_once_without_labels(name: &str, seed: u64, indices: &[usize]) {
     let synth = Synth::new(preset(name).expect("preset"), seed).expect("synth");
     let cfg = BoxesConfig {
@@ -107,14 +97,11 @@ fn every_person_matched_once_without_labels(name: &str, seed: u64, indices: &[us
     for &index in indices {
         let frame = synth.frame(index);
         let found = find_boxes(&cloud(&synth, &frame), &cfg).expect("boxes");
-        for t in &frame.boxes.boxes {
-            let hits = found.boxes.iter().filter(|f| box_iou(t, f) >= 0.5).count();
-            assert_eq!(hits, 1, "{name} {seed} frame {index}: {t:?} vs {found:?}");
-        }
-        assert_eq!(
-            found.boxes.len(),
-            frame.boxes.boxes.len(),
-            "{name} {seed} frame {index}: an extra box in {found:?}"
+        let m = match_boxes(&frame.boxes.boxes, &found.boxes);
+        assert!(
+            m.is_good(),
+            "{name} {seed} frame {index}: {m:?}, {:?} vs {found:?}",
+            frame.boxes.boxes
         );
     }
 }
@@ -210,4 +197,12 @@ fn a_walking_person_s_box_follows_their_trunk_without_labels() {
             "frame {index}: IoU {iou:.3}: {truth:?} vs {b:?}"
         );
     }
+}
+
+#[test]
+fn two_people_close_face_to_face_get_boxes_along_the_line_between_their_heads() {
+    // handover seed 802: two people 0.54 m apart hand something over. The cameras see an
+    // arc of the taller one's trunk, whose axis was 24° off (box IoU 0.49–0.50 in 13 of
+    // 25 frames of the box study); the line between the heads gives the yaw.
+    every_person_matched_once_without_labels("handover", 802, &[0, 12, 20]);
 }
