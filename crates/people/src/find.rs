@@ -1480,7 +1480,8 @@ mod tests {
         assert_eq!(&got[61..], &[true, true, false, false, false]);
         // An orange shirt a bin from the robot's orange, and the robot's shade of it (5% of
         // the robot, a bin from both): the shade is the robot's, which wears its very bin
-        // more than the person (nobody's at 10% of its part, it was the person's).
+        // more than the person. (When a colour was the robot's only from 10% of its part
+        // on, the shade was the person's.)
         let shaded = dressed(bin(33, 15), 21..23, bin(32, 15));
         let got = person_coloured(&shaded, &cluster, &[0], &centers, &robot, 0.2);
         assert_eq!(&got[61..], &[true, true, false, false, false]);
