@@ -131,15 +131,15 @@ fn head_on_top(
         && head_h_sum / head as f32 >= top_h - HEAD_ON_TOP_M
 }
 
-/// Checks one person candidate (its voxels) against the size limits and fits its box
-/// around its raw points. The box's yaw is `facing` where given ([`close_pair_yaw`]), else
-/// the principal horizontal axis of its `trunk`
-/// voxels (labels mode: those labelled torso; geometry mode: [`trunk_voxels`]) when there
-/// are at least [`MIN_TORSO_VOXELS`] of them, else of all the voxels: the trunk (shoulders and
-/// hips wider than deep) follows the facing direction, which the true boxes are aligned
-/// with, while a pointing, reaching or handing-over arm turns the axis of the whole body
-/// towards itself. Torso alone, not with the legs: they stride along the facing direction
-/// while hips and shoulders lie across it, so together they have no clear axis.
+/// Checks one person candidate (its voxels) against the size limits and fits its box around
+/// its raw points. The box's yaw is `facing` where given ([`close_pair_yaw`]), else the
+/// principal horizontal axis of its `trunk` voxels (labels mode: those labelled torso;
+/// geometry mode: [`trunk_voxels`]) when there are at least [`MIN_TORSO_VOXELS`] of them,
+/// else of all the voxels: the trunk (shoulders and hips wider than deep) follows the
+/// facing direction, which the true boxes are aligned with, while a pointing, reaching or
+/// handing-over arm turns the axis of the whole body towards itself. Torso alone, not with
+/// the legs: they stride along the facing direction while hips and shoulders lie across it,
+/// so together they have no clear axis.
 #[allow(clippy::too_many_arguments)]
 fn person_box(
     id: u32,
@@ -851,19 +851,8 @@ fn close_pair_yaw(head: u32, heads: &[u32], centers: &[Vec3]) -> Option<f32> {
         .filter(|&&h| h != head)
         .map(|&h| (xy_dist(centers[h as usize], c), centers[h as usize]))
         .min_by(|a, b| a.0.total_cmp(&b.0))?;
-    if d >= CLOSE_PAIR_M {
-        return None;
-    }
-    // A box's yaw and the opposite one are the same box: kept where principal_yaw's are.
-    let yaw = (o[1] - c[1]).atan2(o[0] - c[0]);
-    let half_turn = std::f32::consts::PI;
-    Some(if yaw > half_turn / 2.0 {
-        yaw - half_turn
-    } else if yaw <= -half_turn / 2.0 {
-        yaw + half_turn
-    } else {
-        yaw
-    })
+    // The axis through the two heads, as the trunk's is found (in (-π/2, π/2]).
+    (d < CLOSE_PAIR_M).then(|| principal_yaw(&[[c[0], c[1]], [o[0], o[1]]]))
 }
 
 /// Two people of one cluster whose heads are closer than this, metres (less than an arm's
@@ -915,7 +904,7 @@ const FOREIGN_COLOUR_SCALE: f32 = 1.5;
 /// IoU 0.41; 0.94 with the penalty). With it the robot reaches the arm only along the arm
 /// itself, from its tip. On the twelve seed groups of the box study (with the rule of
 /// [`person_coloured`]): `robot_cell` geometry 1100–1103 85% → 95%, 900–903 94% → 95%, no
-/// frame lost in any cell; mean best IoU up in 10 of the 12 `robot_cell` groups (1100–1103
+/// frame lost in any cell; mean best IoU up in 9 of the 12 `robot_cell` groups (1100–1103
 /// 0.794 → 0.807), down 0.001 in one (600–603).
 const COLOUR_EDGE_PENALTY_M: f32 = 1.0;
 /// A colour is a person's when at least this fraction of the coloured voxels in the column
@@ -953,12 +942,12 @@ fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
 /// voxels within `column_radius_m` of a head's vertical (head, shirt, trousers: where
 /// nothing but the person stands) share its chromaticity bin or a neighbouring one — and
 /// that person wears its very bin at least as much as what the part that is nobody's
-/// claimed on positions alone (`claimed`) does, as shares of each one's coloured voxels. That part is
-/// mostly the robot, so its colours are the robot's; an arm it took along a link is a
-/// small share of it. A sleeve or a hand reaching along a robot link then stays its
-/// owner's, while the link, of the robot's colour, is still claimed from the pedestal at
-/// [`NOBODY_LENGTH_SCALE`]. Where the robot wears a person's colour more than they do the
-/// split is as without colours.
+/// claimed on positions alone (`claimed`) does, as shares of each one's coloured voxels.
+/// That part is mostly the robot, so its colours are the robot's; an arm it took along a
+/// link is a small share of it. A sleeve or a hand reaching along a robot link then stays
+/// its owner's, while the link, of the robot's colour, is still claimed from the pedestal
+/// at [`NOBODY_LENGTH_SCALE`]. Where the robot wears a person's colour more than they do
+/// the split is as without colours.
 ///
 /// The very bin, compared: a colour lies a bin from both sides' in two cases of the box
 /// study. A grey shirt one bin from grey robot joints (`robot_cell` 1101: shirt (15, 17),
@@ -1363,8 +1352,9 @@ fn dense_column(
 
 /// The column test of the head candidate `top` (geometry mode): the fraction of the
 /// [`COLUMN_SLICE_M`] slices between the ground and the top that hold one of `voxels` (as
-/// in [`dense_column`]) within `column_radius_m` of the top's vertical (below [`LOW_LEG_FRACTION`] of the
-/// top's height: within [`LEG_RADIUS_M`]), and the lowest such voxel's height.
+/// in [`dense_column`]) within `column_radius_m` of the top's vertical (below
+/// [`LOW_LEG_FRACTION`] of the top's height: within [`LEG_RADIUS_M`]), and the lowest such
+/// voxel's height.
 fn column_fill(
     voxels: &[u32],
     centers: &[Vec3],
