@@ -171,7 +171,7 @@ fn person_box(
             && voxel_labels.is_some_and(|labels| {
                 head_on_top(group, labels, centers, ground, hi_h, cfg.min_head_voxels)
             }));
-    if hi_h < cfg.min_height_m || hi_h > cfg.max_height_m || floating {
+    if hi_h < cfg.min_top_m() || hi_h > cfg.max_height_m || floating {
         tracing::trace!(
             voxels = group.len(),
             lo_h,
@@ -1073,18 +1073,30 @@ const DENSE_SLICE_VOXELS: usize = 4;
 /// left out of its head test ([`dense_column`]).
 const MIN_DENSE_FILL: f32 = 0.95;
 /// A top hidden by someone's limb lying on it ([`find_heads`]) is a head only at least
-/// this high, metres (a crouching adult's head: ≈ 1.3 m in bodyseg-synth). Lower, the tops
-/// hidden by a link rising from them in the box study were a robot's base under its
-/// upper arm (0.94–0.97 m, `robot_cell`, ten frames of ten seeds) and a person's forearm
-/// held before the chest (1.15–1.17 m, 101 frames 80–88).
-const LIMB_HIDDEN_MIN_TOP_M: f32 = 1.2;
+/// this high, metres (a crouching adult's head: 1.05–1.4 m in bodyseg-synth). Lower, the
+/// tops hidden by a link rising from them in the box study were a robot's base under its
+/// upper arm (0.94–0.97 m, `robot_cell`, ten frames of ten seeds). (1.2 → 1.0, with
+/// [`MIN_HEAD_AREA_M2`], which keeps out the forearms held before a chest at 1.05–1.2 m
+/// that 1.2 was for (`robot_cell` 101 frames 80–88, `handover` 503 frames 16 and 76):
+/// `robot_cell` geometry 1100–1103 and 900–903 +2 and +3 frames, crouching people under a
+/// neighbour's arm; no frame lost in any preset's fifteen seed groups.)
+const LIMB_HIDDEN_MIN_TOP_M: f32 = 1.0;
+/// A head's blob (what is connected to its top within a head's height and is not someone
+/// else's limb, [`find_heads`]) covers at least this much, m² (as voxels of `voxel_m`: 30
+/// at 5 cm). Among the candidates that pass the column test in seven seed groups of each
+/// preset, heads had 35 voxels or more, the hands and forearms held before a chest or
+/// handed over that passed for heads 10–24 (none 25–34): the hand held out in a hand-over
+/// stands over its owner's body column too. (`handover` geometry 1200–1203 97% → 100%; no
+/// frame lost in any preset's fifteen seed groups.)
+const MIN_HEAD_AREA_M2: f32 = 0.075;
 /// Cell of the top-view height map heads are searched in, metres.
 const HEIGHT_MAP_CELL_M: f32 = 0.08;
 /// Height of the slices of the column test, metres.
 const COLUMN_SLICE_M: f32 = 0.1;
 
 /// The heads of one cluster (geometry mode): cells of the top-view height map that are
-/// the highest within `head_separation_m`, at least `min_height_m` high, with a column of
+/// the highest within `head_separation_m`, at least `geometry_min_height_m` high, as large
+/// as a head ([`MIN_HEAD_AREA_M2`]), with a column of
 /// points below them (`column_radius_m`, `min_column_fill`) reaching down to
 /// `max_bottom_m`. Returns one voxel per head (its top), highest first.
 fn find_heads(
@@ -1111,7 +1123,7 @@ fn find_heads(
     let mut tops: Vec<u32> = map
         .values()
         .copied()
-        .filter(|&v| heights[v as usize] >= cfg.min_height_m)
+        .filter(|&v| heights[v as usize] >= cfg.min_top_m())
         .collect();
     tops.sort_by(|&a, &b| {
         heights[b as usize]
@@ -1149,6 +1161,7 @@ fn find_heads(
         }
         near
     };
+    let min_blob_voxels = MIN_HEAD_AREA_M2 / (cfg.voxel_m * cfg.voxel_m);
     let mut heads: Vec<u32> = Vec::new();
     for v in tops {
         let (p, c) = (centers[v as usize], cell(centers[v as usize]));
@@ -1203,11 +1216,24 @@ fn find_heads(
                     .iter()
                     .all(|&o| xy_dist(centers[o as usize], p) > limit))
         {
+            tracing::trace!(
+                x = p[0],
+                y = p[1],
+                h,
+                may_be_under_limb,
+                "head candidate dropped: hidden by a higher top"
+            );
             continue;
         }
         let near = column_near(p);
         let dense = dense_column(&near, centers, heights, v, cfg) >= MIN_DENSE_FILL;
         if limb_hidden && !dense {
+            tracing::trace!(
+                x = p[0],
+                y = p[1],
+                h,
+                "head candidate dropped: hidden, column not dense"
+            );
             continue;
         }
         // Only what is connected to the top within the head's height belongs to this
@@ -1221,6 +1247,7 @@ fn find_heads(
         });
         let raised = higher_near && blob.iter().any(|&j| heights[j as usize] > h);
         if raised && !may_be_under_limb {
+            tracing::trace!(x = p[0], y = p[1], h, "head candidate dropped: raised");
             continue;
         }
         let under_limb = limb_hidden || raised;
@@ -1274,8 +1301,29 @@ fn find_heads(
             );
             continue;
         }
+        // A head is a head's size: a hand or a forearm held before a chest or handed over
+        // is a compact top too, over a body's column (its owner's), but smaller.
+        if (near_top.len() as f32) < min_blob_voxels {
+            tracing::trace!(
+                x = p[0],
+                y = p[1],
+                h,
+                voxels = near_top.len(),
+                "head candidate dropped: smaller than a head"
+            );
+            continue;
+        }
         let (fill, lowest) = column_fill(&near, centers, heights, v, cfg);
-        tracing::trace!(x = p[0], y = p[1], h, fill, lowest, "head candidate");
+        tracing::trace!(
+            x = p[0],
+            y = p[1],
+            h,
+            fill,
+            lowest,
+            blob = near_top.len(),
+            spread,
+            "head candidate"
+        );
         if fill >= cfg.min_column_fill && lowest <= cfg.max_bottom_m {
             heads.push(v);
         }

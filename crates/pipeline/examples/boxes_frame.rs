@@ -4,26 +4,10 @@
 //! `cargo run --release -p bodyseg-pipeline --example boxes_frame PRESET SEED FRAME...`
 //! (`RUST_LOG=bodyseg_people=trace` for the finder's reasons).
 
-use bodyseg_core::PersonBox;
 use bodyseg_people::{BoxMode, BoxesConfig, box_iou, find_boxes};
-use bodyseg_pipeline::{match_boxes, study_frame};
+use bodyseg_pipeline::{describe_box as describe, match_boxes, study_frame};
 use bodyseg_project::FrameProjector;
 use bodyseg_synth::{Synth, preset};
-
-fn describe(b: &PersonBox) -> String {
-    format!(
-        "#{} c=({:.2},{:.2},{:.2}) size=({:.2},{:.2},{:.2}) yaw={:.2} top={:.2}",
-        b.id,
-        b.center_m[0],
-        b.center_m[1],
-        b.center_m[2],
-        2.0 * b.half_extents_m[0],
-        2.0 * b.half_extents_m[1],
-        2.0 * b.half_extents_m[2],
-        b.yaw_rad,
-        b.center_m[2] + b.half_extents_m[2],
-    )
-}
 
 fn main() -> anyhow::Result<()> {
     // `RUST_LOG=bodyseg_people=trace` shows the head candidates and why each was dropped.

@@ -4,7 +4,7 @@
 use crate::projection_study::{camera_images, parsing_images};
 use anyhow::Result;
 use bodyseg_calib::BackProjectOptions;
-use bodyseg_core::{LabeledCloud, RgbImage};
+use bodyseg_core::{LabeledCloud, PersonBox, RgbImage};
 use bodyseg_people::{BoxesConfig, find_boxes};
 pub use bodyseg_people::{FrameMatch, MATCH_IOU, match_boxes};
 use bodyseg_project::{FrameProjector, ProjectConfig};
@@ -118,4 +118,21 @@ pub fn box_stats(
         }
     }
     Ok(stats)
+}
+
+/// One line describing a box for the box studies' tools: id, centre, size (full extents)
+/// and yaw, metres and radians, and its top.
+pub fn describe_box(b: &PersonBox) -> String {
+    format!(
+        "#{} c=({:.2},{:.2},{:.2}) size=({:.2},{:.2},{:.2}) yaw={:.2} top={:.2}",
+        b.id,
+        b.center_m[0],
+        b.center_m[1],
+        b.center_m[2],
+        2.0 * b.half_extents_m[0],
+        2.0 * b.half_extents_m[1],
+        2.0 * b.half_extents_m[2],
+        b.yaw_rad,
+        b.center_m[2] + b.half_extents_m[2],
+    )
 }

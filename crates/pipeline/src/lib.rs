@@ -60,7 +60,9 @@ pub use bodyseg_project::ProjectMode;
 pub use boxes::{
     BoxesInput, BoxesOptions, BoxesSummary, boxes_file, boxes_path, read_cloud, top_view,
 };
-pub use boxes_study::{BoxStats, FrameMatch, MATCH_IOU, box_stats, match_boxes, study_frame};
+pub use boxes_study::{
+    BoxStats, FrameMatch, MATCH_IOU, box_stats, describe_box, match_boxes, study_frame,
+};
 pub use calibrate::{
     CALIBRATE_AVAILABLE, CalibrateSummary, IntrinsicsCalibOptions, StereoCalibOptions, ViewReport,
     WorldCalibOptions, calibrate_intrinsics, calibrate_stereo, calibrate_world,
