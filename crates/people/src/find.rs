@@ -765,37 +765,63 @@ fn split_people(
         };
         let mut owner =
             graph.split_scaled(centers, cluster, &seeds, plain, |_, i, j| penalty(i, j));
-        // With colours, again, the part that is nobody's now spreading slowly through a
+        // With colours, again: the part that is nobody's now spreading slowly through a
         // person's colours that the part it claimed on positions hardly wears
-        // (person_coloured). Only its costs change: with no seed (people touching, nothing
-        // beyond their reach) the split would be the same.
-        if let Some(chroma) = chroma.filter(|_| !seeds[nobody].is_empty()) {
-            let claimed: Vec<u32> = cluster
-                .iter()
-                .zip(&owner)
-                .filter(|&(_, &g)| g == nobody)
-                .map(|(&j, _)| j)
-                .collect();
-            let foreign = person_coloured(
-                chroma,
-                cluster,
-                heads,
-                centers,
-                &claimed,
-                cfg.column_radius_m,
-            );
-            // Nothing of a person's colour that nobody's part does not wear: the same split.
-            if cluster.iter().any(|&j| foreign[j as usize]) {
-                let scale = |g: usize, j: u32| match (g == nobody, foreign[j as usize]) {
-                    (false, _) => 1.0,
-                    (true, true) => FOREIGN_COLOUR_SCALE,
-                    (true, false) => NOBODY_LENGTH_SCALE,
+        // (person_coloured), and each person slowly through the colours that only another
+        // person wears (worn_by_one). Only those costs change: with neither (one person and
+        // nothing beyond their reach, or nothing of such a colour) the split is the same.
+        if let Some(chroma) = chroma {
+            let foreign = (!seeds[nobody].is_empty())
+                .then(|| {
+                    let claimed: Vec<u32> = cluster
+                        .iter()
+                        .zip(&owner)
+                        .filter(|&(_, &g)| g == nobody)
+                        .map(|(&j, _)| j)
+                        .collect();
+                    person_coloured(
+                        chroma,
+                        cluster,
+                        heads,
+                        centers,
+                        &claimed,
+                        cfg.column_radius_m,
+                    )
+                })
+                .filter(|f| cluster.iter().any(|&j| f[j as usize]));
+            let mine = (heads.len() >= 2)
+                .then(|| worn_by_one(chroma, cluster, heads, centers, cfg.column_radius_m))
+                .filter(|m| cluster.iter().any(|&j| m[j as usize] != u8::MAX));
+            if foreign.is_some() || mine.is_some() {
+                let is_foreign = |j: u32| foreign.as_ref().is_some_and(|f| f[j as usize]);
+                // Whether voxel j is of a colour only another person than g wears.
+                let others = |g: usize, j: u32| {
+                    mine.as_ref().is_some_and(|m| {
+                        let k = m[j as usize];
+                        k != u8::MAX && usize::from(k) != g
+                    })
+                };
+                let scale = |g: usize, j: u32| {
+                    if g == nobody {
+                        if is_foreign(j) {
+                            FOREIGN_COLOUR_SCALE
+                        } else {
+                            NOBODY_LENGTH_SCALE
+                        }
+                    } else if others(g, j) {
+                        OTHER_COLOUR_SCALE
+                    } else {
+                        1.0
+                    }
                 };
                 // ... and pays COLOUR_EDGE_PENALTY_M to step into a person's colours from
-                // its own (see there).
+                // its own, a person OTHER_COLOUR_EDGE_M to step into another's (see there).
                 let edge = |g: usize, i: u32, j: u32| {
-                    let crosses = g == nobody && foreign[j as usize] && !foreign[i as usize];
-                    penalty(i, j) + if crosses { COLOUR_EDGE_PENALTY_M } else { 0.0 }
+                    let crosses = g == nobody && is_foreign(j) && !is_foreign(i);
+                    let enters = g != nobody && others(g, j) && !others(g, i);
+                    penalty(i, j)
+                        + if crosses { COLOUR_EDGE_PENALTY_M } else { 0.0 }
+                        + if enters { OTHER_COLOUR_EDGE_M } else { 0.0 }
                 };
                 owner = graph.split_scaled(centers, cluster, &seeds, scale, edge);
             }
@@ -907,6 +933,26 @@ const FOREIGN_COLOUR_SCALE: f32 = 1.5;
 /// frame lost in any cell; mean best IoU up in 9 of the 12 `robot_cell` groups (1100–1103
 /// 0.794 → 0.807), down 0.001 in one (600–603).
 const COLOUR_EDGE_PENALTY_M: f32 = 1.0;
+/// Geometry mode's split with colours: a person spreads into a voxel of a colour only
+/// another person wears ([`worn_by_one`]: a neighbour's sleeve reaching their chest) at
+/// this multiple of the cost, and pays [`OTHER_COLOUR_EDGE_M`] to step into it from one
+/// that is not. Where one person's arm touches another's body below the head, the graph
+/// alone gives the arm's far end to the body it touches (nearer that person's head than
+/// its own's along the graph); the colours keep it its owner's. With both, on the box
+/// study's fifteen seed groups (1,500 frames a preset): `handover` geometry 11 → 4 bad
+/// frames, mean best IoU up in every group (0.697 → 0.762 on 900–903, 0.744 → 0.814 on
+/// 1100–1103), `robot_cell` 37 → 32 (403 frames 28–44 and 96: a reaching arm), mean
+/// best IoU up or equal in every group; `single` unchanged (one person: not used). Flat
+/// from 2 to 4 and from 0.3 to 0.8 m.
+const OTHER_COLOUR_SCALE: f32 = 3.0;
+/// See [`OTHER_COLOUR_SCALE`], metres.
+const OTHER_COLOUR_EDGE_M: f32 = 0.5;
+/// A colour is one person's only ([`worn_by_one`]) when every other person's column holds
+/// less than this fraction of it (with neighbouring bins): an arm reaching across a
+/// neighbour's column adds its sleeve there. (0.03, the same as [`PERSON_COLOUR_DENSITY`]:
+/// one `robot_cell` frame lost, 1101 frame 44; 0.015: three of the five `robot_cell`
+/// frames above not won.)
+const OTHER_WEARS_DENSITY: f32 = 0.02;
 /// A colour is a person's when at least this fraction of the coloured voxels in the column
 /// below their head share its chromaticity bin or a neighbouring one ([`person_coloured`]).
 const PERSON_COLOUR_DENSITY: f32 = 0.03;
@@ -965,56 +1011,111 @@ fn person_coloured(
     claimed: &[u32],
     column_radius_m: f32,
 ) -> Vec<bool> {
-    let histogram = |members: &mut dyn Iterator<Item = u32>| {
-        let mut hist = vec![0u32; CHROMA_BINS * CHROMA_BINS];
-        let mut total = 0u32;
-        for j in members {
-            if let Some(b) = chroma[j as usize] {
-                hist[usize::from(b)] += 1;
-                total += 1;
-            }
-        }
-        (hist, total)
-    };
-    // Whether at least `density` of a histogram's voxels lie within a bin of `b`.
-    let common = |(hist, total): &(Vec<u32>, u32), b: u16, density: f32| {
-        let n: u32 = near_chroma_bins(usize::from(b)).map(|k| hist[k]).sum();
-        *total > 0 && n as f32 >= density * *total as f32
-    };
-    let people: Vec<(Vec<u32>, u32)> = heads
-        .iter()
-        .map(|&h| {
-            let top = centers[h as usize];
-            histogram(
-                &mut cluster
-                    .iter()
-                    .copied()
-                    .filter(|&j| xy_dist(centers[j as usize], top) <= column_radius_m),
-            )
-        })
-        .collect();
-    let nobody = histogram(&mut claimed.iter().copied());
-    // The share of a histogram's voxels in the very bin `b`.
-    let share = |(hist, total): &(Vec<u32>, u32), b: u16| {
-        if *total == 0 {
-            0.0
-        } else {
-            hist[usize::from(b)] as f32 / *total as f32
-        }
-    };
+    let people = column_colours(chroma, cluster, heads, centers, column_radius_m);
+    let nobody = ChromaHist::of(chroma, claimed.iter().copied());
     let mut out = vec![false; chroma.len()];
     for &j in cluster {
         if let Some(b) = chroma[j as usize] {
-            let robot = share(&nobody, b);
+            let robot = nobody.share(b);
             // At least as much: a colour neither wears in its very bin, a bin from a
             // person's (a hand a shade off the face), is the person's.
             out[j as usize] = people
                 .iter()
-                .any(|p| common(p, b, PERSON_COLOUR_DENSITY) && share(p, b) >= robot);
+                .any(|p| p.near_at_least(b, PERSON_COLOUR_DENSITY) && p.share(b) >= robot);
         }
     }
     out
 }
+
+/// A histogram of voxels' chromaticity bins ([`voxel_chroma`]; voxels without a colour
+/// are not counted).
+struct ChromaHist {
+    bins: Vec<u32>,
+    total: u32,
+}
+
+impl ChromaHist {
+    fn of(chroma: &[Option<u16>], members: impl Iterator<Item = u32>) -> ChromaHist {
+        let mut bins = vec![0u32; CHROMA_BINS * CHROMA_BINS];
+        let mut total = 0u32;
+        for j in members {
+            if let Some(b) = chroma[j as usize] {
+                bins[usize::from(b)] += 1;
+                total += 1;
+            }
+        }
+        ChromaHist { bins, total }
+    }
+
+    /// Whether at least `density` of the voxels lie within a bin of `b`.
+    fn near_at_least(&self, b: u16, density: f32) -> bool {
+        let n: u32 = near_chroma_bins(usize::from(b)).map(|k| self.bins[k]).sum();
+        self.total > 0 && n as f32 >= density * self.total as f32
+    }
+
+    /// The share of the voxels in the very bin `b`.
+    fn share(&self, b: u16) -> f32 {
+        if self.total == 0 {
+            0.0
+        } else {
+            self.bins[usize::from(b)] as f32 / self.total as f32
+        }
+    }
+}
+
+/// The colours of the column below each of `heads` (within `column_radius_m` of its
+/// vertical, among `cluster`): where nothing but that person stands (head, shirt, trousers).
+fn column_colours(
+    chroma: &[Option<u16>],
+    cluster: &[u32],
+    heads: &[u32],
+    centers: &[Vec3],
+    column_radius_m: f32,
+) -> Vec<ChromaHist> {
+    heads
+        .iter()
+        .map(|&h| {
+            let top = centers[h as usize];
+            let column = cluster
+                .iter()
+                .copied()
+                .filter(|&j| xy_dist(centers[j as usize], top) <= column_radius_m);
+            ChromaHist::of(chroma, column)
+        })
+        .collect()
+}
+/// Per voxel of `cluster` (indexed by voxel): the one person (index into `heads`) whose
+/// colour it is, `u8::MAX` for none or several: at least [`PERSON_COLOUR_DENSITY`] of the
+/// coloured voxels within `column_radius_m` of their head's vertical (head, shirt,
+/// trousers) share its chromaticity bin or a neighbouring one, and less than
+/// [`OTHER_WEARS_DENSITY`] of every other person's column do. A sleeve reaching a
+/// neighbour's chest is then its owner's colour ([`split_people`]).
+fn worn_by_one(
+    chroma: &[Option<u16>],
+    cluster: &[u32],
+    heads: &[u32],
+    centers: &[Vec3],
+    column_radius_m: f32,
+) -> Vec<u8> {
+    let people = column_colours(chroma, cluster, heads, centers, column_radius_m);
+    let mut out = vec![u8::MAX; chroma.len()];
+    for &j in cluster {
+        if let Some(b) = chroma[j as usize] {
+            let mut wearers =
+                (0..people.len()).filter(|&k| people[k].near_at_least(b, PERSON_COLOUR_DENSITY));
+            if let (Some(k), None) = (wearers.next(), wearers.next())
+                && people
+                    .iter()
+                    .enumerate()
+                    .all(|(o, p)| o == k || !p.near_at_least(b, OTHER_WEARS_DENSITY))
+            {
+                out[j as usize] = k as u8;
+            }
+        }
+    }
+    out
+}
+
 /// How far beyond a person's reach (`max_reach_m`, [`LEG_RADIUS_M`]) a voxel must lie to
 /// seed the part of a cluster that is nobody's, metres: a hand stretched a little past
 /// the reach limit is cut, but does not pull the person's forearm away with it.
@@ -1523,6 +1624,41 @@ mod tests {
         let shaded = dressed(bin(33, 15), 21..23, bin(32, 15));
         let got = person_coloured(&shaded, &cluster, &[0], &centers, &robot, 0.2);
         assert_eq!(&got[61..], &[true, true, false, false, false]);
+    }
+
+    #[test]
+    fn a_colour_only_one_person_wears_is_theirs() {
+        let bin = |r: usize, g: usize| Some((r * CHROMA_BINS + g) as u16);
+        let (skin, red, blue, grey) = (bin(30, 12), bin(40, 10), bin(8, 12), bin(15, 17));
+        // Two people 1 m apart, each a column of 40 voxels: 10 skin, then 30 of their shirt
+        // (red, blue), in the red one's 3 of them grey (7.5%: theirs), in the blue one's 1
+        // (2.5%: under PERSON_COLOUR_DENSITY, over OTHER_WEARS_DENSITY).
+        let mut centers = vec![[0.0, 0.0, 1.8], [1.0, 0.0, 1.8]];
+        let mut chroma = vec![skin, skin];
+        for (x, shirt) in [(0.0, red), (1.0, blue)] {
+            for k in 0..40 {
+                centers.push([x, 0.0, 1.75 - 0.04 * k as f32]);
+                chroma.push(match k {
+                    0..10 => skin,
+                    10..13 if x == 0.0 => grey,
+                    39 if x == 1.0 => grey,
+                    _ => shirt,
+                });
+            }
+        }
+        // Judged, between them and in neither column: a red sleeve, a blue one, a hand,
+        // something grey (both wear a little), a colour nobody wears, one too dark.
+        for c in [red, blue, skin, grey, bin(20, 30), None] {
+            centers.push([0.5, 0.0, 1.3]);
+            chroma.push(c);
+        }
+        let cluster: Vec<u32> = (0..centers.len() as u32).collect();
+        let got = worn_by_one(&chroma, &cluster, &[0, 1], &centers, 0.2);
+        let none = u8::MAX;
+        assert_eq!(&got[82..], &[0, 1, none, none, none, none]);
+        // One person: every colour they wear is theirs alone, the grey too.
+        let got = worn_by_one(&chroma, &cluster, &[0], &centers, 0.2);
+        assert_eq!(&got[82..], &[0, none, 0, 0, none, none]);
     }
 
     /// A person 1.8 m tall at x = 0 (one voxel column: skin head, shirt, trousers) whose
