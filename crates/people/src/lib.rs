@@ -14,8 +14,9 @@
 //!   too small, too low, too tall, floating or too wide are dropped.
 //! - **geometry** (no labels): a RANSAC ground plane (Fischler & Bolles 1981) is removed
 //!   with sparse voxels (flying pixels), the rest clustered; heads are maxima of the
-//!   top-view height map at least `head_separation_m` apart (closer, down to 0.25 m, when
-//!   the lower one is a separate peak: two heads leaning together) that are compact (a head, not
+//!   top-view height map at least `geometry_min_height_m` high and `head_separation_m` apart
+//!   (closer, down to 0.25 m, when the lower one is a separate peak: two heads leaning
+//!   together) that are as large as a head (not a hand held out) and compact (a head, not
 //!   a robot arm's joint; only what is connected to the top within a head's height
 //!   counts, so a neighbour's shoulder or hand beside the head does not) and have a
 //!   continuous column of points below them down to the ground (the lower legs within a
@@ -25,7 +26,9 @@
 //!   sideways at its height costs a contact, as only a hand or an arm touches a head
 //!   there) between its heads and what no person can own (voxels beyond arm's reach of every head, or low and
 //!   beyond the legs: a robot's pedestal, a box), so a robot arm touching a person is
-//!   claimed from its base; each person keeps what lies within arm's reach of the head
+//!   claimed from its base (with the points' colours, what is nobody's spreads slowly into
+//!   a person's colours, and each person into colours only another person wears: a sleeve
+//!   stays its owner's); each person keeps what lies within arm's reach of the head
 //!   (below the hips: within a leg's reach), and the same size filters apply.
 //!
 //! The `file` mode (boxes read from `boxes/<stem>.json`) is the pipeline's: it reads files.
