@@ -238,23 +238,19 @@ impl BoxesConfig {
                 ),
             );
         }
-        if !(self.max_height_m.is_finite() && self.max_height_m > self.min_height_m) {
-            return bad(
-                "max_height_m",
-                format!(
-                    "must be a finite number > boxes.min_height_m ({}), got {}",
-                    self.min_height_m, self.max_height_m
-                ),
-            );
-        }
-        if self.max_height_m <= self.geometry_min_height_m {
-            return bad(
-                "max_height_m",
-                format!(
-                    "must be > boxes.geometry_min_height_m ({}), got {}",
-                    self.geometry_min_height_m, self.max_height_m
-                ),
-            );
+        for (lowest, low) in [
+            ("min_height_m", self.min_height_m),
+            ("geometry_min_height_m", self.geometry_min_height_m),
+        ] {
+            if !(self.max_height_m.is_finite() && self.max_height_m > low) {
+                return bad(
+                    "max_height_m",
+                    format!(
+                        "must be a finite number > boxes.{lowest} ({low}), got {}",
+                        self.max_height_m
+                    ),
+                );
+            }
         }
         if !(self.max_ground_tilt_deg > 0.0 && self.max_ground_tilt_deg < 90.0) {
             return bad(
@@ -309,7 +305,7 @@ mod tests {
                 geometry_min_height_m: 2.5,
                 ..geometry
             }),
-            "boxes.max_height_m must be > boxes.geometry_min_height_m (2.5), got 2.3"
+            "boxes.max_height_m must be a finite number > boxes.geometry_min_height_m (2.5), got 2.3"
         );
     }
 }

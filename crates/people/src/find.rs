@@ -771,6 +771,9 @@ fn split_people(
         // person wears (worn_by_one). Only those costs change: with neither (one person and
         // nothing beyond their reach, or nothing of such a colour) the split is the same.
         if let Some(chroma) = chroma {
+            // Here there are two people or more, or a part that is nobody's: the columns'
+            // colours serve one of the two tests at least.
+            let columns = column_colours(chroma, cluster, heads, centers, cfg.column_radius_m);
             let foreign = (!seeds[nobody].is_empty())
                 .then(|| {
                     let claimed: Vec<u32> = cluster
@@ -779,27 +782,18 @@ fn split_people(
                         .filter(|&(_, &g)| g == nobody)
                         .map(|(&j, _)| j)
                         .collect();
-                    person_coloured(
-                        chroma,
-                        cluster,
-                        heads,
-                        centers,
-                        &claimed,
-                        cfg.column_radius_m,
-                    )
+                    person_coloured(chroma, cluster, &columns, &claimed)
                 })
                 .filter(|f| cluster.iter().any(|&j| f[j as usize]));
             let mine = (heads.len() >= 2)
-                .then(|| worn_by_one(chroma, cluster, heads, centers, cfg.column_radius_m))
-                .filter(|m| cluster.iter().any(|&j| m[j as usize] != u8::MAX));
+                .then(|| worn_by_one(chroma, cluster, &columns))
+                .filter(|m| cluster.iter().any(|&j| m[j as usize].is_some()));
             if foreign.is_some() || mine.is_some() {
                 let is_foreign = |j: u32| foreign.as_ref().is_some_and(|f| f[j as usize]);
                 // Whether voxel j is of a colour only another person than g wears.
                 let others = |g: usize, j: u32| {
-                    mine.as_ref().is_some_and(|m| {
-                        let k = m[j as usize];
-                        k != u8::MAX && usize::from(k) != g
-                    })
+                    mine.as_ref()
+                        .is_some_and(|m| m[j as usize].is_some_and(|k| k as usize != g))
                 };
                 let scale = |g: usize, j: u32| {
                     if g == nobody {
@@ -941,7 +935,8 @@ const COLOUR_EDGE_PENALTY_M: f32 = 1.0;
 /// its own's along the graph); the colours keep it its owner's. With both, on the box
 /// study's fifteen seed groups (1,500 frames a preset): `handover` geometry 11 → 4 bad
 /// frames, mean best IoU up in every group (0.697 → 0.762 on 900–903, 0.744 → 0.814 on
-/// 1100–1103), `robot_cell` 37 → 32 (403 frames 28–44 and 96: a reaching arm), mean
+/// 1100–1103), `robot_cell` 37 → 32 (403 frames 28, 36, 44 and 96: a reaching arm; 1500
+/// frame 40), mean
 /// best IoU up or equal in every group; `single` unchanged (one person: not used). Flat
 /// from 2 to 4 and from 0.3 to 0.8 m.
 const OTHER_COLOUR_SCALE: f32 = 3.0;
@@ -950,8 +945,8 @@ const OTHER_COLOUR_EDGE_M: f32 = 0.5;
 /// A colour is one person's only ([`worn_by_one`]) when every other person's column holds
 /// less than this fraction of it (with neighbouring bins): an arm reaching across a
 /// neighbour's column adds its sleeve there. (0.03, the same as [`PERSON_COLOUR_DENSITY`]:
-/// one `robot_cell` frame lost, 1101 frame 44; 0.015: three of the five `robot_cell`
-/// frames above not won.)
+/// one `robot_cell` frame lost, 1101 frame 44; 0.015: two of the five `robot_cell` frames
+/// above not won, 403 frames 28 and 44, and one `handover` frame, 1603 frame 84.)
 const OTHER_WEARS_DENSITY: f32 = 0.02;
 /// A colour is a person's when at least this fraction of the coloured voxels in the column
 /// below their head share its chromaticity bin or a neighbouring one ([`person_coloured`]).
@@ -985,7 +980,7 @@ fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
 /// Per voxel of `cluster` (indexed by voxel): whether the part that is nobody's spreads
 /// into it at [`FOREIGN_COLOUR_SCALE`] (and pays [`COLOUR_EDGE_PENALTY_M`] to enter it):
 /// its colour is one of a person's — at least [`PERSON_COLOUR_DENSITY`] of the coloured
-/// voxels within `column_radius_m` of a head's vertical (head, shirt, trousers: where
+/// voxels of their column (`people`, [`column_colours`]: head, shirt, trousers, where
 /// nothing but the person stands) share its chromaticity bin or a neighbouring one — and
 /// that person wears its very bin at least as much as what the part that is nobody's
 /// claimed on positions alone (`claimed`) does, as shares of each one's coloured voxels.
@@ -1006,12 +1001,9 @@ fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
 fn person_coloured(
     chroma: &[Option<u16>],
     cluster: &[u32],
-    heads: &[u32],
-    centers: &[Vec3],
+    people: &[ChromaHist],
     claimed: &[u32],
-    column_radius_m: f32,
 ) -> Vec<bool> {
-    let people = column_colours(chroma, cluster, heads, centers, column_radius_m);
     let nobody = ChromaHist::of(chroma, claimed.iter().copied());
     let mut out = vec![false; chroma.len()];
     for &j in cluster {
@@ -1084,21 +1076,15 @@ fn column_colours(
         })
         .collect()
 }
-/// Per voxel of `cluster` (indexed by voxel): the one person (index into `heads`) whose
-/// colour it is, `u8::MAX` for none or several: at least [`PERSON_COLOUR_DENSITY`] of the
-/// coloured voxels within `column_radius_m` of their head's vertical (head, shirt,
-/// trousers) share its chromaticity bin or a neighbouring one, and less than
+
+/// Per voxel of `cluster` (indexed by voxel): the one person (index into `people`, the
+/// colours of each head's column, [`column_colours`]) whose colour it is, `None` for none
+/// or several: at least [`PERSON_COLOUR_DENSITY`] of the coloured voxels of their column
+/// share its chromaticity bin or a neighbouring one, and less than
 /// [`OTHER_WEARS_DENSITY`] of every other person's column do. A sleeve reaching a
 /// neighbour's chest is then its owner's colour ([`split_people`]).
-fn worn_by_one(
-    chroma: &[Option<u16>],
-    cluster: &[u32],
-    heads: &[u32],
-    centers: &[Vec3],
-    column_radius_m: f32,
-) -> Vec<u8> {
-    let people = column_colours(chroma, cluster, heads, centers, column_radius_m);
-    let mut out = vec![u8::MAX; chroma.len()];
+fn worn_by_one(chroma: &[Option<u16>], cluster: &[u32], people: &[ChromaHist]) -> Vec<Option<u32>> {
+    let mut out = vec![None; chroma.len()];
     for &j in cluster {
         if let Some(b) = chroma[j as usize] {
             let mut wearers =
@@ -1109,7 +1095,7 @@ fn worn_by_one(
                     .enumerate()
                     .all(|(o, p)| o == k || !p.near_at_least(b, OTHER_WEARS_DENSITY))
             {
-                out[j as usize] = k as u8;
+                out[j as usize] = Some(k as u32);
             }
         }
     }
@@ -1184,11 +1170,12 @@ const MIN_DENSE_FILL: f32 = 0.95;
 const LIMB_HIDDEN_MIN_TOP_M: f32 = 1.0;
 /// A head's blob (what is connected to its top within a head's height and is not someone
 /// else's limb, [`find_heads`]) covers at least this much, m² (as voxels of `voxel_m`: 30
-/// at 5 cm). Among the candidates that pass the column test in seven seed groups of each
-/// preset, heads had 35 voxels or more, the hands and forearms held before a chest or
-/// handed over that passed for heads 10–24 (none 25–34): the hand held out in a hand-over
-/// stands over its owner's body column too. (`handover` geometry 1200–1203 97% → 100%; no
-/// frame lost in any preset's fifteen seed groups.)
+/// at 5 cm). Of the tops that passed the column test in seven seed groups of each preset
+/// (100, 300, 500, 800, 1000, 1200, 1600), the heads had 38 voxels or more; the 8 others,
+/// none of them within a true box's head height, 11–22: hands held out in hand-overs
+/// (`handover` 503, 1201, 1202; 1.04–1.5 m high), which stand over their owner's body
+/// column too. (`handover` geometry 1200–1203 97% → 100%; no frame lost in any preset's
+/// fifteen seed groups.)
 const MIN_HEAD_AREA_M2: f32 = 0.075;
 /// Cell of the top-view height map heads are searched in, metres.
 const HEIGHT_MAP_CELL_M: f32 = 0.08;
@@ -1584,7 +1571,12 @@ mod tests {
         }
         let cluster: Vec<u32> = (0..centers.len() as u32).collect();
         let robot: Vec<u32> = (21..61).collect();
-        let got = person_coloured(&chroma, &cluster, &[0], &centers, &robot, 0.2);
+        let got = person_coloured(
+            &chroma,
+            &cluster,
+            &column_colours(&chroma, &cluster, &[0], &centers, 0.2),
+            &robot,
+        );
         assert_eq!(&got[61..], &[true, true, false, false, false]);
         // The scene with the person in `shirt` (their column's and the judged sleeve) and
         // the robot's voxels `part` (and the judged link) in `robot_colour`.
@@ -1598,7 +1590,12 @@ mod tests {
         };
         // A shirt of the robot's colour: nothing is slowed any more than without colours.
         let same = dressed(orange, 0..0, orange);
-        let got = person_coloured(&same, &cluster, &[0], &centers, &robot, 0.2);
+        let got = person_coloured(
+            &same,
+            &cluster,
+            &column_colours(&same, &cluster, &[0], &centers, 0.2),
+            &robot,
+        );
         assert_eq!(&got[61..], &[false, true, false, false, false]);
         // Nothing claimed with a colour (a dark pedestal alone): a person's colours slow it.
         let dark: Vec<Option<u16>> = (0..chroma.len())
@@ -1610,19 +1607,34 @@ mod tests {
                 }
             })
             .collect();
-        let got = person_coloured(&dark, &cluster, &[0], &centers, &robot, 0.2);
+        let got = person_coloured(
+            &dark,
+            &cluster,
+            &column_colours(&dark, &cluster, &[0], &centers, 0.2),
+            &robot,
+        );
         assert_eq!(&got[61..], &[true, true, false, false, false]);
         // A grey shirt one bin from the robot's grey joints (half its voxels): the sleeve
         // is still the person's colour, the joints still the robot's.
         let grey = dressed(bin(15, 17), 21..41, bin(15, 16));
-        let got = person_coloured(&grey, &cluster, &[0], &centers, &robot, 0.2);
+        let got = person_coloured(
+            &grey,
+            &cluster,
+            &column_colours(&grey, &cluster, &[0], &centers, 0.2),
+            &robot,
+        );
         assert_eq!(&got[61..], &[true, true, false, false, false]);
         // An orange shirt a bin from the robot's orange, and the robot's shade of it (5% of
         // the robot, a bin from both): the shade is the robot's, which wears its very bin
         // more than the person. (When a colour was the robot's only from 10% of its part
         // on, the shade was the person's.)
         let shaded = dressed(bin(33, 15), 21..23, bin(32, 15));
-        let got = person_coloured(&shaded, &cluster, &[0], &centers, &robot, 0.2);
+        let got = person_coloured(
+            &shaded,
+            &cluster,
+            &column_colours(&shaded, &cluster, &[0], &centers, 0.2),
+            &robot,
+        );
         assert_eq!(&got[61..], &[true, true, false, false, false]);
     }
 
@@ -1653,12 +1665,19 @@ mod tests {
             chroma.push(c);
         }
         let cluster: Vec<u32> = (0..centers.len() as u32).collect();
-        let got = worn_by_one(&chroma, &cluster, &[0, 1], &centers, 0.2);
-        let none = u8::MAX;
-        assert_eq!(&got[82..], &[0, 1, none, none, none, none]);
+        let got = worn_by_one(
+            &chroma,
+            &cluster,
+            &column_colours(&chroma, &cluster, &[0, 1], &centers, 0.2),
+        );
+        assert_eq!(&got[82..], &[Some(0), Some(1), None, None, None, None]);
         // One person: every colour they wear is theirs alone, the grey too.
-        let got = worn_by_one(&chroma, &cluster, &[0], &centers, 0.2);
-        assert_eq!(&got[82..], &[0, none, 0, 0, none, none]);
+        let got = worn_by_one(
+            &chroma,
+            &cluster,
+            &column_colours(&chroma, &cluster, &[0], &centers, 0.2),
+        );
+        assert_eq!(&got[82..], &[Some(0), None, Some(0), Some(0), None, None]);
     }
 
     /// A person 1.8 m tall at x = 0 (one voxel column: skin head, shirt, trousers) whose

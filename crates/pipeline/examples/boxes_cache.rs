@@ -50,7 +50,8 @@ fn read_frame(path: &Path) -> Result<(LabeledCloud, PersonBoxes)> {
         bail!("{}: {} bytes, no point count", path.display(), bytes.len());
     };
     let n = u64::from_le_bytes(head.try_into()?) as usize;
-    if (bytes.len() as u64 - 8) / 16 != n as u64 || (bytes.len() - 8) % 16 != 0 {
+    // 8 bytes of count, then 12 of position, 1 of label and 3 of colour per point.
+    if n.checked_mul(16).and_then(|b| b.checked_add(8)) != Some(bytes.len()) {
         bail!("{}: {} bytes for {n} points", path.display(), bytes.len());
     }
     let (pos, rest) = bytes[8..].split_at(12 * n);
@@ -135,16 +136,8 @@ fn main() -> Result<()> {
                 .map(|(seed, index, p)| -> Result<_> {
                     let (cloud, truth) = read_frame(p)?;
                     let found = find_boxes(&cloud, &cfg)?;
-                    let m = match_boxes(&truth.boxes, &found.boxes);
-                    let s = BoxStats {
-                        frames: 1,
-                        good_frames: usize::from(m.is_good()),
-                        people: m.people,
-                        matched: m.matched,
-                        found: m.found,
-                        iou_sum: m.best_iou.iter().map(|&v| f64::from(v)).sum(),
-                        bad_frames: if m.is_good() { vec![] } else { vec![*index] },
-                    };
+                    let mut s = BoxStats::default();
+                    s.add_frame(*index, &match_boxes(&truth.boxes, &found.boxes));
                     Ok((*seed, *index, s))
                 })
                 .collect::<Result<_>>()?;

@@ -35,6 +35,20 @@ impl BoxStats {
         self.good_frames as f64 / self.frames.max(1) as f64
     }
 
+    /// Counts one frame, `index`, scored as `m`.
+    pub fn add_frame(&mut self, index: usize, m: &FrameMatch) {
+        self.frames += 1;
+        self.good_frames += usize::from(m.is_good());
+        if !m.is_good() {
+            self.bad_frames.push(index);
+            tracing::debug!(index, ?m, "frame not matched");
+        }
+        self.people += m.people;
+        self.matched += m.matched;
+        self.found += m.found;
+        self.iou_sum += m.best_iou.iter().map(|&v| f64::from(v)).sum::<f64>();
+    }
+
     /// Adds `other`'s counts; its bad frame indices are shifted by `frame_offset` (to tell
     /// sequences apart, e.g. `seed * 10_000`).
     pub fn absorb(&mut self, other: &BoxStats, frame_offset: usize) {
@@ -104,17 +118,7 @@ pub fn box_stats(
         let (frame, cloud) = study_frame(synth, &projector, index)?;
         for (cfg, s) in configs.iter().zip(&mut stats) {
             let found = find_boxes(&cloud, cfg)?;
-            let m = match_boxes(&frame.boxes.boxes, &found.boxes);
-            s.frames += 1;
-            s.good_frames += usize::from(m.is_good());
-            if !m.is_good() {
-                s.bad_frames.push(index);
-                tracing::debug!(index, ?m, "frame not matched");
-            }
-            s.people += m.people;
-            s.matched += m.matched;
-            s.found += m.found;
-            s.iou_sum += m.best_iou.iter().map(|&v| f64::from(v)).sum::<f64>();
+            s.add_frame(index, &match_boxes(&frame.boxes.boxes, &found.boxes));
         }
     }
     Ok(stats)
