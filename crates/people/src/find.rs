@@ -2,7 +2,7 @@
 
 use crate::config::{BoxMode, BoxesConfig, PeopleError};
 use crate::fit::{fit_box, principal_yaw};
-use crate::voxel::{Graph, Voxels, voxelize};
+use crate::voxel::{VoxelGraph, Voxels, voxelize};
 use bodyseg_core::math::{CHROMA_BINS, Vec3, chroma_bin, near_chroma_bins, srgb_to_linear};
 use bodyseg_core::{Class, LabeledCloud, PersonBox, PersonBoxes};
 use rustc_hash::{FxHashMap, FxHashSet};
@@ -20,7 +20,7 @@ pub fn find_boxes(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Result<PersonBoxes
         BoxMode::Labels => labels_mode(cloud, cfg),
         BoxMode::Geometry => geometry_mode(
             &cloud.positions_m,
-            cloud.colors.as_deref().filter(|_| cfg.uses_colours()),
+            cloud.colors.as_deref().filter(|_| cfg.uses_colors()),
             cfg,
         ),
         BoxMode::File => return Err(PeopleError::FileMode),
@@ -218,7 +218,7 @@ fn person_box(
 /// different people: connected patches of at least `min_voxels`, patches whose
 /// horizontal centres are closer than `separation_m` merged.
 fn part_seeds(
-    graph: &Graph,
+    graph: &VoxelGraph,
     v: &Voxels,
     members: &[u32],
     class: Class,
@@ -289,7 +289,7 @@ fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<PersonBox> {
         .iter()
         .map(|&c| c >= cfg.min_voxel_points)
         .collect();
-    let graph = Graph::new(&v.centers, cfg.person_gap_m, &dense);
+    let graph = VoxelGraph::new(&v.centers, cfg.person_gap_m, &dense);
     // Each voxel's person (0, 1, ... in the order found), u32::MAX for none.
     let mut owner = vec![u32::MAX; v.centers.len()];
     let mut people = 0u32;
@@ -399,7 +399,7 @@ const MAX_FRAGMENT_EXTENT_M: f32 = 0.6;
 /// than the one it touches, with the upper arm it hangs on
 /// nearest to it within [`FRAGMENT_REACH_M`]; with none, it stays where it was. `owner`
 /// holds each voxel's person (u32::MAX: none) and is updated in place.
-fn attach_limb_fragments(graph: &Graph, v: &Voxels, dense: &[bool], owner: &mut [u32]) {
+fn attach_limb_fragments(graph: &VoxelGraph, v: &Voxels, dense: &[bool], owner: &mut [u32]) {
     let torso = Class::Torso.id();
     let (upper_arm, lower_arm) = (Class::UpperArms.id(), Class::LowerArms.id());
     // The part an arm voxel hangs on: a lower arm on an upper arm, an upper arm on a torso.
@@ -612,7 +612,7 @@ fn geometry_mode(
                 && n >= cfg.min_voxel_points
         })
         .collect();
-    let graph = Graph::new(&all.centers, cfg.person_gap_m, &keep);
+    let graph = VoxelGraph::new(&all.centers, cfg.person_gap_m, &keep);
     let index = VoxelPoints::new(&all);
     let chroma = colors.map(|c| voxel_chroma(&all, c));
     let mut boxes = Vec::new();
@@ -680,12 +680,12 @@ fn geometry_mode(
 /// path leaving a head sideways within [`HEAD_CONTACT_DEPTH_M`] of its top pays
 /// [`CONTACT_PENALTY_M`], so an arm touching the side of a neighbour's head or neck stays
 /// its owner's. With the points' colours (`chroma`, [`voxel_chroma`]), the part that is
-/// nobody's spreads at [`FOREIGN_COLOUR_SCALE`] instead into voxels of a person's colours
-/// that it does not wear itself ([`person_coloured`]), and pays [`COLOUR_EDGE_PENALTY_M`]
+/// nobody's spreads at [`FOREIGN_COLOR_SCALE`] instead into voxels of a person's colours
+/// that it does not wear itself ([`person_colored`]), and pays [`COLOR_EDGE_PENALTY_M`]
 /// to step into them from its own: a person's arm lying along a robot link is then theirs,
 /// as it is not on positions alone.
 fn split_people(
-    graph: &Graph,
+    graph: &VoxelGraph,
     cluster: &[u32],
     heads: &[u32],
     centers: &[Vec3],
@@ -767,13 +767,13 @@ fn split_people(
             graph.split_scaled(centers, cluster, &seeds, plain, |_, i, j| penalty(i, j));
         // With colours, again: the part that is nobody's now spreading slowly through a
         // person's colours that the part it claimed on positions hardly wears
-        // (person_coloured), and each person slowly through the colours that only another
+        // (person_colored), and each person slowly through the colours that only another
         // person wears (worn_by_one). Only those costs change: with neither (one person and
         // nothing beyond their reach, or nothing of such a colour) the split is the same.
         if let Some(chroma) = chroma {
             // Here there are two people or more, or a part that is nobody's: the columns'
             // colours serve one of the two tests at least.
-            let columns = column_colours(chroma, cluster, heads, centers, cfg.column_radius_m);
+            let columns = column_colors(chroma, cluster, heads, centers, cfg.column_radius_m);
             let foreign = (!seeds[nobody].is_empty())
                 .then(|| {
                     let claimed: Vec<u32> = cluster
@@ -782,7 +782,7 @@ fn split_people(
                         .filter(|&(_, &g)| g == nobody)
                         .map(|(&j, _)| j)
                         .collect();
-                    person_coloured(chroma, cluster, &columns, &claimed)
+                    person_colored(chroma, cluster, &columns, &claimed)
                 })
                 .filter(|f| cluster.iter().any(|&j| f[j as usize]));
             let mine = (heads.len() >= 2)
@@ -798,24 +798,24 @@ fn split_people(
                 let scale = |g: usize, j: u32| {
                     if g == nobody {
                         if is_foreign(j) {
-                            FOREIGN_COLOUR_SCALE
+                            FOREIGN_COLOR_SCALE
                         } else {
                             NOBODY_LENGTH_SCALE
                         }
                     } else if others(g, j) {
-                        OTHER_COLOUR_SCALE
+                        OTHER_COLOR_SCALE
                     } else {
                         1.0
                     }
                 };
-                // ... and pays COLOUR_EDGE_PENALTY_M to step into a person's colours from
-                // its own, a person OTHER_COLOUR_EDGE_M to step into another's (see there).
+                // ... and pays COLOR_EDGE_PENALTY_M to step into a person's colours from
+                // its own, a person OTHER_COLOR_EDGE_M to step into another's (see there).
                 let edge = |g: usize, i: u32, j: u32| {
                     let crosses = g == nobody && is_foreign(j) && !is_foreign(i);
                     let enters = g != nobody && others(g, j) && !others(g, i);
                     penalty(i, j)
-                        + if crosses { COLOUR_EDGE_PENALTY_M } else { 0.0 }
-                        + if enters { OTHER_COLOUR_EDGE_M } else { 0.0 }
+                        + if crosses { COLOR_EDGE_PENALTY_M } else { 0.0 }
+                        + if enters { OTHER_COLOR_EDGE_M } else { 0.0 }
                 };
                 owner = graph.split_scaled(centers, cluster, &seeds, scale, edge);
             }
@@ -912,24 +912,24 @@ const TRUNK_RADIUS_M: f32 = 0.25;
 /// 87% (one frame lost, one won), no other cell changed.
 const NOBODY_LENGTH_SCALE: f32 = 0.5;
 /// Geometry mode's split with colours: the part that is nobody's spreads into a voxel of a
-/// person's colour ([`person_coloured`]: a sleeve or a hand reaching along a robot link)
+/// person's colour ([`person_colored`]: a sleeve or a hand reaching along a robot link)
 /// at this fraction of a person's cost instead of [`NOBODY_LENGTH_SCALE`].
-const FOREIGN_COLOUR_SCALE: f32 = 1.5;
+const FOREIGN_COLOR_SCALE: f32 = 1.5;
 /// Geometry mode's split with colours: what the part that is nobody's pays, metres, on an
-/// edge from a voxel not of a person's colour into one that is ([`person_coloured`]), as a
+/// edge from a voxel not of a person's colour into one that is ([`person_colored`]), as a
 /// path leaving a head sideways pays [`CONTACT_PENALTY_M`]. A robot link along which a
 /// person's arm lies touches every voxel of the arm: the slower spread alone
-/// ([`FOREIGN_COLOUR_SCALE`], on one 5 cm step from the link) hardly slowed it, and the
+/// ([`FOREIGN_COLOR_SCALE`], on one 5 cm step from the link) hardly slowed it, and the
 /// robot took the arm from the side (`robot_cell` 1101 frame 60: the reaching person's box
 /// IoU 0.41; 0.94 with the penalty). With it the robot reaches the arm only along the arm
 /// itself, from its tip. On the twelve seed groups of the box study (with the rule of
-/// [`person_coloured`]): `robot_cell` geometry 1100–1103 85% → 95%, 900–903 94% → 95%, no
+/// [`person_colored`]): `robot_cell` geometry 1100–1103 85% → 95%, 900–903 94% → 95%, no
 /// frame lost in any cell; mean best IoU up in 9 of the 12 `robot_cell` groups (1100–1103
 /// 0.794 → 0.807), down 0.001 in one (600–603).
-const COLOUR_EDGE_PENALTY_M: f32 = 1.0;
+const COLOR_EDGE_PENALTY_M: f32 = 1.0;
 /// Geometry mode's split with colours: a person spreads into a voxel of a colour only
 /// another person wears ([`worn_by_one`]: a neighbour's sleeve reaching their chest) at
-/// this multiple of the cost, and pays [`OTHER_COLOUR_EDGE_M`] to step into it from one
+/// this multiple of the cost, and pays [`OTHER_COLOR_EDGE_M`] to step into it from one
 /// that is not. Where one person's arm touches another's body below the head, the graph
 /// alone gives the arm's far end to the body it touches (nearer that person's head than
 /// its own's along the graph); the colours keep it its owner's. With both, on the box
@@ -939,18 +939,18 @@ const COLOUR_EDGE_PENALTY_M: f32 = 1.0;
 /// frame 40), mean
 /// best IoU up or equal in every group; `single` unchanged (one person: not used). Flat
 /// from 2 to 4 and from 0.3 to 0.8 m.
-const OTHER_COLOUR_SCALE: f32 = 3.0;
-/// See [`OTHER_COLOUR_SCALE`], metres.
-const OTHER_COLOUR_EDGE_M: f32 = 0.5;
+const OTHER_COLOR_SCALE: f32 = 3.0;
+/// See [`OTHER_COLOR_SCALE`], metres.
+const OTHER_COLOR_EDGE_M: f32 = 0.5;
 /// A colour is one person's only ([`worn_by_one`]) when every other person's column holds
 /// less than this fraction of it (with neighbouring bins): an arm reaching across a
-/// neighbour's column adds its sleeve there. (0.03, the same as [`PERSON_COLOUR_DENSITY`]:
+/// neighbour's column adds its sleeve there. (0.03, the same as [`PERSON_COLOR_DENSITY`]:
 /// one `robot_cell` frame lost, 1101 frame 44; 0.015: two of the five `robot_cell` frames
 /// above not won, 403 frames 28 and 44, and one `handover` frame, 1603 frame 84.)
 const OTHER_WEARS_DENSITY: f32 = 0.02;
 /// A colour is a person's when at least this fraction of the coloured voxels in the column
-/// below their head share its chromaticity bin or a neighbouring one ([`person_coloured`]).
-const PERSON_COLOUR_DENSITY: f32 = 0.03;
+/// below their head share its chromaticity bin or a neighbouring one ([`person_colored`]).
+const PERSON_COLOR_DENSITY: f32 = 0.03;
 /// Per voxel, its points' mean colour as a linear-RGB chromaticity bin ([`chroma_bin`]);
 /// `None` where it is too dark to tell (black: no colour).
 fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
@@ -978,9 +978,9 @@ fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
 }
 
 /// Per voxel of `cluster` (indexed by voxel): whether the part that is nobody's spreads
-/// into it at [`FOREIGN_COLOUR_SCALE`] (and pays [`COLOUR_EDGE_PENALTY_M`] to enter it):
-/// its colour is one of a person's — at least [`PERSON_COLOUR_DENSITY`] of the coloured
-/// voxels of their column (`people`, [`column_colours`]: head, shirt, trousers, where
+/// into it at [`FOREIGN_COLOR_SCALE`] (and pays [`COLOR_EDGE_PENALTY_M`] to enter it):
+/// its colour is one of a person's — at least [`PERSON_COLOR_DENSITY`] of the coloured
+/// voxels of their column (`people`, [`column_colors`]: head, shirt, trousers, where
 /// nothing but the person stands) share its chromaticity bin or a neighbouring one — and
 /// that person wears its very bin at least as much as what the part that is nobody's
 /// claimed on positions alone (`claimed`) does, as shares of each one's coloured voxels.
@@ -998,7 +998,7 @@ fn voxel_chroma(all: &Voxels, colors: &[[u8; 3]]) -> Vec<Option<u16>> {
 /// (30, 16), shirt (32–33, 14)), is the robot's. (Before, a colour was the robot's at 10%
 /// of its part in the very bin: the shade was then the person's, and with the penalty the
 /// robot's shaded voxels stayed in the person's box.)
-fn person_coloured(
+fn person_colored(
     chroma: &[Option<u16>],
     cluster: &[u32],
     people: &[ChromaHist],
@@ -1013,7 +1013,7 @@ fn person_coloured(
             // person's (a hand a shade off the face), is the person's.
             out[j as usize] = people
                 .iter()
-                .any(|p| p.near_at_least(b, PERSON_COLOUR_DENSITY) && p.share(b) >= robot);
+                .any(|p| p.near_at_least(b, PERSON_COLOR_DENSITY) && p.share(b) >= robot);
         }
     }
     out
@@ -1057,7 +1057,7 @@ impl ChromaHist {
 
 /// The colours of the column below each of `heads` (within `column_radius_m` of its
 /// vertical, among `cluster`): where nothing but that person stands (head, shirt, trousers).
-fn column_colours(
+fn column_colors(
     chroma: &[Option<u16>],
     cluster: &[u32],
     heads: &[u32],
@@ -1078,8 +1078,8 @@ fn column_colours(
 }
 
 /// Per voxel of `cluster` (indexed by voxel): the one person (index into `people`, the
-/// colours of each head's column, [`column_colours`]) whose colour it is, `None` for none
-/// or several: at least [`PERSON_COLOUR_DENSITY`] of the coloured voxels of their column
+/// colours of each head's column, [`column_colors`]) whose colour it is, `None` for none
+/// or several: at least [`PERSON_COLOR_DENSITY`] of the coloured voxels of their column
 /// share its chromaticity bin or a neighbouring one, and less than
 /// [`OTHER_WEARS_DENSITY`] of every other person's column do. A sleeve reaching a
 /// neighbour's chest is then its owner's colour ([`split_people`]).
@@ -1088,7 +1088,7 @@ fn worn_by_one(chroma: &[Option<u16>], cluster: &[u32], people: &[ChromaHist]) -
     for &j in cluster {
         if let Some(b) = chroma[j as usize] {
             let mut wearers =
-                (0..people.len()).filter(|&k| people[k].near_at_least(b, PERSON_COLOUR_DENSITY));
+                (0..people.len()).filter(|&k| people[k].near_at_least(b, PERSON_COLOR_DENSITY));
             if let (Some(k), None) = (wearers.next(), wearers.next())
                 && people
                     .iter()
@@ -1188,7 +1188,7 @@ const COLUMN_SLICE_M: f32 = 0.1;
 /// points below them (`column_radius_m`, `min_column_fill`) reaching down to
 /// `max_bottom_m`. Returns one voxel per head (its top), highest first.
 fn find_heads(
-    graph: &Graph,
+    graph: &VoxelGraph,
     keep: &[bool],
     cluster: &[u32],
     centers: &[Vec3],
@@ -1426,7 +1426,7 @@ fn find_heads(
 /// arm touching a crouching person's head rises to its owner's shoulder.
 #[allow(clippy::too_many_arguments)]
 fn reaching_limbs(
-    graph: &Graph,
+    graph: &VoxelGraph,
     keep: &[bool],
     blob: &[u32],
     centers: &[Vec3],
@@ -1545,7 +1545,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn only_a_person_s_colours_the_robot_does_not_wear_slow_the_robot_s_spread() {
+    fn only_a_person_s_colors_the_robot_does_not_wear_slow_the_robot_s_spread() {
         let bin = |r: usize, g: usize| Some((r * CHROMA_BINS + g) as u16);
         // A person at x = 0 (head 0, then 20 voxels in the column: 10 shirt, 10 skin) and
         // beside them, 1 m away, a robot of 40 voxels: 39 orange, one (under the density)
@@ -1571,29 +1571,29 @@ mod tests {
         }
         let cluster: Vec<u32> = (0..centers.len() as u32).collect();
         let robot: Vec<u32> = (21..61).collect();
-        let got = person_coloured(
+        let got = person_colored(
             &chroma,
             &cluster,
-            &column_colours(&chroma, &cluster, &[0], &centers, 0.2),
+            &column_colors(&chroma, &cluster, &[0], &centers, 0.2),
             &robot,
         );
         assert_eq!(&got[61..], &[true, true, false, false, false]);
         // The scene with the person in `shirt` (their column's and the judged sleeve) and
-        // the robot's voxels `part` (and the judged link) in `robot_colour`.
-        let dressed = |shirt, part: std::ops::Range<usize>, robot_colour| {
+        // the robot's voxels `part` (and the judged link) in `robot_color`.
+        let dressed = |shirt, part: std::ops::Range<usize>, robot_color| {
             let mut c = chroma.clone();
             c[1..11].fill(shirt);
-            c[part].fill(robot_colour);
+            c[part].fill(robot_color);
             c[61] = shirt;
-            c[63] = robot_colour;
+            c[63] = robot_color;
             c
         };
         // A shirt of the robot's colour: nothing is slowed any more than without colours.
         let same = dressed(orange, 0..0, orange);
-        let got = person_coloured(
+        let got = person_colored(
             &same,
             &cluster,
-            &column_colours(&same, &cluster, &[0], &centers, 0.2),
+            &column_colors(&same, &cluster, &[0], &centers, 0.2),
             &robot,
         );
         assert_eq!(&got[61..], &[false, true, false, false, false]);
@@ -1607,20 +1607,20 @@ mod tests {
                 }
             })
             .collect();
-        let got = person_coloured(
+        let got = person_colored(
             &dark,
             &cluster,
-            &column_colours(&dark, &cluster, &[0], &centers, 0.2),
+            &column_colors(&dark, &cluster, &[0], &centers, 0.2),
             &robot,
         );
         assert_eq!(&got[61..], &[true, true, false, false, false]);
         // A grey shirt one bin from the robot's grey joints (half its voxels): the sleeve
         // is still the person's colour, the joints still the robot's.
         let grey = dressed(bin(15, 17), 21..41, bin(15, 16));
-        let got = person_coloured(
+        let got = person_colored(
             &grey,
             &cluster,
-            &column_colours(&grey, &cluster, &[0], &centers, 0.2),
+            &column_colors(&grey, &cluster, &[0], &centers, 0.2),
             &robot,
         );
         assert_eq!(&got[61..], &[true, true, false, false, false]);
@@ -1629,22 +1629,22 @@ mod tests {
         // more than the person. (When a colour was the robot's only from 10% of its part
         // on, the shade was the person's.)
         let shaded = dressed(bin(33, 15), 21..23, bin(32, 15));
-        let got = person_coloured(
+        let got = person_colored(
             &shaded,
             &cluster,
-            &column_colours(&shaded, &cluster, &[0], &centers, 0.2),
+            &column_colors(&shaded, &cluster, &[0], &centers, 0.2),
             &robot,
         );
         assert_eq!(&got[61..], &[true, true, false, false, false]);
     }
 
     #[test]
-    fn a_colour_only_one_person_wears_is_theirs() {
+    fn a_color_only_one_person_wears_is_theirs() {
         let bin = |r: usize, g: usize| Some((r * CHROMA_BINS + g) as u16);
         let (skin, red, blue, grey) = (bin(30, 12), bin(40, 10), bin(8, 12), bin(15, 17));
         // Two people 1 m apart, each a column of 40 voxels: 10 skin, then 30 of their shirt
         // (red, blue), in the red one's 3 of them grey (7.5%: theirs), in the blue one's 1
-        // (2.5%: under PERSON_COLOUR_DENSITY, over OTHER_WEARS_DENSITY).
+        // (2.5%: under PERSON_COLOR_DENSITY, over OTHER_WEARS_DENSITY).
         let mut centers = vec![[0.0, 0.0, 1.8], [1.0, 0.0, 1.8]];
         let mut chroma = vec![skin, skin];
         for (x, shirt) in [(0.0, red), (1.0, blue)] {
@@ -1668,14 +1668,14 @@ mod tests {
         let got = worn_by_one(
             &chroma,
             &cluster,
-            &column_colours(&chroma, &cluster, &[0, 1], &centers, 0.2),
+            &column_colors(&chroma, &cluster, &[0, 1], &centers, 0.2),
         );
         assert_eq!(&got[82..], &[Some(0), Some(1), None, None, None, None]);
         // One person: every colour they wear is theirs alone, the grey too.
         let got = worn_by_one(
             &chroma,
             &cluster,
-            &column_colours(&chroma, &cluster, &[0], &centers, 0.2),
+            &column_colors(&chroma, &cluster, &[0], &centers, 0.2),
         );
         assert_eq!(&got[82..], &[Some(0), None, Some(0), Some(0), None, None]);
     }
@@ -1696,12 +1696,12 @@ mod tests {
         };
         for k in 0..=34 {
             let z = 0.1 + 0.05 * k as f32;
-            let colour = match z {
+            let color = match z {
                 z if z >= 1.6 => skin,
                 z if z >= 0.9 => shirt,
                 _ => trousers,
             };
-            push([0.0, 0.0, z], colour);
+            push([0.0, 0.0, z], color);
         }
         let arm: Vec<u32> = (1..=15)
             .map(|k| {
@@ -1719,7 +1719,7 @@ mod tests {
     }
 
     #[test]
-    fn an_arm_along_a_robot_link_stays_its_owner_s_by_its_colours() {
+    fn an_arm_along_a_robot_link_stays_its_owner_s_by_its_colors() {
         let (centers, chroma, arm) = arm_along_a_link();
         let heights: Vec<f32> = centers.iter().map(|p| p[2]).collect();
         let cfg = BoxesConfig {
@@ -1727,7 +1727,7 @@ mod tests {
             ..BoxesConfig::default()
         };
         let every = vec![true; centers.len()];
-        let graph = Graph::new(&centers, cfg.person_gap_m, &every);
+        let graph = VoxelGraph::new(&centers, cfg.person_gap_m, &every);
         let [cluster] = graph.components(&every).try_into().expect("one cluster");
         let head = 34;
         // How many of the arm's voxels are the person's, and whether any of the robot's
