@@ -83,10 +83,8 @@ pub struct BoxesConfig {
     /// `min_height_m`. Without labels, what stands up to ≈ 1 m in a workcell looks like a
     /// crouching person from above: a robot's shoulder joint on its pedestal (0.97 m in
     /// bodyseg-synth), a storage box (up to 0.9 m), a table with things on it; crouching
-    /// adults are ≈ 1.05 m and up. (0.9 → 1.0 on the box study's fifteen `robot_cell` seed
-    /// groups: 5 frames with such an extra box mended, none lost, no other preset changed.)
-    /// Lower it to find people sitting on the floor. Must be > 0 and <
-    /// `max_height_m`. Default 1.0.
+    /// adults are ≈ 1.05 m and up. Lower it to find people sitting on the floor. Must be
+    /// > 0 and < `max_height_m`. Default 1.0.
     pub geometry_min_height_m: f32,
     /// A person's top is at most this high, metres. Must be > `min_height_m` and
     /// `geometry_min_height_m`.
