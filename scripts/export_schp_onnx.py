@@ -18,6 +18,8 @@ What it does:
   where it is "none", ELU where "elu").
 - The checkpoint's `module.` prefix (DataParallel) is stripped; the state dict must then
   match the network exactly.
+- Adaptive average poolings (SCHP's PSP module) are rewritten as two matrix products,
+  checked equal; the exporter refuses those whose output size does not divide the input.
 - The exported graph takes one fixed-size input [N,3,512,512] float32 (BGR, normalised with
   SCHP's mean/std, N dynamic) and returns the fusion head's logits [N,7,128,128]; opset 17,
   IR version 8 (ONNX Runtime >= 1.14 reads it).
@@ -124,6 +126,46 @@ class FusionOnly:
         return Wrapped(net)
 
 
+def exportable_adaptive_pools(net):
+    """Replaces each nn.AdaptiveAvgPool2d by the same pooling written as two matrix products
+    (the row and column averaging matrices of PyTorch's adaptive windows: start floor(i n /
+    out), end ceil((i + 1) n / out)). The ONNX exporter refuses an adaptive pooling whose
+    output size does not divide the input size, which SCHP's PSP module has (bins 3 and 6 of
+    a 64x64 map for a 512 input). Returns the number replaced."""
+    import math
+
+    import torch
+    import torch.nn as nn
+
+    class MatrixAdaptiveAvgPool2d(nn.Module):
+        def __init__(self, output_size):
+            super().__init__()
+            o = output_size if isinstance(output_size, (tuple, list)) else (output_size, output_size)
+            self.out_h, self.out_w = int(o[0]), int(o[1])
+
+        @staticmethod
+        def averaging(n_in, n_out, like):
+            m = torch.zeros(n_out, n_in, dtype=like.dtype)
+            for i in range(n_out):
+                a, b = (i * n_in) // n_out, math.ceil((i + 1) * n_in / n_out)
+                m[i, a:b] = 1.0 / (b - a)
+            return m
+
+        def forward(self, x):
+            h, w = int(x.shape[-2]), int(x.shape[-1])
+            ph = self.averaging(h, self.out_h, x)
+            pw = self.averaging(w, self.out_w, x)
+            return torch.matmul(torch.matmul(ph, x), pw.t())
+
+    count = 0
+    for name, mod in list(net.named_modules()):
+        for child_name, child in list(mod.named_children()):
+            if isinstance(child, nn.AdaptiveAvgPool2d):
+                setattr(mod, child_name, MatrixAdaptiveAvgPool2d(child.output_size))
+                count += 1
+    return count
+
+
 def stand_in_network(num_classes):
     """A tiny SCHP-shaped network (conv + InPlaceABNSync blocks, output at 1/4, returning
     [[parsing, fusion], [edge]]) for --dry-run."""
@@ -163,6 +205,11 @@ def export(net, out, input_size, num_classes, opset, description):
         folded = model(x_check).numpy()
     if np.abs(ref - folded).max() > 1e-4:
         sys.exit("folding |w| + eps into the BatchNorm weights changed the output")
+    if exportable_adaptive_pools(model):
+        with torch.no_grad():
+            pooled = model(x_check).numpy()
+        if np.abs(ref - pooled).max() > 1e-4:
+            sys.exit("the matrix form of the adaptive poolings changed the output")
     dummy = torch.zeros(1, 3, input_size, input_size)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(".tmp.onnx")
