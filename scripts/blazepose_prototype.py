@@ -176,15 +176,21 @@ class PersonPose:
     mask: np.ndarray  # [256, 256] person probability on the ROI grid
 
 
+def ort_session(path, threads):
+    """ONNX Runtime session: `threads` intra-op threads, one inter-op, no spin-waiting (a
+    spinning pool is several times slower on a shared 2-core machine)."""
+    import onnxruntime as ort
+
+    o = ort.SessionOptions()
+    o.intra_op_num_threads = threads
+    o.inter_op_num_threads = 1
+    o.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    return ort.InferenceSession(str(path), o, providers=["CPUExecutionProvider"])
+
+
 class LandmarkModel:
     def __init__(self, path, threads=2):
-        import onnxruntime as ort
-
-        o = ort.SessionOptions()
-        o.intra_op_num_threads = threads
-        o.inter_op_num_threads = 1
-        o.add_session_config_entry("session.intra_op.allow_spinning", "0")
-        self.sess = ort.InferenceSession(str(path), o, providers=["CPUExecutionProvider"])
+        self.sess = ort_session(path, threads)
 
     calls = 0  # inference count and seconds, for the bench
     seconds = 0.0
@@ -231,13 +237,7 @@ def ssd_anchors():
 
 class Detector:
     def __init__(self, path, threads=2):
-        import onnxruntime as ort
-
-        o = ort.SessionOptions()
-        o.intra_op_num_threads = threads
-        o.inter_op_num_threads = 1
-        o.add_session_config_entry("session.intra_op.allow_spinning", "0")
-        self.sess = ort.InferenceSession(str(path), o, providers=["CPUExecutionProvider"])
+        self.sess = ort_session(path, threads)
         self.anchors = ssd_anchors()
 
     def detect(self, rgb, region):
