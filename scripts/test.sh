@@ -65,6 +65,13 @@ else
     echo "skipped: pip install torch onnx onnxruntime to check the SCHP export script"
 fi
 
+step "python3 scripts/test_real_parsing.py (real-image benchmark scripts; when numpy and pillow are installed)"
+if python3 -c "import numpy, PIL" >/dev/null 2>&1; then
+    python3 scripts/test_real_parsing.py
+else
+    echo "skipped: pip install numpy pillow scipy to test the benchmark scripts"
+fi
+
 step "cargo test --workspace --all-features --release"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
