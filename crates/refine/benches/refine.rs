@@ -1,9 +1,12 @@
 //! Guards the speed of label-aware DBSCAN and of the whole refinement on human-shaped
-//! clouds of 30k, 100k and 300k points (eps 0.05 m, min_points 40, 7 labels), made by the
-//! seeded generator of `bodyseg-testkit`. Targets (issue 2, single-threaded at 100k): the
-//! whole refinement of one person under 20 ms; ratios against peers are printed by
-//! `scripts/bench_dbscan_peers.py`. Run single-threaded with
-//! `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`. `refine_modes` prices
+//! clouds of 30k, 100k and 300k points (eps 0.05 m, min_points 40, 7 labels), two kinds:
+//! `*_synth`, sensor-like clouds of `bodyseg-synth` (one person seen by Kinect-v2-like
+//! depth cameras, flying pixels on, the parser's label errors; `common/synth_cloud.rs`),
+//! and the capsule clouds of `bodyseg-testkit` (groups without a suffix). Targets (issue
+//! 30, single-threaded, synth cloud at 100k): the whole refinement (M-R-N) of one person
+//! ≤ 12 ms; ratios against peers are printed by `scripts/bench_dbscan_peers.py`. Run
+//! single-threaded with `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`;
+//! `refine_synth_steps` splits the synth 100k refinement by steps (M, N, M-R-N). `refine_modes` prices
 //! the modes beside the paper's (issue 8: contact graph, coverage tree, weighted noise,
 //! and all three; probability noise and its wide vote for doubted labels with made-up
 //! parser probabilities, doubted in strips) on the 100k cloud; `foreign_colours` the
@@ -11,6 +14,7 @@
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
+use bodyseg_refine::Steps;
 use bodyseg_refine::colour::drop_foreign_arms;
 use bodyseg_refine::{
     DbscanParams, GraphMode, NoiseMode, PointEvidence, RefineConfig, TreeMode, dbscan, refine,
@@ -24,8 +28,72 @@ use std::hint::black_box;
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+#[path = "common/synth_cloud.rs"]
+mod synth_cloud;
+
 const SIZES: [usize; 3] = [30_000, 100_000, 300_000];
 const SEED: u64 = 1;
+
+/// The synth cloud of `n` points (seed [`SEED`]).
+fn synth(n: usize) -> synth_cloud::SynthPersonCloud {
+    synth_cloud::synth_person_cloud(n, SEED).expect("the synth preset renders")
+}
+
+fn bench_synth(c: &mut Criterion) {
+    let params = DbscanParams {
+        eps_m: 0.05,
+        min_points: 40,
+        label_penalty_m: f32::INFINITY,
+    };
+    let cfg = RefineConfig::default();
+    let clouds: Vec<_> = SIZES.iter().map(|&n| (n, synth(n))).collect();
+    for (n, p) in &clouds {
+        eprintln!(
+            "synth cloud {n}: {} cameras, {} flying pixels, {} labels unlike the truth",
+            p.cameras, p.flying, p.mislabelled
+        );
+    }
+    let mut g = c.benchmark_group("dbscan_synth");
+    g.sample_size(20);
+    for (n, p) in &clouds {
+        g.throughput(Throughput::Elements(*n as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), p, |b, p| {
+            b.iter(|| {
+                dbscan(
+                    black_box(&p.cloud.positions_m),
+                    black_box(&p.cloud.labels),
+                    &params,
+                )
+            })
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("refine_synth");
+    g.sample_size(20);
+    for (n, p) in &clouds {
+        let boxes = [p.person_box.clone()];
+        g.throughput(Throughput::Elements(*n as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), p, |b, p| {
+            b.iter(|| refine(black_box(&p.cloud), &boxes, &cfg))
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("refine_synth_steps");
+    g.sample_size(20);
+    let (n, p) = &clouds[1];
+    let boxes = [p.person_box.clone()];
+    g.throughput(Throughput::Elements(*n as u64));
+    for steps in ["M", "N", "M-R-N"] {
+        let cfg = RefineConfig {
+            steps: steps.parse::<Steps>().expect("a step name"),
+            ..RefineConfig::default()
+        };
+        g.bench_with_input(BenchmarkId::new(steps, n), p, |b, p| {
+            b.iter(|| refine(black_box(&p.cloud), &boxes, &cfg))
+        });
+    }
+    g.finish();
+}
 
 fn bench_dbscan(c: &mut Criterion) {
     let mut g = c.benchmark_group("dbscan");
@@ -211,6 +279,6 @@ fn bench_smooth(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default();
-    targets = bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colours, bench_smooth
+    targets = bench_synth, bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colours, bench_smooth
 }
 criterion_main!(benches);
