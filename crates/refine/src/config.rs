@@ -44,6 +44,20 @@ pub enum RefineError {
         /// The configured density.
         density: f32,
     },
+    /// A length that sets a grid's cells is finer than the cloud's coordinates resolve.
+    #[error(
+        "refine.{field} = {value_m} m is finer than this cloud's coordinates resolve: the cloud's extent is {extent_m} m, over which f32 coordinates step by up to {min_m} m (extent / 2^23); use at least that"
+    )]
+    TooFine {
+        /// The field's name.
+        field: &'static str,
+        /// Its value, metres.
+        value_m: f32,
+        /// The cloud's largest extent along an axis, metres.
+        extent_m: f32,
+        /// The smallest value this cloud allows, metres.
+        min_m: f32,
+    },
     /// Label probabilities given, but not one per point.
     #[error("label probabilities: {got} for {want} points (one per point expected)")]
     LabelProbs {
@@ -172,6 +186,13 @@ impl Steps {
         },
         Steps::MRN,
     ];
+}
+
+impl Steps {
+    /// True when N runs (never in `Reference`).
+    pub fn noise(&self) -> bool {
+        matches!(self, Steps::Run { noise: true, .. })
+    }
 }
 
 impl Default for Steps {
@@ -383,10 +404,46 @@ impl Default for RefineConfig {
     }
 }
 
+/// Largest radius or gap of the refinement, metres: every search radius is about a body
+/// part (eps 5 cm, contact 10 cm, votes 15 cm), and a person fits in 2.5 m; a radius of
+/// kilometres is a typo, and it would make the grids' searches walk every cell.
+pub const MAX_RADIUS_M: f32 = 5.0;
+
+/// Largest count of the refinement (`min_points`, `noise_doubt_k`): far beyond any
+/// neighbourhood of a person's points, so that a typo fails at load.
+pub const MAX_COUNT: usize = 1_000_000;
+
+/// Largest `noise_k`: the narrow vote keeps its voters in a sorted list (insertions cost
+/// up to `noise_k` each), and 1024 points within eps is far beyond any cloud's density.
+pub const MAX_NOISE_K: usize = 1024;
+
+/// A grid length must be at least the cloud's extent over this (2^23: the steps of f32
+/// coordinates across that extent).
+const RESOLUTION_STEPS: f32 = 8_388_608.0;
+
 impl RefineConfig {
     /// Checks every field's range; the error names the field.
     pub fn validate(&self) -> Result<(), RefineError> {
         let bad = |field, problem: String| Err(RefineError::InvalidConfig { field, problem });
+        let radius = |field, v: f32, zero_ok: bool| {
+            let low_ok = if zero_ok { v >= 0.0 } else { v > 0.0 };
+            if v.is_finite() && low_ok && v <= MAX_RADIUS_M {
+                Ok(())
+            } else {
+                let low = if zero_ok { "[0" } else { "(0" };
+                bad(
+                    field,
+                    format!("must be in {low}, {MAX_RADIUS_M}] metres, got {v}"),
+                )
+            }
+        };
+        let count = |field, v: usize, max: usize| {
+            if (1..=max).contains(&v) {
+                Ok(())
+            } else {
+                bad(field, format!("must be in [1, {max}], got {v}"))
+            }
+        };
         let non_negative = |field, v: f32| {
             if v.is_finite() && v >= 0.0 {
                 Ok(())
@@ -401,15 +458,8 @@ impl RefineConfig {
                 bad(field, format!("must be in [0, 1), got {v}"))
             }
         };
-        if !(self.eps_m.is_finite() && self.eps_m > 0.0) {
-            return bad(
-                "eps_m",
-                format!("must be a finite number > 0, got {}", self.eps_m),
-            );
-        }
-        if self.min_points < 1 {
-            return bad("min_points", "must be >= 1, got 0".into());
-        }
+        radius("eps_m", self.eps_m, false)?;
+        count("min_points", self.min_points, MAX_COUNT)?;
         if self.label_penalty_m.is_nan() || self.label_penalty_m < 0.0 {
             return bad(
                 "label_penalty_m",
@@ -420,31 +470,67 @@ impl RefineConfig {
             );
         }
         non_negative("inside_tolerance", self.inside_tolerance)?;
-        if !(self.contact_gap_m.is_finite() && self.contact_gap_m > 0.0) {
-            return bad(
-                "contact_gap_m",
-                format!("must be a finite number > 0, got {}", self.contact_gap_m),
-            );
-        }
+        radius("contact_gap_m", self.contact_gap_m, false)?;
         if !(self.contact_inside_fraction > 0.0 && self.contact_inside_fraction <= 1.0) {
             return bad(
                 "contact_inside_fraction",
                 format!("must be in (0, 1], got {}", self.contact_inside_fraction),
             );
         }
-        if self.noise_k < 1 {
-            return bad("noise_k", "must be >= 1, got 0".into());
-        }
+        count("noise_k", self.noise_k, MAX_NOISE_K)?;
         non_negative("noise_self_weight", self.noise_self_weight)?;
         below_one("noise_doubt_ratio", self.noise_doubt_ratio)?;
-        non_negative("noise_doubt_radius_m", self.noise_doubt_radius_m)?;
-        if self.noise_doubt_k < 1 {
-            return bad("noise_doubt_k", "must be >= 1, got 0".into());
-        }
+        radius("noise_doubt_radius_m", self.noise_doubt_radius_m, true)?;
+        count("noise_doubt_k", self.noise_doubt_k, MAX_COUNT)?;
         below_one("foreign_colour_density", self.foreign_colour_density)?;
-        non_negative("floor_contact_m", self.floor_contact_m)?;
-        non_negative("smooth_radius_m", self.smooth_radius_m)?;
+        radius("floor_contact_m", self.floor_contact_m, true)?;
+        radius("smooth_radius_m", self.smooth_radius_m, true)?;
         Ok(())
+    }
+
+    /// Checks the lengths that set the size of a grid's cells against a cloud whose
+    /// largest extent along an axis is `extent_m` (after [`RefineConfig::validate`]): each
+    /// in use must be at least `extent_m / 2^23`, the step of f32 coordinates across that
+    /// extent. Below it the neighbourhoods cannot be told apart from rounding, and the
+    /// grids would need more cells per axis than their keys hold.
+    pub fn validate_for_extent(&self, extent_m: f32) -> Result<(), RefineError> {
+        let min_m = extent_m / RESOLUTION_STEPS;
+        let lengths = [
+            ("eps_m", self.eps_m),
+            (
+                "contact_gap_m",
+                if self.graph == GraphMode::Contact {
+                    self.contact_gap_m
+                } else {
+                    f32::INFINITY
+                },
+            ),
+            (
+                "noise_doubt_radius_m",
+                if self.noise == NoiseMode::Probability && self.noise_doubt_radius_m > 0.0 {
+                    self.noise_doubt_radius_m
+                } else {
+                    f32::INFINITY
+                },
+            ),
+            (
+                "smooth_radius_m",
+                if self.smooth_radius_m > 0.0 {
+                    self.smooth_radius_m
+                } else {
+                    f32::INFINITY
+                },
+            ),
+        ];
+        match lengths.into_iter().find(|&(_, v)| v < min_m) {
+            Some((field, value_m)) => Err(RefineError::TooFine {
+                field,
+                value_m,
+                extent_m,
+                min_m,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// The DBSCAN parameters of this configuration.

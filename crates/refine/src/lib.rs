@@ -33,9 +33,13 @@ pub mod config;
 pub mod dbscan;
 pub mod floor;
 pub mod graph;
+mod grid;
 pub mod steps;
 
-pub use config::{GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode, VoteMode};
+pub use config::{
+    GraphMode, MAX_COUNT, MAX_NOISE_K, MAX_RADIUS_M, NoiseMode, RefineConfig, RefineError, Steps,
+    TreeMode, VoteMode,
+};
 pub use dbscan::{Clustering, DbscanParams, dbscan, dbscan_brute_force};
 pub use graph::{
     BodyTree, ClusterFeatures, Graph, best_tree_coverage, best_tree_paper, build_graph,
@@ -49,6 +53,7 @@ pub use steps::{
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, LabeledCloud, PersonBox, RefinedCloud};
 use rayon::prelude::*;
+use steps::NoiseNearest;
 
 /// Everything the refinement computed for one person, for tests, figures and reports.
 #[derive(Clone, Debug)]
@@ -150,6 +155,37 @@ pub fn apply_steps(
     steps: Steps,
     cfg: &RefineConfig,
 ) -> PersonRefinement {
+    let evidence = PersonEvidence {
+        label_probs,
+        doubted,
+        nearest: None,
+    };
+    apply_steps_with(structure, positions_m, labels, evidence, steps, cfg)
+}
+
+/// What [`apply_steps`] may be given beside the structure: the parser's evidence, and N's
+/// search when it was done already for another configuration of the same clustering.
+#[derive(Clone, Copy, Default)]
+struct PersonEvidence<'a> {
+    label_probs: Option<&'a [f32]>,
+    doubted: Option<&'a [bool]>,
+    nearest: Option<&'a NoiseNearest>,
+}
+
+/// [`apply_steps`] with a [`PersonEvidence`].
+fn apply_steps_with(
+    structure: PersonStructure,
+    positions_m: &[Vec3],
+    labels: &[Label],
+    evidence: PersonEvidence<'_>,
+    steps: Steps,
+    cfg: &RefineConfig,
+) -> PersonRefinement {
+    let PersonEvidence {
+        label_probs,
+        doubted,
+        nearest,
+    } = evidence;
     let (merge, remove, noise) = match steps {
         Steps::Reference => (false, false, false),
         Steps::Run {
@@ -227,7 +263,10 @@ pub fn apply_steps(
             .as_ref()
             .map(|(doubted, _)| doubted.iter().map(|&d| !d).collect());
         point_labels = match cfg.noise {
-            NoiseMode::Nearest => reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m),
+            NoiseMode::Nearest => match nearest {
+                Some(n) => n.relabel(&point_labels),
+                None => reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m),
+            },
             NoiseMode::Weighted | NoiseMode::Probability => reassign_noise_weighted(
                 positions_m,
                 &point_labels,
@@ -378,6 +417,7 @@ pub fn refine_variants_with(
 ) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
     cloud.validate()?;
+    cfg.validate_for_extent(extent_m(&cloud.positions_m))?;
     let PointEvidence { voted, label_probs } = evidence;
     let colours = match &cloud.colors {
         _ if cfg.foreign_colour_density == 0.0 => None,
@@ -474,22 +514,37 @@ pub fn refine_variants_with(
                 });
                 let doubted = doubted.as_deref();
                 let structure = analyse_person(pos, cluster_lab, cfg);
+                // N's search depends on the clustering only: once for every run with N.
+                let nearest = (cfg.noise == NoiseMode::Nearest && runs.iter().any(Steps::noise))
+                    .then(|| {
+                        let is_noise: Vec<bool> = structure
+                            .clustering
+                            .cluster_of
+                            .iter()
+                            .map(Option::is_none)
+                            .collect();
+                        NoiseNearest::new(pos, &is_noise, cfg.eps_m)
+                    });
+                let evidence = PersonEvidence {
+                    label_probs: probs,
+                    doubted,
+                    nearest: nearest.as_ref(),
+                };
                 // Every run but the last works on a copy; the last (the only one of a
                 // plain run) takes the structure itself.
                 let mut refinements: Vec<PersonRefinement> = Vec::with_capacity(runs.len());
                 if let Some((&last, rest)) = runs.split_last() {
                     for &s in rest {
-                        refinements.push(apply_steps(
+                        refinements.push(apply_steps_with(
                             structure.clone(),
                             pos,
                             lab,
-                            probs,
-                            doubted,
+                            evidence,
                             s,
                             cfg,
                         ));
                     }
-                    refinements.push(apply_steps(structure, pos, lab, probs, doubted, last, cfg));
+                    refinements.push(apply_steps_with(structure, pos, lab, evidence, last, cfg));
                 }
                 if let Some(colours) = colours {
                     let colours: Vec<[u8; 3]> = idx.iter().map(|&i| colours[i as usize]).collect();
@@ -554,6 +609,19 @@ pub fn refine_variants_with(
         out.clusters = vec![None; cloud.len()];
     }
     Ok(out)
+}
+
+/// The largest extent of `positions` along an axis, metres (0 when empty).
+fn extent_m(positions: &[Vec3]) -> f32 {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in positions {
+        for a in 0..3 {
+            lo[a] = if p[a] < lo[a] { p[a] } else { lo[a] };
+            hi[a] = if p[a] > hi[a] { p[a] } else { hi[a] };
+        }
+    }
+    (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max)
 }
 
 /// Fuse (§5.7): a point inside exactly one box takes that person's label; inside several,

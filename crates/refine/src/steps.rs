@@ -1,9 +1,11 @@
 //! The M, R and N steps (ALGORITHM.md §5.4–§5.6), each a plain function.
 
 use crate::graph::{BodyTree, ClusterFeatures, Graph};
-use bodyseg_core::math::{Vec3, dist2};
+use crate::grid::{CellGrid, NnIndex};
+use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, NUM_CLASSES};
-use std::collections::HashMap;
+use rayon::prelude::*;
+use rustc_hash::FxHashMap as HashMap;
 
 /// M — merge_nodes: every cluster that is not a tree node and lies inside at least one
 /// cluster of a different label takes the label of the largest such container (ties: the
@@ -110,64 +112,64 @@ pub fn restore_bridged(
     }
     let key = |p: Vec3| p.map(|x| (x / cell_m).floor() as i32);
     // Cells holding body points, then their components (flood fill over 26 neighbours).
+    let body: Vec<u32> = (0..positions_m.len() as u32)
+        .filter(|&i| match cluster_of[i as usize] {
+            Some(c) => before[c as usize].is_body(),
+            None => own[i as usize].is_body(),
+        })
+        .collect();
+    let keys: Vec<[i32; 3]> = body.iter().map(|&i| key(positions_m[i as usize])).collect();
+    let grid = CellGrid::new(positions_m, &body, &keys, 1);
+    let around: Vec<[i32; 3]> = (-1..=1)
+        .flat_map(|z| (-1..=1).flat_map(move |y| (-1..=1).map(move |x| [x, y, z])))
+        .collect();
+    let offs = grid.offsets(&around);
     const UNSEEN: u32 = u32::MAX;
-    let mut component: HashMap<[i32; 3], u32> = HashMap::default();
-    for ((p, c), l) in positions_m.iter().zip(cluster_of).zip(own) {
-        let body = match c {
-            Some(c) => before[*c as usize].is_body(),
-            None => l.is_body(),
-        };
-        if body {
-            component.insert(key(*p), UNSEEN);
-        }
-    }
-    let mut cells: Vec<[i32; 3]> = component.keys().copied().collect();
-    // Deterministic component ids whatever the map's order.
-    cells.sort_unstable();
+    let mut component = vec![UNSEEN; grid.num_cells()];
     let mut next = 0;
     let mut stack = Vec::new();
-    for start in cells {
-        if component[&start] != UNSEEN {
+    for start in 0..grid.num_cells() as u32 {
+        if component[start as usize] != UNSEEN {
             continue;
         }
-        component.insert(start, next);
+        component[start as usize] = next;
         stack.push(start);
-        while let Some(k) = stack.pop() {
-            for dz in -1..=1 {
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
-                        let n = [k[0] + dx, k[1] + dy, k[2] + dz];
-                        if let Some(id) = component.get_mut(&n)
-                            && *id == UNSEEN
-                        {
-                            *id = next;
-                            stack.push(n);
-                        }
-                    }
+        while let Some(c) = stack.pop() {
+            let at = grid.anchor(c);
+            for o in 0..around.len() {
+                if let Some(n) = grid.near_cell(at, &offs, o)
+                    && component[n as usize] == UNSEEN
+                {
+                    component[n as usize] = next;
+                    stack.push(n);
                 }
             }
         }
         next += 1;
     }
-    // The components the tree lies in, and those of each removed cluster.
+    // Per body point, its cell's component.
+    let mut component_of = vec![UNSEEN; positions_m.len()];
+    for c in 0..grid.num_cells() as u32 {
+        for &i in &grid.ids()[grid.range(c)] {
+            component_of[i as usize] = component[c as usize];
+        }
+    }
+    // The components the tree lies in (tree clusters are body clusters: all in the grid),
+    // and those of each removed cluster (body clusters before R).
     let in_tree: Vec<bool> = (0..before.len() as u32).map(|c| tree.contains(c)).collect();
     let mut with_tree = vec![false; next as usize];
-    for (p, c) in positions_m.iter().zip(cluster_of) {
+    for (&id, c) in component_of.iter().zip(cluster_of) {
         if let Some(c) = c
             && in_tree[*c as usize]
-            && let Some(&id) = component.get(&key(*p))
+            && id != UNSEEN
         {
             with_tree[id as usize] = true;
         }
     }
-    for (p, c) in positions_m.iter().zip(cluster_of) {
+    for (&id, c) in component_of.iter().zip(cluster_of) {
         if let Some(c) = c {
             let c = *c as usize;
-            if out[c] != before[c]
-                && component
-                    .get(&key(*p))
-                    .is_some_and(|&id| with_tree[id as usize])
-            {
+            if out[c] != before[c] && id != UNSEEN && with_tree[id as usize] {
                 out[c] = before[c];
             }
         }
@@ -190,27 +192,61 @@ pub fn reassign_noise(
     is_noise: &[bool],
     eps_m: f32,
 ) -> Vec<Label> {
-    let mut out = labels.to_vec();
-    let clustered: Vec<u32> = (0..positions_m.len() as u32)
-        .filter(|&i| !is_noise[i as usize])
-        .collect();
-    if clustered.is_empty() {
-        for l in &mut out {
-            if l.is_unknown() {
-                *l = Label::BACKGROUND;
+    let nearest = NoiseNearest::new(positions_m, is_noise, eps_m);
+    nearest.relabel(labels)
+}
+
+/// N's search, done once per clustering: for every noise point, the nearest clustered
+/// point ([`reassign_noise`]). The step configurations of one clustering share it (they
+/// differ only by the labels they give the clusters); the queries run in parallel.
+#[derive(Clone, Debug)]
+pub(crate) struct NoiseNearest {
+    /// (noise point, its nearest clustered point), in point order; empty when no point is
+    /// clustered.
+    pairs: Vec<(u32, u32)>,
+    /// Noise points with no clustered point to take a label from.
+    orphans: Vec<u32>,
+}
+
+impl NoiseNearest {
+    pub(crate) fn new(positions_m: &[Vec3], is_noise: &[bool], eps_m: f32) -> Self {
+        let (noise, clustered): (Vec<u32>, Vec<u32>) =
+            (0..positions_m.len() as u32).partition(|&i| is_noise[i as usize]);
+        if clustered.is_empty() {
+            return NoiseNearest {
+                pairs: Vec::new(),
+                orphans: noise,
+            };
+        }
+        let index = NnIndex::new(positions_m, &clustered, eps_m);
+        let pairs: Vec<(u32, u32)> = noise
+            .par_iter()
+            .with_min_len(256)
+            .map_init(Vec::new, |scratch, &i| {
+                (i, index.nearest_with(positions_m[i as usize], scratch))
+            })
+            .filter_map(|(i, j)| j.map(|j| (i, j)))
+            .collect();
+        NoiseNearest {
+            pairs,
+            orphans: Vec::new(),
+        }
+    }
+
+    /// `labels` with every noise point given its nearest clustered point's label (with no
+    /// clustered point, unknown becomes background).
+    pub(crate) fn relabel(&self, labels: &[Label]) -> Vec<Label> {
+        let mut out = labels.to_vec();
+        for &(i, j) in &self.pairs {
+            out[i as usize] = labels[j as usize];
+        }
+        for &i in &self.orphans {
+            if out[i as usize].is_unknown() {
+                out[i as usize] = Label::BACKGROUND;
             }
         }
-        return out;
+        out
     }
-    let index = NnIndex::new(positions_m, &clustered, eps_m);
-    for i in 0..positions_m.len() {
-        if is_noise[i]
-            && let Some(j) = index.nearest(positions_m[i])
-        {
-            out[i] = labels[j as usize];
-        }
-    }
-    out
 }
 
 /// Who votes in N's votes ([`reassign_noise_weighted`], [`reassign_doubted_wide`]).
@@ -521,23 +557,31 @@ impl LabelCells {
     ) -> Self {
         let side_m = radius_m / WIDE_VOTE_CELLS;
         let key = |p: Vec3| p.map(|x| (x / side_m).floor() as i32);
-        let mut cell_of: HashMap<[i32; 3], u32> = HashMap::default();
-        let mut sums: Vec<[f64; 3]> = Vec::new();
-        let mut counts: Vec<[f32; NUM_CLASSES]> = Vec::new();
-        for &i in voters {
-            let p = positions_m[i as usize];
-            let next = sums.len() as u32;
-            let c = *cell_of.entry(key(p)).or_insert(next) as usize;
-            if c == sums.len() {
-                sums.push([0.0; 3]);
-                counts.push([0.0; NUM_CLASSES]);
+        let keys: Vec<[i32; 3]> = voters
+            .iter()
+            .map(|&i| key(positions_m[i as usize]))
+            .collect();
+        let grid = CellGrid::new(positions_m, voters, &keys, 0);
+        // Cells numbered in the order of their first voter (ties of the votes go to the
+        // smaller number, as they always have); each cell's voters in their order.
+        let mut order: Vec<u32> = (0..grid.num_cells() as u32).collect();
+        order.sort_unstable_by_key(|&c| grid.ids()[grid.range(c).start]);
+        let mut sums: Vec<[f64; 3]> = Vec::with_capacity(order.len());
+        let mut counts: Vec<[f32; NUM_CLASSES]> = Vec::with_capacity(order.len());
+        for &c in &order {
+            let r = grid.range(c);
+            let mut sum = [0f64; 3];
+            let mut count = [0f32; NUM_CLASSES];
+            for (&i, p) in grid.ids()[r.clone()].iter().zip(&grid.pts()[r]) {
+                for a in 0..3 {
+                    sum[a] += f64::from(p[a]);
+                }
+                if let Some(class) = labels[i as usize].class() {
+                    count[usize::from(class.id())] += 1.0;
+                }
             }
-            for a in 0..3 {
-                sums[c][a] += f64::from(p[a]);
-            }
-            if let Some(class) = labels[i as usize].class() {
-                counts[c][usize::from(class.id())] += 1.0;
-            }
+            sums.push(sum);
+            counts.push(count);
         }
         let centroids: Vec<Vec3> = sums
             .iter()
@@ -645,371 +689,6 @@ pub fn doubtful_as_unknown(labels: &[Label], probs: &[f32], ratio: f32) -> Vec<L
         .collect()
 }
 
-/// Fine cells per block edge in [`NnIndex`].
-const NN_BLOCK_CELLS: i32 = 4;
-
-/// Axis-aligned box, metres.
-#[derive(Clone, Copy)]
-struct Aabb {
-    lo: Vec3,
-    hi: Vec3,
-}
-
-impl Aabb {
-    const EMPTY: Aabb = Aabb {
-        lo: [f32::INFINITY; 3],
-        hi: [f32::NEG_INFINITY; 3],
-    };
-    fn grow(&mut self, p: Vec3) {
-        // Plain comparisons (coordinates are finite): `f32::min`'s NaN handling costs
-        // several instructions per call on this hot path.
-        for a in 0..3 {
-            if p[a] < self.lo[a] {
-                self.lo[a] = p[a];
-            }
-            if p[a] > self.hi[a] {
-                self.hi[a] = p[a];
-            }
-        }
-    }
-    fn union(&mut self, o: &Aabb) {
-        self.grow(o.lo);
-        self.grow(o.hi);
-    }
-    /// Squared distance from `q` to the box (0 inside); a lower bound for its points,
-    /// shaved by a hair so rounding never prunes a point at exactly the best distance.
-    #[inline]
-    fn dist2(&self, q: Vec3) -> f32 {
-        let mut d = 0.0;
-        for a in 0..3 {
-            let g = (self.lo[a] - q[a]).max(q[a] - self.hi[a]).max(0.0);
-            d += g * g;
-        }
-        d * (1.0 - 1e-5)
-    }
-}
-
-/// Exact nearest-neighbour index over a fixed point set: cells of side eps grouped into
-/// blocks of 4×4×4 cells, each cell and block with the bounding box of its points.
-struct NnIndex {
-    /// Grid geometry, to find a query's own cell.
-    lo: Vec3,
-    inv_side: f32,
-    dims: [i32; 3],
-    /// Per grid cell (dense, row-major): its index among the non-empty cells, or `u32::MAX`.
-    cell_of_grid: Vec<u32>,
-    /// Point ids grouped by cell (CSR over cells), and their positions in the same order.
-    items: Vec<u32>,
-    pts: Vec<Vec3>,
-    cell_start: Vec<u32>,
-    cell_box: Vec<Aabb>,
-    /// Cells grouped by block (CSR over blocks).
-    block_cells: Vec<u32>,
-    block_start: Vec<u32>,
-    block_box: Vec<Aabb>,
-    /// Block lower bounds of the query in progress (reused to avoid an allocation per query).
-    scratch: std::cell::RefCell<Vec<f32>>,
-}
-
-impl NnIndex {
-    fn new(positions: &[Vec3], idx: &[u32], eps_m: f32) -> Self {
-        let mut bounds = Aabb::EMPTY;
-        for &i in idx {
-            bounds.grow(positions[i as usize]);
-        }
-        let extent = (0..3)
-            .map(|a| bounds.hi[a] - bounds.lo[a])
-            .fold(0.0f32, f32::max);
-        // Cells of side eps, but never more than ~64 along the longest axis.
-        let side = eps_m.max(extent / 64.0).max(1e-6);
-        let inv_side = 1.0 / side;
-        let dims = [0, 1, 2].map(|a| ((bounds.hi[a] - bounds.lo[a]) * inv_side) as i32 + 1);
-        let key = |p: Vec3| -> [i32; 3] {
-            [0, 1, 2].map(|a| (((p[a] - bounds.lo[a]) * inv_side) as i32).clamp(0, dims[a] - 1))
-        };
-        let lin = |k: [i32; 3]| ((k[2] * dims[1] + k[1]) * dims[0] + k[0]) as usize;
-        let ncell = dims.iter().map(|&d| d as usize).product::<usize>();
-        // Counting sort of the points by cell.
-        let cell_of: Vec<usize> = idx
-            .iter()
-            .map(|&i| lin(key(positions[i as usize])))
-            .collect();
-        let mut start = vec![0u32; ncell + 1];
-        for &c in &cell_of {
-            start[c + 1] += 1;
-        }
-        for c in 0..ncell {
-            start[c + 1] += start[c];
-        }
-        let mut fill = start.clone();
-        let mut sorted = vec![0u32; idx.len()];
-        // Positions too, in cell order, so that scanning a cell reads memory in sequence.
-        let mut pts = vec![[0f32; 3]; idx.len()];
-        for (&i, &c) in idx.iter().zip(&cell_of) {
-            let f = fill[c] as usize;
-            sorted[f] = i;
-            pts[f] = positions[i as usize];
-            fill[c] += 1;
-        }
-        // Keep the non-empty cells only, with their boxes, and bucket them by block.
-        let bdims = dims.map(|d| (d + NN_BLOCK_CELLS - 1) / NN_BLOCK_CELLS);
-        let nblock = bdims.iter().map(|&d| d as usize).product::<usize>();
-        let mut cell_start = vec![0u32];
-        let mut cell_box = Vec::new();
-        let mut cell_block = Vec::new();
-        let mut cell_of_grid = vec![u32::MAX; ncell];
-        for c in 0..ncell {
-            let (s, e) = (start[c] as usize, start[c + 1] as usize);
-            if s == e {
-                continue;
-            }
-            cell_of_grid[c] = cell_box.len() as u32;
-            let mut bx = Aabb::EMPTY;
-            for &p in &pts[s..e] {
-                bx.grow(p);
-            }
-            cell_box.push(bx);
-            cell_start.push(e as u32);
-            let (x, y, z) = (
-                c as i32 % dims[0],
-                (c as i32 / dims[0]) % dims[1],
-                c as i32 / (dims[0] * dims[1]),
-            );
-            let b = [x, y, z].map(|v| v / NN_BLOCK_CELLS);
-            cell_block.push(((b[2] * bdims[1] + b[1]) * bdims[0] + b[0]) as usize);
-        }
-        let mut bstart = vec![0u32; nblock + 1];
-        for &b in &cell_block {
-            bstart[b + 1] += 1;
-        }
-        for b in 0..nblock {
-            bstart[b + 1] += bstart[b];
-        }
-        let mut bfill = bstart.clone();
-        let mut bcells = vec![0u32; cell_block.len()];
-        for (c, &b) in cell_block.iter().enumerate() {
-            bcells[bfill[b] as usize] = c as u32;
-            bfill[b] += 1;
-        }
-        let mut block_start = vec![0u32];
-        let mut block_cells = Vec::with_capacity(bcells.len());
-        let mut block_box = Vec::new();
-        for b in 0..nblock {
-            let cells = &bcells[bstart[b] as usize..bstart[b + 1] as usize];
-            if cells.is_empty() {
-                continue;
-            }
-            let mut bx = Aabb::EMPTY;
-            for &c in cells {
-                bx.union(&cell_box[c as usize]);
-            }
-            block_cells.extend_from_slice(cells);
-            block_start.push(block_cells.len() as u32);
-            block_box.push(bx);
-        }
-        NnIndex {
-            lo: bounds.lo,
-            inv_side,
-            dims,
-            cell_of_grid,
-            items: sorted,
-            pts,
-            cell_start,
-            cell_box,
-            block_cells,
-            block_start,
-            block_box,
-            scratch: Default::default(),
-        }
-    }
-
-    /// The nearest indexed point to `q` (ties: smaller index).
-    ///
-    /// The block nearest to `q` is opened first so the bound is tight, then every other
-    /// block is checked against it in one linear pass (a few hundred box tests).
-    fn nearest(&self, q: Vec3) -> Option<u32> {
-        let mut best: Option<(f32, u32)> = None;
-        // Near the body (most noise: unknown points on it, points at its edges) the answer
-        // lies in the query's own 3×3×3 block of cells: scan the own cell, then the block,
-        // and stop as soon as the best point is nearer than the block's walls.
-        let k = [0, 1, 2].map(|a| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32);
-        if (0..3).all(|a| k[a] >= 0 && k[a] < self.dims[a]) {
-            let g = ((k[2] * self.dims[1] + k[1]) * self.dims[0] + k[0]) as usize;
-            let own = self.cell_of_grid[g];
-            if own != u32::MAX {
-                self.scan_cell(q, own as usize, &mut best);
-                if best.is_some_and(|(b2, _)| b2 <= self.wall_dist2(q, k, 0)) {
-                    return best.map(|(_, j)| j);
-                }
-            }
-            for dz in -1..=1 {
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
-                        let n = [k[0] + dx, k[1] + dy, k[2] + dz];
-                        if (dx, dy, dz) == (0, 0, 0)
-                            || (0..3).any(|a| n[a] < 0 || n[a] >= self.dims[a])
-                        {
-                            continue;
-                        }
-                        let c = self.cell_of_grid
-                            [((n[2] * self.dims[1] + n[1]) * self.dims[0] + n[0]) as usize];
-                        if c != u32::MAX
-                            && best.is_none_or(|(b2, _)| self.cell_box[c as usize].dist2(q) <= b2)
-                        {
-                            self.scan_cell(q, c as usize, &mut best);
-                        }
-                    }
-                }
-            }
-            if best.is_some_and(|(b2, _)| b2 <= self.wall_dist2(q, k, 1)) {
-                return best.map(|(_, j)| j);
-            }
-        }
-        // Far from the body: rank the blocks by their lower bound, scan the nearest cell of
-        // the nearest block for a real best distance, then open only the blocks and cells
-        // whose boxes are nearer than it.
-        let blb = &mut *self.scratch.borrow_mut();
-        blb.clear();
-        blb.extend(self.block_box.iter().map(|bx| bx.dist2(q)));
-        let b0 = (0..blb.len()).min_by(|&a, &b| blb[a].total_cmp(&blb[b]))?;
-        let c0 = self
-            .cells_of_block(b0)
-            .iter()
-            .min_by(|&&a, &&b| {
-                self.cell_box[a as usize]
-                    .dist2(q)
-                    .total_cmp(&self.cell_box[b as usize].dist2(q))
-            })
-            .copied()?;
-        self.scan_cell(q, c0 as usize, &mut best);
-        for (b, &lb) in blb.iter().enumerate() {
-            if best.is_some_and(|(b2, _)| lb > b2) {
-                continue;
-            }
-            for &c in self.cells_of_block(b) {
-                if c != c0 && best.is_none_or(|(b2, _)| self.cell_box[c as usize].dist2(q) <= b2) {
-                    self.scan_cell(q, c as usize, &mut best);
-                }
-            }
-        }
-        best.map(|(_, j)| j)
-    }
-
-    /// Calls `f(squared distance, id)` for every indexed point within `r2` of `q`, in no
-    /// particular order (the same for the same query): for votes that sum all of them
-    /// ([`smooth_labels`]); `cells` is scratch.
-    fn for_each_within(
-        &self,
-        q: Vec3,
-        r2: f32,
-        cells: &mut Vec<(f32, u32)>,
-        mut f: impl FnMut(f32, u32),
-    ) {
-        self.cells_within(q, r2, cells);
-        for &(_, c) in cells.iter() {
-            let r = self.cell_start[c as usize] as usize..self.cell_start[c as usize + 1] as usize;
-            for (&j, &p) in self.items[r.clone()].iter().zip(&self.pts[r]) {
-                let d2 = dist2(q, p);
-                if d2 <= r2 {
-                    f(d2, j);
-                }
-            }
-        }
-    }
-
-    /// The non-empty cells whose box lies within `r2` of `q`, as (squared distance, cell).
-    fn cells_within(&self, q: Vec3, r2: f32, cells: &mut Vec<(f32, u32)>) {
-        cells.clear();
-        let kc = [0, 1, 2].map(|a| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32);
-        let reach = ((r2.sqrt() * self.inv_side).ceil() as i32).max(1);
-        for dz in -reach..=reach {
-            for dy in -reach..=reach {
-                for dx in -reach..=reach {
-                    let n = [kc[0] + dx, kc[1] + dy, kc[2] + dz];
-                    if (0..3).any(|a| n[a] < 0 || n[a] >= self.dims[a]) {
-                        continue;
-                    }
-                    let c = self.cell_of_grid
-                        [((n[2] * self.dims[1] + n[1]) * self.dims[0] + n[0]) as usize];
-                    if c == u32::MAX {
-                        continue;
-                    }
-                    let d = self.cell_box[c as usize].dist2(q);
-                    if d <= r2 {
-                        cells.push((d, c));
-                    }
-                }
-            }
-        }
-    }
-
-    /// The at most `k` indexed points nearest to `q` within squared distance `r2`, as
-    /// `(squared distance, id)` sorted by distance then id, into `out`. Every cell within
-    /// reach of `r2` is searched, nearest first (3×3×3 when `r2` is at most a cell's side
-    /// squared: the narrow N; wider for the cell centroids of [`reassign_doubted_wide`]);
-    /// `cells` is scratch.
-    fn knn_within(
-        &self,
-        q: Vec3,
-        k: usize,
-        r2: f32,
-        out: &mut Vec<(f32, u32)>,
-        cells: &mut Vec<(f32, u32)>,
-    ) {
-        out.clear();
-        self.cells_within(q, r2, cells);
-        cells.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for &(d, c) in cells.iter() {
-            if out.len() == k && out.last().is_some_and(|&(w, _)| d > w) {
-                break;
-            }
-            let r = self.cell_start[c as usize] as usize..self.cell_start[c as usize + 1] as usize;
-            for (&j, &p) in self.items[r.clone()].iter().zip(&self.pts[r]) {
-                let d2 = dist2(q, p);
-                if d2 > r2 {
-                    continue;
-                }
-                let beats = |&(w, wj): &(f32, u32)| d2 < w || (d2 == w && j < wj);
-                if out.len() == k && !out.last().is_some_and(beats) {
-                    continue;
-                }
-                let at = out.partition_point(|e| !beats(e));
-                out.insert(at, (d2, j));
-                out.truncate(k);
-            }
-        }
-    }
-
-    /// Squared distance from `q` (in cell `k`) to the walls of the block of cells within
-    /// `r` cells of `k`, shaved by a hair: no point outside that block is nearer.
-    fn wall_dist2(&self, q: Vec3, k: [i32; 3], r: i32) -> f32 {
-        let side = 1.0 / self.inv_side;
-        let mut m = f32::INFINITY;
-        for a in 0..3 {
-            let lo = self.lo[a] + (k[a] - r) as f32 * side;
-            let hi = self.lo[a] + (k[a] + r + 1) as f32 * side;
-            m = m.min(q[a] - lo).min(hi - q[a]);
-        }
-        let m = m.max(0.0);
-        m * m * (1.0 - 1e-4)
-    }
-
-    fn cells_of_block(&self, b: usize) -> &[u32] {
-        &self.block_cells[self.block_start[b] as usize..self.block_start[b + 1] as usize]
-    }
-
-    #[inline]
-    fn scan_cell(&self, q: Vec3, c: usize, best: &mut Option<(f32, u32)>) {
-        let r = self.cell_start[c] as usize..self.cell_start[c + 1] as usize;
-        for (&j, &p) in self.items[r.clone()].iter().zip(&self.pts[r]) {
-            let d2 = dist2(q, p);
-            if best.is_none_or(|(b2, bj)| d2 < b2 || (d2 == b2 && j < bj)) {
-                *best = Some((d2, j));
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1022,80 +701,6 @@ mod tests {
         assert_eq!(quantile(&mut v, 1.0), 4.0);
         let mut w: Vec<f32> = (0..201).map(|i| (200 - i) as f32).collect();
         assert_eq!(quantile(&mut w, 0.005), 1.0, "rank round(200 x 0.005) = 1");
-    }
-
-    #[test]
-    fn nearest_neighbour_index_equals_brute_force() {
-        let mut rng = bodyseg_testkit_free_rng(11);
-        for case in 0..50 {
-            let n = 1 + (case * 37) % 400;
-            let pos: Vec<Vec3> = (0..n)
-                .map(|_| {
-                    [
-                        rng() * 2.0,
-                        rng() * 1.0,
-                        rng() * 0.5 + if case % 3 == 0 { 5.0 } else { 0.0 },
-                    ]
-                })
-                .collect();
-            let is_noise: Vec<bool> = (0..n).map(|_| rng() < 0.3).collect();
-            let clustered: Vec<u32> = (0..n as u32).filter(|&i| !is_noise[i as usize]).collect();
-            if clustered.is_empty() {
-                continue;
-            }
-            let index = NnIndex::new(&pos, &clustered, 0.05);
-            for _ in 0..20 {
-                let q = [rng() * 4.0 - 1.0, rng() * 3.0 - 1.0, rng() * 7.0 - 1.0];
-                let want = clustered.iter().copied().min_by(|&a, &b| {
-                    dist2(q, pos[a as usize])
-                        .total_cmp(&dist2(q, pos[b as usize]))
-                        .then(a.cmp(&b))
-                });
-                assert_eq!(index.nearest(q), want, "case {case}");
-            }
-        }
-    }
-
-    #[test]
-    fn knn_within_equals_brute_force() {
-        let mut rng = bodyseg_testkit_free_rng(5);
-        for case in 0..40 {
-            let n = 1 + (case * 53) % 600;
-            let pos: Vec<Vec3> = (0..n)
-                .map(|_| [rng() * 0.5, rng() * 0.4, rng() * 0.3])
-                .collect();
-            let idx: Vec<u32> = (0..n as u32).filter(|i| i % 4 != 0).collect();
-            if idx.is_empty() {
-                continue;
-            }
-            let eps = 0.05;
-            let index = NnIndex::new(&pos, &idx, eps);
-            let (mut out, mut cells) = (Vec::new(), Vec::new());
-            for _ in 0..20 {
-                let q = [rng() * 0.7 - 0.1, rng() * 0.6 - 0.1, rng() * 0.5 - 0.1];
-                // Within one cell's side, beyond it (a wide N), and every point within reach
-                // (smoothing: k larger than the cells hold).
-                for (k, r) in [
-                    (1 + case % 9, eps),
-                    (5 + 7 * (case % 13), 2.6 * eps),
-                    (usize::MAX / 2, 2.6 * eps),
-                ] {
-                    index.knn_within(q, k, r * r, &mut out, &mut cells);
-                    let mut want: Vec<(f32, u32)> = idx
-                        .iter()
-                        .map(|&j| (dist2(q, pos[j as usize]), j))
-                        .filter(|&(d2, _)| d2 <= r * r)
-                        .collect();
-                    want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                    let mut all = Vec::new();
-                    index.for_each_within(q, r * r, &mut cells, |d2, j| all.push((d2, j)));
-                    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                    assert_eq!(all, want, "case {case}, all within {r}");
-                    want.truncate(k);
-                    assert_eq!(out, want, "case {case}, k {k}, r {r}");
-                }
-            }
-        }
     }
 
     #[test]
