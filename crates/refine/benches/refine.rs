@@ -9,13 +9,13 @@
 //! `refine_synth_steps` splits the synth 100k refinement by steps (M, N, M-R-N). `refine_modes` prices
 //! the modes beside the paper's (issue 8: contact graph, coverage tree, weighted noise,
 //! and all three; probability noise and its wide vote for doubted labels with made-up
-//! parser probabilities, doubted in strips) on the 100k cloud; `foreign_colours` the
-//! foreign-colour step alone on it; `smooth_labels` the 5 cm smoothing alone on it.
+//! parser probabilities, doubted in strips) on the 100k cloud; `foreign_colors` the
+//! foreign-color step alone on it; `smooth_labels` the 5 cm smoothing alone on it.
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
 use bodyseg_refine::Steps;
-use bodyseg_refine::colour::drop_foreign_arms;
+use bodyseg_refine::color::drop_foreign_arms;
 use bodyseg_refine::{
     DbscanParams, GraphMode, NoiseMode, PointEvidence, RefineConfig, TreeMode, dbscan, refine,
     refine_variants_with, smooth_labels,
@@ -228,13 +228,13 @@ fn bench_refine_modes(c: &mut Criterion) {
     g.finish();
 }
 
-/// `foreign_colour_density`'s step alone on the 100k cloud: head skin, torso shirt, arms in
+/// `foreign_color_density`'s step alone on the 100k cloud: head skin, torso shirt, arms in
 /// shirt or skin with every tenth arm point orange (an object to drop).
-fn bench_foreign_colours(c: &mut Criterion) {
-    let mut g = c.benchmark_group("foreign_colours");
+fn bench_foreign_colors(c: &mut Criterion) {
+    let mut g = c.benchmark_group("foreign_colors");
     let n = 100_000;
     let p = human_cloud(n, SEED);
-    let colours: Vec<[u8; 3]> = p
+    let colors: Vec<[u8; 3]> = p
         .cloud
         .labels
         .iter()
@@ -252,7 +252,7 @@ fn bench_foreign_colours(c: &mut Criterion) {
             let mut labels = p.cloud.labels.clone();
             drop_foreign_arms(
                 black_box(&mut labels),
-                &colours,
+                &colors,
                 0.02,
                 bodyseg_core::Label::BACKGROUND,
             );
@@ -279,6 +279,6 @@ fn bench_smooth(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default();
-    targets = bench_synth, bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colours, bench_smooth
+    targets = bench_synth, bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colors, bench_smooth
 }
 criterion_main!(benches);

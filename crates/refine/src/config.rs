@@ -36,11 +36,11 @@ pub enum RefineError {
         /// Points of the cloud.
         want: usize,
     },
-    /// `foreign_colour_density` > 0 on a cloud without camera colours.
+    /// `foreign_color_density` > 0 on a cloud without camera colors.
     #[error(
-        "refine.foreign_colour_density = {density} needs the points' camera colours, and this cloud has none (a PLY's red, green, blue are read unless bodyseg wrote them as its class palette): set it to 0, or give a cloud with camera colours"
+        "refine.foreign_color_density = {density} needs the points' camera colors, and this cloud has none (a PLY's red, green, blue are read unless bodyseg wrote them as its class palette): set it to 0, or give a cloud with camera colors"
     )]
-    NoColours {
+    NoColors {
         /// The configured density.
         density: f32,
     },
@@ -116,7 +116,7 @@ pub enum NoiseMode {
     /// clustered point's).
     Weighted,
     /// As `weighted`, with the parser's probability of each point's label (the softmax of
-    /// that label at the point's colour pixel): doubtful labels (`noise_doubt_ratio`) are
+    /// that label at the point's color pixel): doubtful labels (`noise_doubt_ratio`) are
     /// left out of the clustering and relabelled by N, and the own label counts
     /// `noise_self_weight` × its probability, so a label the parser was unsure of yields to
     /// its neighbours and a sure one holds. The
@@ -135,7 +135,7 @@ pub enum VoteMode {
     #[default]
     Off,
     /// Every configuration but Reference starts from the labels of the projection's
-    /// multi-view vote (a point seen by several colour cameras takes the label most of
+    /// multi-view vote (a point seen by several color cameras takes the label most of
     /// them agree on; `bodyseg_project::FrameProjector::vote_labels`), which the caller
     /// hands to [`crate::refine_variants_with`]. Reference stays the projected labels.
     MultiView,
@@ -366,13 +366,14 @@ pub struct RefineConfig {
     /// label on a patch of background surface (a wall, the robot, the floor beside a
     /// foot) goes to the background.
     pub merge_into_background: bool,
-    /// After the steps, an upper- or lower-arm point whose colour is rare on the person's
+    /// After the steps, an upper- or lower-arm point whose color is rare on the person's
     /// head and torso — less than this fraction of either's points share its chromaticity
     /// (±0.02) — is an object the person holds or touches (a parcel, a robot link), not an
-    /// arm: background ([`crate::colour::drop_foreign_arms`]). Needs the cloud's camera
-    /// colours. In [0, 1); 0 = off (default, the paper). Gloves and sleeves of another
-    /// colour than the shirt are lost with it.
-    pub foreign_colour_density: f32,
+    /// arm: background ([`crate::color::drop_foreign_arms`]). Needs the cloud's camera
+    /// colors. In [0, 1); 0 = off (default, the paper). Gloves and sleeves of another
+    /// color than the shirt are lost with it.
+    #[serde(alias = "foreign_colour_density")]
+    pub foreign_color_density: f32,
 }
 
 impl Default for RefineConfig {
@@ -399,7 +400,7 @@ impl Default for RefineConfig {
             steps: Steps::MRN,
             keep_outside_boxes: false,
             merge_into_background: false,
-            foreign_colour_density: 0.0,
+            foreign_color_density: 0.0,
         }
     }
 }
@@ -482,7 +483,7 @@ impl RefineConfig {
         below_one("noise_doubt_ratio", self.noise_doubt_ratio)?;
         radius("noise_doubt_radius_m", self.noise_doubt_radius_m, true)?;
         count("noise_doubt_k", self.noise_doubt_k, MAX_COUNT)?;
-        below_one("foreign_colour_density", self.foreign_colour_density)?;
+        below_one("foreign_color_density", self.foreign_color_density)?;
         radius("floor_contact_m", self.floor_contact_m, true)?;
         radius("smooth_radius_m", self.smooth_radius_m, true)?;
         Ok(())
@@ -559,6 +560,17 @@ mod tests {
     }
 
     #[test]
+    fn the_old_spelling_of_foreign_color_density_still_reads() {
+        let old: RefineConfig = toml::from_str("foreign_colour_density = 0.02").unwrap_or_default();
+        let new: RefineConfig = toml::from_str("foreign_color_density = 0.03").unwrap_or_default();
+        assert_eq!(old.foreign_color_density, 0.02);
+        assert_eq!(new.foreign_color_density, 0.03);
+        // Written with the new name.
+        let text = toml::to_string(&old).unwrap_or_default();
+        assert!(text.contains("foreign_color_density = 0.02"), "{text}");
+    }
+
+    #[test]
     fn validation_names_the_field() {
         let c = RefineConfig {
             eps_m: -1.0,
@@ -620,9 +632,9 @@ mod tests {
                 },
             ),
             (
-                "foreign_colour_density",
+                "foreign_color_density",
                 RefineConfig {
-                    foreign_colour_density: -0.01,
+                    foreign_color_density: -0.01,
                     ..Default::default()
                 },
             ),

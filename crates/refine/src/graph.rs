@@ -62,7 +62,7 @@ pub fn cluster_features(positions_m: &[Vec3], clustering: &Clustering) -> Vec<Cl
 /// The graph of clusters: *inside* and *intersect* edges from the bounding spheres. Tree
 /// edges live in [`BodyTree`].
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Graph {
+pub struct ClusterGraph {
     /// `containers[a]`: the clusters that cluster `a` lies inside (sorted ids).
     pub containers: Vec<Vec<u32>>,
     /// `adjacent[a]`: clusters joined to `a` by an inside (either way) or intersect edge
@@ -70,7 +70,7 @@ pub struct Graph {
     pub adjacent: Vec<Vec<u32>>,
 }
 
-impl Graph {
+impl ClusterGraph {
     /// True when `a` and `b` are joined by an inside or intersect edge.
     pub fn touches(&self, a: u32, b: u32) -> bool {
         self.adjacent[a as usize].binary_search(&b).is_ok()
@@ -79,7 +79,7 @@ impl Graph {
 
 /// Builds the inside / intersect edges. With `d = ‖c_A − c_B‖`: A is inside B when
 /// `d + r_A ≤ r_B · (1 + inside_tolerance)`; A and B intersect when `d ≤ r_A + r_B`.
-pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> Graph {
+pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> ClusterGraph {
     let k = features.len();
     let mut containers = vec![Vec::new(); k];
     let mut adjacent = vec![Vec::new(); k];
@@ -105,7 +105,7 @@ pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> Graph
     for v in containers.iter_mut().chain(adjacent.iter_mut()) {
         v.sort_unstable();
     }
-    Graph {
+    ClusterGraph {
         containers,
         adjacent,
     }
@@ -131,7 +131,7 @@ pub fn build_graph_contact(
     features: &[ClusterFeatures],
     contact_gap_m: f32,
     inside_fraction: f32,
-) -> Graph {
+) -> ClusterGraph {
     let index = ContactIndex::new(positions_m, clustering, contact_gap_m);
     let touching = index.touching_pairs();
     let near = index.near_counts(&touching, features, inside_fraction);
@@ -154,7 +154,7 @@ pub fn build_graph_contact(
     for v in containers.iter_mut().chain(adjacent.iter_mut()) {
         v.sort_unstable();
     }
-    Graph {
+    ClusterGraph {
         containers,
         adjacent,
     }
@@ -445,7 +445,7 @@ impl BodyTree {
 /// with the largest unused cluster of its label adjacent (intersecting, inside or
 /// containing) to its parent; ties go to the smaller cluster id. A slot whose parent slot
 /// is empty stays empty.
-pub fn best_tree_paper(features: &[ClusterFeatures], graph: &Graph) -> BodyTree {
+pub fn best_tree_paper(features: &[ClusterFeatures], graph: &ClusterGraph) -> BodyTree {
     let largest = |cands: &mut dyn Iterator<Item = u32>| -> Option<u32> {
         cands.fold(None, |best: Option<u32>, c| match best {
             Some(b) if features[b as usize].size >= features[c as usize].size => Some(b),
@@ -495,7 +495,7 @@ pub fn best_tree_paper(features: &[ClusterFeatures], graph: &Graph) -> BodyTree 
 /// Greedy slot filling ([`best_tree_paper`]) gives an upper-arm slot to the largest
 /// upper-arm cluster even when it carries no lower arm (a mislabelled patch on the torso),
 /// leaving a real arm and its forearm out of the tree; this search does not.
-pub fn best_tree_coverage(features: &[ClusterFeatures], graph: &Graph) -> BodyTree {
+pub fn best_tree_coverage(features: &[ClusterFeatures], graph: &ClusterGraph) -> BodyTree {
     let size = |c: u32| features[c as usize].size;
     let with_label = |cands: &[u32], class: Class| -> Vec<u32> {
         let want = Label::from(class);

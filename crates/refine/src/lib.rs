@@ -20,7 +20,7 @@
 //! ([`PointEvidence::label_probs`]). After the steps, `floor_contact_m` gives lower-leg
 //! points on the floor back to the background ([`floor`]), `smooth_radius_m` gives each
 //! body point the body label most points around it carry ([`smooth_labels`]), and
-//! `foreign_colour_density` arm labels on colours the person does not wear ([`colour`]).
+//! `foreign_color_density` arm labels on colors the person does not wear ([`color`]).
 //!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).
@@ -28,7 +28,7 @@
 //!   person's point list, which keeps the cloud's order).
 //! - Nothing here depends on point order beyond that numbering: ties are broken by index.
 
-pub mod colour;
+pub mod color;
 pub mod config;
 pub mod dbscan;
 pub mod floor;
@@ -42,7 +42,7 @@ pub use config::{
 };
 pub use dbscan::{Clustering, DbscanParams, dbscan, dbscan_brute_force};
 pub use graph::{
-    BodyTree, ClusterFeatures, Graph, best_tree_coverage, best_tree_paper, build_graph,
+    BodyTree, ClusterFeatures, ClusterGraph, best_tree_coverage, best_tree_paper, build_graph,
     build_graph_contact, cluster_features,
 };
 pub use steps::{
@@ -63,7 +63,7 @@ pub struct PersonRefinement {
     /// Per cluster features.
     pub features: Vec<ClusterFeatures>,
     /// The cluster graph.
-    pub graph: Graph,
+    pub graph: ClusterGraph,
     /// The best body tree.
     pub tree: BodyTree,
     /// Cluster labels after M (equal to DBSCAN's when M is off).
@@ -71,7 +71,7 @@ pub struct PersonRefinement {
     /// Cluster labels after R (equal to the above when R is off or the tree is invalid).
     pub labels_after_remove: Vec<Label>,
     /// Final per-point labels of the person's points: never unknown, except where
-    /// `foreign_colour_density` found an arm label of a colour this person does not wear
+    /// `foreign_color_density` found an arm label of a color this person does not wear
     /// (it abstains: the fuse gives the point another person's label, or background).
     pub point_labels: Vec<Label>,
 }
@@ -106,7 +106,7 @@ pub struct PersonStructure {
     /// Per cluster features.
     pub features: Vec<ClusterFeatures>,
     /// The cluster graph.
-    pub graph: Graph,
+    pub graph: ClusterGraph,
     /// The best body tree.
     pub tree: BodyTree,
 }
@@ -393,7 +393,7 @@ pub struct PointEvidence<'a> {
     /// (`bodyseg_project::FrameProjector::vote_labels`); needed by `vote = multi_view`.
     pub voted: Option<&'a [Label]>,
     /// The parser's probability of each point's projected label (the softmax of that
-    /// label at the point's colour pixel); used by `noise = "probability"`. Where the
+    /// label at the point's color pixel); used by `noise = "probability"`. Where the
     /// vote changed a label, its probability is not the new label's: such points count 1.
     pub label_probs: Option<&'a [f32]>,
 }
@@ -419,12 +419,12 @@ pub fn refine_variants_with(
     cloud.validate()?;
     cfg.validate_for_extent(extent_m(&cloud.positions_m))?;
     let PointEvidence { voted, label_probs } = evidence;
-    let colours = match &cloud.colors {
-        _ if cfg.foreign_colour_density == 0.0 => None,
+    let colors = match &cloud.colors {
+        _ if cfg.foreign_color_density == 0.0 => None,
         Some(c) => Some(c.as_slice()),
         None => {
-            return Err(RefineError::NoColours {
-                density: cfg.foreign_colour_density,
+            return Err(RefineError::NoColors {
+                density: cfg.foreign_color_density,
             });
         }
     };
@@ -546,13 +546,13 @@ pub fn refine_variants_with(
                     }
                     refinements.push(apply_steps_with(structure, pos, lab, evidence, last, cfg));
                 }
-                if let Some(colours) = colours {
-                    let colours: Vec<[u8; 3]> = idx.iter().map(|&i| colours[i as usize]).collect();
+                if let Some(colors) = colors {
+                    let colors: Vec<[u8; 3]> = idx.iter().map(|&i| colors[i as usize]).collect();
                     for r in &mut refinements {
-                        colour::drop_foreign_arms(
+                        color::drop_foreign_arms(
                             &mut r.point_labels,
-                            &colours,
-                            cfg.foreign_colour_density,
+                            &colors,
+                            cfg.foreign_color_density,
                             // Unknown: this person abstains; another whose box holds the
                             // point (a hand reaching into it) may keep it.
                             Label::UNKNOWN,
@@ -698,7 +698,7 @@ fn fuse_labels(
                     take(&mut labels, &mut clusters);
                     seen[i] = AGREE;
                 }
-                // Unknown is a person abstaining (a colour it does not wear): the others
+                // Unknown is a person abstaining (a color it does not wear): the others
                 // decide; when all abstain, background (below).
                 AGREE if l.is_unknown() => {}
                 AGREE if labels[i].is_unknown() => take(&mut labels, &mut clusters),

@@ -98,7 +98,11 @@ fn render(
                     segment: &[],
                 };
                 let camera = (batch * MAX_CAMERAS + c) as u64;
-                predict_labels(&view, &synth.config().parsing, seed ^ ((camera + 1) * 0x9E37))
+                predict_labels(
+                    &view,
+                    &synth.config().parsing,
+                    seed ^ ((camera + 1) * 0x9E37),
+                )
             })
             .collect();
         for ((&p, &l), &o) in truth
