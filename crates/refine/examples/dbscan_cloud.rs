@@ -22,10 +22,15 @@ use bodyseg_testkit::human_cloud;
 
 #[path = "../benches/common/synth_cloud.rs"]
 mod synth_cloud;
+
+#[path = "../benches/common/alloc.rs"]
+mod alloc;
 use std::io::Write;
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // As `bodyseg refine` runs (crates/cli/main.rs).
+    alloc::keep_freed_memory();
     let mut points = 100_000usize;
     let mut seed = 1u64;
     let mut eps = 0.05f32;

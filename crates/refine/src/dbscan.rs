@@ -274,10 +274,10 @@ impl GroupGrid {
         let side = f64::from(eps) / 3f64.sqrt() * CELL_SIDE_FRACTION;
         let frame = GridFrame::covering(positions, idx, side);
         let fine = frame.side_m() <= side;
-        let keys: Vec<[i32; 3]> = idx
-            .iter()
-            .map(|&i| frame.key(positions[i as usize]))
-            .collect();
+        let mut keys: Vec<[i32; 3]> = Vec::with_capacity(idx.len());
+        for &i in idx {
+            keys.push(frame.key(positions[i as usize]));
+        }
         let grid = CellGrid::new(positions, idx, &keys, REACH);
         let lbl: Vec<Label> = grid.ids().iter().map(|&i| labels[i as usize]).collect();
         let ncells = grid.num_cells();
@@ -482,6 +482,9 @@ fn cluster_group(
 
 /// Per stored point: whether it is core. `MIXED = false` when the group holds one label.
 fn core_points<const MIXED: bool>(g: &GroupGrid, min_pts: usize, th: Thresholds) -> Vec<bool> {
+    if !MIXED {
+        return core_points_one_label(g, min_pts, th.same2);
+    }
     let mut core = vec![false; g.grid.pts().len()];
     let mut nbrs = Neighbours::new();
     for c in 0..g.num_cells() as u32 {
@@ -493,6 +496,85 @@ fn core_points<const MIXED: bool>(g: &GroupGrid, min_pts: usize, th: Thresholds)
         let nbrs = nbrs.at(g, c);
         for i in r {
             core[i] = is_core_point::<MIXED>(g, c, i, min_pts, th, nbrs);
+        }
+    }
+    core
+}
+
+/// A neighbour cell as the core test of one cell's points reads it: copied once per cell
+/// into a short list that stays in L1 while each of the cell's points walks it.
+#[derive(Clone, Copy)]
+struct NearCell {
+    bbox: Aabb,
+    start: u32,
+    end: u32,
+}
+
+/// [`core_points`] for a group of one label (every pair of points within eps are
+/// neighbours): the hot loop of the clustering.
+fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> Vec<bool> {
+    let pts = g.grid.pts();
+    let mut core = vec![false; pts.len()];
+    let mut nbrs = Neighbours::new();
+    let mut cells: Vec<NearCell> = Vec::with_capacity(125);
+    let record = |d: u32| {
+        let r = g.grid.range(d);
+        NearCell {
+            bbox: g.bbox[d as usize],
+            start: r.start as u32,
+            end: r.end as u32,
+        }
+    };
+    for c in 0..g.num_cells() as u32 {
+        let r = g.grid.range(c);
+        let whole = g.whole[c as usize];
+        if r.len() >= min_pts && whole {
+            core[r].fill(true);
+            continue;
+        }
+        // The own cell comes first among the neighbours; when whole it counts at once.
+        let nbrs = nbrs.at(g, c);
+        let skip = usize::from(whole);
+        cells.clear();
+        cells.extend(nbrs.near()[skip..].iter().map(|&d| record(d)));
+        let mut far_listed = false;
+        let own = if whole { r.len() } else { 0 };
+        for i in r {
+            let p = pts[i];
+            let mut count = own;
+            let mut k = 0;
+            while count < min_pts {
+                if k == cells.len() {
+                    if far_listed {
+                        break;
+                    }
+                    let near = nbrs.near().len();
+                    cells.extend(nbrs.all(g)[near..].iter().map(|&d| record(d)));
+                    far_listed = true;
+                    continue;
+                }
+                let n = cells[k];
+                k += 1;
+                let (near2, far2) = n.bbox.near_far2(p);
+                if near2 > eps2 {
+                    continue;
+                }
+                let run = &pts[n.start as usize..n.end as usize];
+                if far2 <= eps2 {
+                    count += run.len();
+                } else {
+                    // Branch-free over chunks of 4, stopping once the count is reached.
+                    for chunk in run.chunks(4) {
+                        for &q in chunk {
+                            count += usize::from(dist2(p, q) <= eps2);
+                        }
+                        if count >= min_pts {
+                            break;
+                        }
+                    }
+                }
+            }
+            core[i] = count >= min_pts;
         }
     }
     core

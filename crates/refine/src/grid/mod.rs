@@ -175,15 +175,21 @@ impl GridFrame {
     /// was made from gets the nearest border cell).
     #[inline]
     pub(crate) fn key(&self, p: Vec3) -> [i32; 3] {
+        // Written out per axis: `[0, 1, 2].map` is not always inlined on this hot path.
+        // `as` saturates (NaN to 0); the min/max keep outside points on the border.
         if let Some((lo, inv)) = self.fast {
-            // `as` saturates (NaN to 0); the clamp keeps outside points on the border.
-            return [0, 1, 2]
-                .map(|a| (((p[a] - lo[a]) * inv) as i32).clamp(0, self.max_key[a] as i32));
+            let k = |a: usize| {
+                (((p[a] - lo[a]) * inv) as i32)
+                    .max(0)
+                    .min(self.max_key[a] as i32)
+            };
+            return [k(0), k(1), k(2)];
         }
-        [0, 1, 2].map(|a| {
+        let k = |a: usize| {
             let k = ((f64::from(p[a]) - self.corner[a]) * self.inv_side) as i64;
-            k.clamp(0, self.max_key[a]) as i32
-        })
+            k.max(0).min(self.max_key[a]) as i32
+        };
+        [k(0), k(1), k(2)]
     }
 }
 
@@ -271,13 +277,13 @@ impl CellGrid {
         // bounded by COUNTING_FACTOR per point).
         let corner = [0, 1, 2].map(|a| i64::from(lo[a]) - i64::from(pad));
         let (dx, dy) = (dims[0] as u32, dims[1] as u32);
-        let slots: Vec<u32> = keys
-            .iter()
-            .map(|k| {
-                let [x, y, z] = [0, 1, 2].map(|a| (i64::from(k[a]) - corner[a]) as u32);
-                (z * dy + y) * dx + x
-            })
-            .collect();
+        let mut slots: Vec<u32> = Vec::with_capacity(m);
+        for k in keys {
+            let x = (i64::from(k[0]) - corner[0]) as u32;
+            let y = (i64::from(k[1]) - corner[1]) as u32;
+            let z = (i64::from(k[2]) - corner[2]) as u32;
+            slots.push((z * dy + y) * dx + x);
+        }
         let mut table = vec![0u32; volume];
         for &s in &slots {
             table[s as usize] += 1;

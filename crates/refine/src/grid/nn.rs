@@ -51,13 +51,14 @@ impl NnIndex {
                 .saturating_add(1)
                 .clamp(1, 1 << 16)
         });
-        let keys: Vec<[i32; 3]> = idx
-            .iter()
-            .map(|&i| {
-                let p = positions[i as usize];
-                [0, 1, 2].map(|a| (((p[a] - bounds.lo[a]) * inv_side) as i32).clamp(0, dims[a] - 1))
-            })
-            .collect();
+        let lo = bounds.lo;
+        let max = [dims[0] - 1, dims[1] - 1, dims[2] - 1];
+        let mut keys: Vec<[i32; 3]> = Vec::with_capacity(idx.len());
+        for &i in idx {
+            let p = positions[i as usize];
+            let k = |a: usize| (((p[a] - lo[a]) * inv_side) as i32).max(0).min(max[a]);
+            keys.push([k(0), k(1), k(2)]);
+        }
         let grid = CellGrid::new(positions, idx, &keys, 0);
         let ncells = grid.num_cells();
         let cell_box: Vec<Aabb> = (0..ncells as u32)
@@ -109,7 +110,8 @@ impl NnIndex {
     /// The key of `q`'s cell, unclamped (may lie outside `0..dims`).
     #[inline]
     fn key_of(&self, q: Vec3) -> [i32; 3] {
-        [0, 1, 2].map(|a| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32)
+        let k = |a: usize| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32;
+        [k(0), k(1), k(2)]
     }
 
     fn inside(&self, k: [i32; 3]) -> bool {
