@@ -727,6 +727,7 @@ fn connect(
     let offs = g.grid.offsets(&forward);
     // Two passes: the 3×3×3 blocks first, which join almost everything, so that the
     // farther pairs of the second pass are mostly settled by one `find`.
+    let mut found = vec![0u32; forward.len()];
     for pass in [0..near, near..forward.len()] {
         for c in 0..ncells as u32 {
             if !has_core(c) {
@@ -735,10 +736,8 @@ fn connect(
             let at = g.grid.anchor(c);
             let ra = core_range(c);
             let whole_c = g.whole[c as usize];
-            for o in pass.clone() {
-                let Some(d) = g.grid.near_cell(at, &offs, o) else {
-                    continue;
-                };
+            let n = g.grid.near_cells(at, &offs, pass.clone(), &mut found);
+            for &d in &found[..n] {
                 if !has_core(d) {
                     continue;
                 }
