@@ -18,7 +18,7 @@
 //! Distances are compared squared, with [`bodyseg_core::math::dist2`] in `f32`, in both the
 //! fast path and the reference, so both round identically and results are equal exactly.
 //!
-//! Speed: points are binned into the crate's grid ([`crate::grid`]) with cells of side
+//! Speed: points are binned into the crate's grid (`grid.rs`) with cells of side
 //! slightly under eps/√3, so a cell's diagonal is below eps: a cell holding ≥ `min_points`
 //! points makes them all core without a single distance computation, and only the 5×5×5
 //! block of cells around a point can hold its neighbours. Neighbour counting visits the
@@ -27,7 +27,7 @@
 //! whose nearest cells already hold `min_points` neighbours touches no others.
 //!
 //! Any finite input is safe: a cloud so wide, or an eps so small, that the extent would
-//! need more than [`crate::grid::MAX_CELLS_PER_AXIS`] cells per axis gets wider cells, and
+//! need more than 2^30 (`grid::MAX_CELLS_PER_AXIS`) cells per axis gets wider cells, and
 //! then the shortcuts that need a cell's diagonal below eps are not taken (the result is
 //! the same, found by distance tests).
 

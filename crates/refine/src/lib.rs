@@ -4,7 +4,7 @@
 //! Place in the pipeline: `LabeledCloud` (projected labels) + `PersonBox`es →
 //! [`refine`] → `RefinedCloud` (same points, same order, repaired labels).
 //!
-//! Per person box, in parallel: label-aware DBSCAN ([`dbscan`], Ester et al. 1996),
+//! Per person box, in parallel: label-aware DBSCAN ([`dbscan()`], Ester et al. 1996),
 //! cluster features and graph ([`graph`]), the best body tree, then the steps
 //! ([`steps`]): M merges clusters lying inside a cluster of another label, R removes
 //! clusters cut off from the body tree, N gives noise points the label of the nearest
@@ -21,6 +21,12 @@
 //! points on the floor back to the background ([`floor`]), `smooth_radius_m` gives each
 //! body point the body label most points around it carry ([`smooth_labels`]), and
 //! `foreign_color_density` arm labels on colors the person does not wear ([`color`]).
+//!
+//! Every spatial search (DBSCAN's neighbour counts, N's nearest clustered point and votes,
+//! smoothing's cell counts, R's bridges, the contact graph) runs on one grid (`grid.rs`:
+//! cells keyed without overflow for any finite input, dense or hashed look-up, tested
+//! against brute force). Lengths that set a grid's cells are checked against the cloud's
+//! extent ([`RefineConfig::validate_for_extent`]).
 //!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).

@@ -22,7 +22,7 @@ use rustc_hash::FxHashMap;
 
 mod nn;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub(crate) use nn::NnIndex;
 
@@ -61,6 +61,22 @@ impl Aabb {
         let mut b = Aabb::EMPTY;
         for &p in pts {
             b.grow(p);
+        }
+        b
+    }
+
+    /// The tight box of the points `ids` of `positions` (the point box at the origin when
+    /// there are none, so that frames built on it stay finite).
+    pub(crate) fn of_ids(positions: &[Vec3], ids: &[u32]) -> Aabb {
+        if ids.is_empty() {
+            return Aabb {
+                lo: [0.0; 3],
+                hi: [0.0; 3],
+            };
+        }
+        let mut b = Aabb::EMPTY;
+        for &i in ids {
+            b.grow(positions[i as usize]);
         }
         b
     }
@@ -137,16 +153,7 @@ impl GridFrame {
     /// one), the side made larger when the extent would need more than
     /// [`MAX_CELLS_PER_AXIS`] cells ([`GridFrame::side_m`] says the side used).
     pub(crate) fn covering(positions: &[Vec3], ids: &[u32], side_m: f64) -> GridFrame {
-        let mut b = Aabb::EMPTY;
-        for &i in ids {
-            b.grow(positions[i as usize]);
-        }
-        if ids.is_empty() {
-            b = Aabb {
-                lo: [0.0; 3],
-                hi: [0.0; 3],
-            };
-        }
+        let b = Aabb::of_ids(positions, ids);
         let extent = [0, 1, 2].map(|a| f64::from(b.hi[a]) - f64::from(b.lo[a]));
         let widest = extent.iter().copied().fold(0.0, f64::max);
         let side = side_m
@@ -240,14 +247,7 @@ impl CellGrid {
         debug_assert_eq!(ids.len(), keys.len());
         let m = ids.len();
         let pad = pad.clamp(0, 4);
-        let mut lo = [i32::MAX; 3];
-        let mut hi = [i32::MIN; 3];
-        for k in keys {
-            for a in 0..3 {
-                lo[a] = lo[a].min(k[a]);
-                hi[a] = hi[a].max(k[a]);
-            }
-        }
+        let (lo, hi) = key_bounds(keys);
         let dims = [0, 1, 2]
             .map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * i64::from(pad)).max(1) as u64);
         let volume = dims.iter().try_fold(1u64, |v, &d| v.checked_mul(d));
@@ -518,14 +518,7 @@ pub(crate) enum Offsets {
 
 impl CellLookup {
     fn new(keys: &[[i32; 3]], pad: i32) -> Self {
-        let mut lo = [i32::MAX; 3];
-        let mut hi = [i32::MIN; 3];
-        for k in keys {
-            for a in 0..3 {
-                lo[a] = lo[a].min(k[a]);
-                hi[a] = hi[a].max(k[a]);
-            }
-        }
+        let (lo, hi) = key_bounds(keys);
         let pad = i64::from(pad);
         let dims = [0, 1, 2].map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * pad).max(1));
         let volume = dims
@@ -561,11 +554,8 @@ impl CellLookup {
     }
 }
 
-/// Positions in `keys` ordered by key (z, then y, then x), equal keys in their order: a
-/// counting sort over the keys' bounding block when it is small, a comparison sort
-/// otherwise.
-pub(super) fn sort_by_key(keys: &[[i32; 3]]) -> Vec<u32> {
-    let m = keys.len();
+/// The smallest and largest key per axis (`i32::MAX` and `i32::MIN` when there is none).
+fn key_bounds(keys: &[[i32; 3]]) -> ([i32; 3], [i32; 3]) {
     let mut lo = [i32::MAX; 3];
     let mut hi = [i32::MIN; 3];
     for k in keys {
@@ -574,6 +564,15 @@ pub(super) fn sort_by_key(keys: &[[i32; 3]]) -> Vec<u32> {
             hi[a] = hi[a].max(k[a]);
         }
     }
+    (lo, hi)
+}
+
+/// Positions in `keys` ordered by key (z, then y, then x), equal keys in their order: a
+/// counting sort over the keys' bounding block when it is small, a comparison sort
+/// otherwise.
+pub(super) fn sort_by_key(keys: &[[i32; 3]]) -> Vec<u32> {
+    let m = keys.len();
+    let (lo, hi) = key_bounds(keys);
     let dims = [0, 1, 2].map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1).max(1) as u64);
     let volume = dims.iter().try_fold(1u64, |v, &d| v.checked_mul(d));
     match volume {

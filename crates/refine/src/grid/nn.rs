@@ -28,16 +28,7 @@ impl NnIndex {
     /// Indexes the points `idx` of `positions` (cells of side `eps_m`, or 1/64 of the
     /// points' extent when that is larger).
     pub(crate) fn new(positions: &[Vec3], idx: &[u32], eps_m: f32) -> Self {
-        let mut bounds = Aabb::EMPTY;
-        for &i in idx {
-            bounds.grow(positions[i as usize]);
-        }
-        if idx.is_empty() {
-            bounds = Aabb {
-                lo: [0.0; 3],
-                hi: [0.0; 3],
-            };
-        }
+        let bounds = Aabb::of_ids(positions, idx);
         let extent = (0..3)
             .map(|a| bounds.hi[a] - bounds.lo[a])
             .fold(0.0f32, f32::max);

@@ -5,7 +5,7 @@ use bodyseg_core::math::dist2;
 
 /// A tiny xorshift so these unit tests need no dev-dependency; the seed is printed by
 /// every assertion message (`case`), and fixed so that a failure reproduces.
-fn rng_from(seed: u64) -> impl FnMut() -> f32 {
+pub(crate) fn rng_from(seed: u64) -> impl FnMut() -> f32 {
     let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
     move || {
         s ^= s << 13;

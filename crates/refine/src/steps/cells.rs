@@ -145,17 +145,3 @@ impl LabelCells {
         any.then_some(votes)
     }
 }
-
-#[cfg(test)]
-pub(super) mod tests {
-    /// A tiny xorshift so this unit test needs no dev-dependency.
-    pub(crate) fn rng_from(seed: u64) -> impl FnMut() -> f32 {
-        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
-}

@@ -13,7 +13,7 @@ use rustc_hash::FxHashMap as HashMap;
 /// point, noise keeps its label and unknown becomes background.
 ///
 /// Why not a plain ring search or an unbounded k-d tree walk: flying pixels lie far from
-/// the body, and searching outward from each costs more than the clustering. [`NnIndex`]
+/// the body, and searching outward from each costs more than the clustering. `NnIndex` (`grid.rs`)
 /// is a two-level grid: blocks of cells, each with the tight bounding box of its points, so
 /// a query ranks the few hundred blocks by lower bound and opens only those that can still
 /// hold a nearer point — a bounded cost whatever the distance.

@@ -19,7 +19,7 @@ use rustc_hash::FxHashMap as HashMap;
 /// floor or a wall does not outvote a foot or a hand. Measured on the tune sets of
 /// configs/benchmarks/improved.toml.
 ///
-/// How: as [`reassign_doubted_wide`], the body points are counted per label in cells of
+/// How: as [`reassign_doubted_wide`](super::reassign_doubted_wide), the body points are counted per label in cells of
 /// `radius_m / 8`, and the points of one cell share the vote asked from its centre.
 pub fn smooth_labels(positions_m: &[Vec3], labels: &[Label], radius_m: f32) -> Vec<Label> {
     smooth_labels_with(positions_m, labels, radius_m, true)
@@ -92,7 +92,7 @@ fn smooth_labels_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::steps::cells::tests::rng_from;
+    use crate::grid::tests::rng_from;
 
     #[test]
     fn smoothing_gives_islands_to_the_part_around_them_and_never_touches_background() {
