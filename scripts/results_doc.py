@@ -160,7 +160,7 @@ def main():
       "a lower leg never (`merge_into_background`); R through noise: a "
       "cluster joined to the body tree through noise points the parser labelled body is not cut off "
       "(`remove_through_noise`); foreign colours: an arm point whose colour is rare on the person's head "
-      "and torso (under 2 % of their points share its chromaticity; `foreign_colour_density`) is an object "
+      "and torso (under 2 % of their points share its chromaticity; `foreign_color_density`) is an object "
       "held or touched — the hand-over's parcel, a robot link — and becomes background; floor contact: "
       "lower-leg points within `floor_contact_m` = 6 mm of the floor under the person become background; "
       "and smoothing: then every body point takes the body label most body points within "

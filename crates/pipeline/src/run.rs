@@ -173,7 +173,7 @@ pub struct FrameInputs {
     /// Ground truth per depth pixel per camera (`depth_labels/`), when the recording has it.
     pub truth: Option<Vec<LabelImage>>,
     /// Colour images per camera, rig order, when the refinement needs the points' colours
-    /// (`refine.foreign_colour_density` > 0); else empty.
+    /// (`refine.foreign_color_density` > 0); else empty.
     pub colour: Vec<RgbImage>,
     /// The files read (for the frame's record: changed inputs make the frame redone).
     pub sources: Vec<InputFile>,
@@ -319,7 +319,7 @@ impl FrameProcessor {
     /// colour images are read, and sampled where the points land): foreign colours, and
     /// geometry mode's split between people and what is nobody's.
     fn needs_colours(&self) -> bool {
-        self.config.refine.foreign_colour_density > 0.0 || self.config.boxes.uses_colours()
+        self.config.refine.foreign_color_density > 0.0 || self.config.boxes.uses_colours()
     }
 
     /// Reads and decodes one frame's images and runs the parser (stages `read`, `parse`).

@@ -1,17 +1,21 @@
 //! Guards the speed of label-aware DBSCAN and of the whole refinement on human-shaped
-//! clouds of 30k, 100k and 300k points (eps 0.05 m, min_points 40, 7 labels), made by the
-//! seeded generator of `bodyseg-testkit`. Targets (issue 2, single-threaded at 100k): the
-//! whole refinement of one person under 20 ms; ratios against peers are printed by
-//! `scripts/bench_dbscan_peers.py`. Run single-threaded with
-//! `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`. `refine_modes` prices
+//! clouds of 30k, 100k and 300k points (eps 0.05 m, min_points 40, 7 labels), two kinds:
+//! `*_synth`, sensor-like clouds of `bodyseg-synth` (one person seen by Kinect-v2-like
+//! depth cameras, flying pixels on, the parser's label errors; `common/synth_cloud.rs`),
+//! and the capsule clouds of `bodyseg-testkit` (groups without a suffix). Targets (issue
+//! 30, single-threaded, synth cloud at 100k): the whole refinement (M-R-N) of one person
+//! ≤ 12 ms; ratios against peers are printed by `scripts/bench_dbscan_peers.py`. Run
+//! single-threaded with `RAYON_NUM_THREADS=1 taskset -c 0 cargo bench -p bodyseg-refine`;
+//! `refine_synth_steps` splits the synth 100k refinement by steps (M, N, M-R-N). `refine_modes` prices
 //! the modes beside the paper's (issue 8: contact graph, coverage tree, weighted noise,
 //! and all three; probability noise and its wide vote for doubted labels with made-up
-//! parser probabilities, doubted in strips) on the 100k cloud; `foreign_colours` the
-//! foreign-colour step alone on it; `smooth_labels` the 5 cm smoothing alone on it.
+//! parser probabilities, doubted in strips) on the 100k cloud; `foreign_colors` the
+//! foreign-color step alone on it; `smooth_labels` the 5 cm smoothing alone on it.
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
-use bodyseg_refine::colour::drop_foreign_arms;
+use bodyseg_refine::Steps;
+use bodyseg_refine::color::drop_foreign_arms;
 use bodyseg_refine::{
     DbscanParams, GraphMode, NoiseMode, PointEvidence, RefineConfig, TreeMode, dbscan, refine,
     refine_variants_with, smooth_labels,
@@ -24,8 +28,77 @@ use std::hint::black_box;
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+#[path = "common/synth_cloud.rs"]
+mod synth_cloud;
+
+#[path = "common/alloc.rs"]
+mod alloc;
+
 const SIZES: [usize; 3] = [30_000, 100_000, 300_000];
 const SEED: u64 = 1;
+
+/// The synth cloud of `n` points (seed [`SEED`]).
+fn synth(n: usize) -> synth_cloud::SynthPersonCloud {
+    synth_cloud::synth_person_cloud(n, SEED).expect("the synth preset renders")
+}
+
+fn bench_synth(c: &mut Criterion) {
+    // As the binary: freed memory stays with the allocator (`targets` runs this first).
+    alloc::keep_freed_memory();
+    let params = DbscanParams {
+        eps_m: 0.05,
+        min_points: 40,
+        label_penalty_m: f32::INFINITY,
+    };
+    let cfg = RefineConfig::default();
+    let clouds: Vec<_> = SIZES.iter().map(|&n| (n, synth(n))).collect();
+    for (n, p) in &clouds {
+        eprintln!(
+            "synth cloud {n}: {} cameras, {} flying pixels, {} labels unlike the truth",
+            p.cameras, p.flying, p.mislabelled
+        );
+    }
+    let mut g = c.benchmark_group("dbscan_synth");
+    g.sample_size(20);
+    for (n, p) in &clouds {
+        g.throughput(Throughput::Elements(*n as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), p, |b, p| {
+            b.iter(|| {
+                dbscan(
+                    black_box(&p.cloud.positions_m),
+                    black_box(&p.cloud.labels),
+                    &params,
+                )
+            })
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("refine_synth");
+    g.sample_size(20);
+    for (n, p) in &clouds {
+        let boxes = [p.person_box.clone()];
+        g.throughput(Throughput::Elements(*n as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), p, |b, p| {
+            b.iter(|| refine(black_box(&p.cloud), &boxes, &cfg))
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("refine_synth_steps");
+    g.sample_size(20);
+    let (n, p) = &clouds[1];
+    let boxes = [p.person_box.clone()];
+    g.throughput(Throughput::Elements(*n as u64));
+    for steps in ["M", "N", "M-R-N"] {
+        let cfg = RefineConfig {
+            steps: steps.parse::<Steps>().expect("a step name"),
+            ..RefineConfig::default()
+        };
+        g.bench_with_input(BenchmarkId::new(steps, n), p, |b, p| {
+            b.iter(|| refine(black_box(&p.cloud), &boxes, &cfg))
+        });
+    }
+    g.finish();
+}
 
 fn bench_dbscan(c: &mut Criterion) {
     let mut g = c.benchmark_group("dbscan");
@@ -160,13 +233,13 @@ fn bench_refine_modes(c: &mut Criterion) {
     g.finish();
 }
 
-/// `foreign_colour_density`'s step alone on the 100k cloud: head skin, torso shirt, arms in
+/// `foreign_color_density`'s step alone on the 100k cloud: head skin, torso shirt, arms in
 /// shirt or skin with every tenth arm point orange (an object to drop).
-fn bench_foreign_colours(c: &mut Criterion) {
-    let mut g = c.benchmark_group("foreign_colours");
+fn bench_foreign_colors(c: &mut Criterion) {
+    let mut g = c.benchmark_group("foreign_colors");
     let n = 100_000;
     let p = human_cloud(n, SEED);
-    let colours: Vec<[u8; 3]> = p
+    let colors: Vec<[u8; 3]> = p
         .cloud
         .labels
         .iter()
@@ -184,7 +257,7 @@ fn bench_foreign_colours(c: &mut Criterion) {
             let mut labels = p.cloud.labels.clone();
             drop_foreign_arms(
                 black_box(&mut labels),
-                &colours,
+                &colors,
                 0.02,
                 bodyseg_core::Label::BACKGROUND,
             );
@@ -211,6 +284,6 @@ fn bench_smooth(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default();
-    targets = bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colours, bench_smooth
+    targets = bench_synth, bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colors, bench_smooth
 }
 criterion_main!(benches);

@@ -36,13 +36,27 @@ pub enum RefineError {
         /// Points of the cloud.
         want: usize,
     },
-    /// `foreign_colour_density` > 0 on a cloud without camera colours.
+    /// `foreign_color_density` > 0 on a cloud without camera colors.
     #[error(
-        "refine.foreign_colour_density = {density} needs the points' camera colours, and this cloud has none (a PLY's red, green, blue are read unless bodyseg wrote them as its class palette): set it to 0, or give a cloud with camera colours"
+        "refine.foreign_color_density = {density} needs the points' camera colors, and this cloud has none (a PLY's red, green, blue are read unless bodyseg wrote them as its class palette): set it to 0, or give a cloud with camera colors"
     )]
-    NoColours {
+    NoColors {
         /// The configured density.
         density: f32,
+    },
+    /// A length that sets a grid's cells is finer than the cloud's coordinates resolve.
+    #[error(
+        "refine.{field} = {value_m} m is finer than this cloud's coordinates resolve: the cloud's extent is {extent_m} m, over which f32 coordinates step by up to {min_m} m (extent / 2^23); use at least that"
+    )]
+    TooFine {
+        /// The field's name.
+        field: &'static str,
+        /// Its value, metres.
+        value_m: f32,
+        /// The cloud's largest extent along an axis, metres.
+        extent_m: f32,
+        /// The smallest value this cloud allows, metres.
+        min_m: f32,
     },
     /// Label probabilities given, but not one per point.
     #[error("label probabilities: {got} for {want} points (one per point expected)")]
@@ -102,7 +116,7 @@ pub enum NoiseMode {
     /// clustered point's).
     Weighted,
     /// As `weighted`, with the parser's probability of each point's label (the softmax of
-    /// that label at the point's colour pixel): doubtful labels (`noise_doubt_ratio`) are
+    /// that label at the point's color pixel): doubtful labels (`noise_doubt_ratio`) are
     /// left out of the clustering and relabelled by N, and the own label counts
     /// `noise_self_weight` × its probability, so a label the parser was unsure of yields to
     /// its neighbours and a sure one holds. The
@@ -121,7 +135,7 @@ pub enum VoteMode {
     #[default]
     Off,
     /// Every configuration but Reference starts from the labels of the projection's
-    /// multi-view vote (a point seen by several colour cameras takes the label most of
+    /// multi-view vote (a point seen by several color cameras takes the label most of
     /// them agree on; `bodyseg_project::FrameProjector::vote_labels`), which the caller
     /// hands to [`crate::refine_variants_with`]. Reference stays the projected labels.
     MultiView,
@@ -172,6 +186,13 @@ impl Steps {
         },
         Steps::MRN,
     ];
+}
+
+impl Steps {
+    /// True when N runs (never in `Reference`).
+    pub fn noise(&self) -> bool {
+        matches!(self, Steps::Run { noise: true, .. })
+    }
 }
 
 impl Default for Steps {
@@ -345,13 +366,14 @@ pub struct RefineConfig {
     /// label on a patch of background surface (a wall, the robot, the floor beside a
     /// foot) goes to the background.
     pub merge_into_background: bool,
-    /// After the steps, an upper- or lower-arm point whose colour is rare on the person's
+    /// After the steps, an upper- or lower-arm point whose color is rare on the person's
     /// head and torso — less than this fraction of either's points share its chromaticity
     /// (±0.02) — is an object the person holds or touches (a parcel, a robot link), not an
-    /// arm: background ([`crate::colour::drop_foreign_arms`]). Needs the cloud's camera
-    /// colours. In [0, 1); 0 = off (default, the paper). Gloves and sleeves of another
-    /// colour than the shirt are lost with it.
-    pub foreign_colour_density: f32,
+    /// arm: background ([`crate::color::drop_foreign_arms`]). Needs the cloud's camera
+    /// colors. In [0, 1); 0 = off (default, the paper). Gloves and sleeves of another
+    /// color than the shirt are lost with it.
+    #[serde(alias = "foreign_colour_density")]
+    pub foreign_color_density: f32,
 }
 
 impl Default for RefineConfig {
@@ -378,15 +400,51 @@ impl Default for RefineConfig {
             steps: Steps::MRN,
             keep_outside_boxes: false,
             merge_into_background: false,
-            foreign_colour_density: 0.0,
+            foreign_color_density: 0.0,
         }
     }
 }
+
+/// Largest radius or gap of the refinement, metres: every search radius is about a body
+/// part (eps 5 cm, contact 10 cm, votes 15 cm), and a person fits in 2.5 m; a radius of
+/// kilometres is a typo, and it would make the grids' searches walk every cell.
+pub const MAX_RADIUS_M: f32 = 5.0;
+
+/// Largest count of the refinement (`min_points`, `noise_doubt_k`): far beyond any
+/// neighbourhood of a person's points, so that a typo fails at load.
+pub const MAX_COUNT: usize = 1_000_000;
+
+/// Largest `noise_k`: the narrow vote keeps its voters in a sorted list (insertions cost
+/// up to `noise_k` each), and 1024 points within eps is far beyond any cloud's density.
+pub const MAX_NOISE_K: usize = 1024;
+
+/// A grid length must be at least the cloud's extent over this (2^23: the steps of f32
+/// coordinates across that extent).
+const RESOLUTION_STEPS: f32 = 8_388_608.0;
 
 impl RefineConfig {
     /// Checks every field's range; the error names the field.
     pub fn validate(&self) -> Result<(), RefineError> {
         let bad = |field, problem: String| Err(RefineError::InvalidConfig { field, problem });
+        let radius = |field, v: f32, zero_ok: bool| {
+            let low_ok = if zero_ok { v >= 0.0 } else { v > 0.0 };
+            if v.is_finite() && low_ok && v <= MAX_RADIUS_M {
+                Ok(())
+            } else {
+                let low = if zero_ok { "[0" } else { "(0" };
+                bad(
+                    field,
+                    format!("must be in {low}, {MAX_RADIUS_M}] metres, got {v}"),
+                )
+            }
+        };
+        let count = |field, v: usize, max: usize| {
+            if (1..=max).contains(&v) {
+                Ok(())
+            } else {
+                bad(field, format!("must be in [1, {max}], got {v}"))
+            }
+        };
         let non_negative = |field, v: f32| {
             if v.is_finite() && v >= 0.0 {
                 Ok(())
@@ -401,15 +459,8 @@ impl RefineConfig {
                 bad(field, format!("must be in [0, 1), got {v}"))
             }
         };
-        if !(self.eps_m.is_finite() && self.eps_m > 0.0) {
-            return bad(
-                "eps_m",
-                format!("must be a finite number > 0, got {}", self.eps_m),
-            );
-        }
-        if self.min_points < 1 {
-            return bad("min_points", "must be >= 1, got 0".into());
-        }
+        radius("eps_m", self.eps_m, false)?;
+        count("min_points", self.min_points, MAX_COUNT)?;
         if self.label_penalty_m.is_nan() || self.label_penalty_m < 0.0 {
             return bad(
                 "label_penalty_m",
@@ -420,31 +471,67 @@ impl RefineConfig {
             );
         }
         non_negative("inside_tolerance", self.inside_tolerance)?;
-        if !(self.contact_gap_m.is_finite() && self.contact_gap_m > 0.0) {
-            return bad(
-                "contact_gap_m",
-                format!("must be a finite number > 0, got {}", self.contact_gap_m),
-            );
-        }
+        radius("contact_gap_m", self.contact_gap_m, false)?;
         if !(self.contact_inside_fraction > 0.0 && self.contact_inside_fraction <= 1.0) {
             return bad(
                 "contact_inside_fraction",
                 format!("must be in (0, 1], got {}", self.contact_inside_fraction),
             );
         }
-        if self.noise_k < 1 {
-            return bad("noise_k", "must be >= 1, got 0".into());
-        }
+        count("noise_k", self.noise_k, MAX_NOISE_K)?;
         non_negative("noise_self_weight", self.noise_self_weight)?;
         below_one("noise_doubt_ratio", self.noise_doubt_ratio)?;
-        non_negative("noise_doubt_radius_m", self.noise_doubt_radius_m)?;
-        if self.noise_doubt_k < 1 {
-            return bad("noise_doubt_k", "must be >= 1, got 0".into());
-        }
-        below_one("foreign_colour_density", self.foreign_colour_density)?;
-        non_negative("floor_contact_m", self.floor_contact_m)?;
-        non_negative("smooth_radius_m", self.smooth_radius_m)?;
+        radius("noise_doubt_radius_m", self.noise_doubt_radius_m, true)?;
+        count("noise_doubt_k", self.noise_doubt_k, MAX_COUNT)?;
+        below_one("foreign_color_density", self.foreign_color_density)?;
+        radius("floor_contact_m", self.floor_contact_m, true)?;
+        radius("smooth_radius_m", self.smooth_radius_m, true)?;
         Ok(())
+    }
+
+    /// Checks the lengths that set the size of a grid's cells against a cloud whose
+    /// largest extent along an axis is `extent_m` (after [`RefineConfig::validate`]): each
+    /// in use must be at least `extent_m / 2^23`, the step of f32 coordinates across that
+    /// extent. Below it the neighbourhoods cannot be told apart from rounding, and the
+    /// grids would need more cells per axis than their keys hold.
+    pub fn validate_for_extent(&self, extent_m: f32) -> Result<(), RefineError> {
+        let min_m = extent_m / RESOLUTION_STEPS;
+        let lengths = [
+            ("eps_m", self.eps_m),
+            (
+                "contact_gap_m",
+                if self.graph == GraphMode::Contact {
+                    self.contact_gap_m
+                } else {
+                    f32::INFINITY
+                },
+            ),
+            (
+                "noise_doubt_radius_m",
+                if self.noise == NoiseMode::Probability && self.noise_doubt_radius_m > 0.0 {
+                    self.noise_doubt_radius_m
+                } else {
+                    f32::INFINITY
+                },
+            ),
+            (
+                "smooth_radius_m",
+                if self.smooth_radius_m > 0.0 {
+                    self.smooth_radius_m
+                } else {
+                    f32::INFINITY
+                },
+            ),
+        ];
+        match lengths.into_iter().find(|&(_, v)| v < min_m) {
+            Some((field, value_m)) => Err(RefineError::TooFine {
+                field,
+                value_m,
+                extent_m,
+                min_m,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// The DBSCAN parameters of this configuration.
@@ -470,6 +557,17 @@ mod tests {
         assert_eq!(Steps::PAPER[3].to_string(), "M-N");
         assert!("m-x".parse::<Steps>().is_err());
         assert!("".parse::<Steps>().is_err());
+    }
+
+    #[test]
+    fn the_old_spelling_of_foreign_color_density_still_reads() {
+        let old: RefineConfig = toml::from_str("foreign_colour_density = 0.02").unwrap_or_default();
+        let new: RefineConfig = toml::from_str("foreign_color_density = 0.03").unwrap_or_default();
+        assert_eq!(old.foreign_color_density, 0.02);
+        assert_eq!(new.foreign_color_density, 0.03);
+        // Written with the new name.
+        let text = toml::to_string(&old).unwrap_or_default();
+        assert!(text.contains("foreign_color_density = 0.02"), "{text}");
     }
 
     #[test]
@@ -534,9 +632,9 @@ mod tests {
                 },
             ),
             (
-                "foreign_colour_density",
+                "foreign_color_density",
                 RefineConfig {
-                    foreign_colour_density: -0.01,
+                    foreign_color_density: -0.01,
                     ..Default::default()
                 },
             ),

@@ -18,12 +18,20 @@
 //! Distances are compared squared, with [`bodyseg_core::math::dist2`] in `f32`, in both the
 //! fast path and the reference, so both round identically and results are equal exactly.
 //!
-//! Speed: points are binned into a grid of cell side slightly under eps/√3, so a cell's
-//! diagonal is below eps: a cell holding ≥ `min_points` points makes them all core without
-//! a single distance computation, and only the 5×5×5 block of cells around a point can hold
-//! its neighbours. Neighbour counting adds whole cells that lie entirely within eps and
-//! stops as soon as `min_points` is reached.
+//! Speed: points are binned into the crate's grid (`grid.rs`) with cells of side
+//! slightly under eps/√3, so a cell's diagonal is below eps: a cell holding ≥ `min_points`
+//! points makes them all core without a single distance computation, and only the 5×5×5
+//! block of cells around a point can hold its neighbours. Neighbour counting visits the
+//! cells nearest first, adds whole cells whose points' box lies within eps and stops as
+//! soon as `min_points` is reached; cells are looked up as they are needed, so a point
+//! whose nearest cells already hold `min_points` neighbours touches no others.
+//!
+//! Any finite input is safe: a cloud so wide, or an eps so small, that the extent would
+//! need more than 2^30 (`grid::MAX_CELLS_PER_AXIS`) cells per axis gets wider cells, and
+//! then the shortcuts that need a cell's diagonal below eps are not taken (the result is
+//! the same, found by distance tests).
 
+use crate::grid::{Aabb, Anchor, CellGrid, GridFrame, Offsets};
 use bodyseg_core::math::{Vec3, dist2};
 use bodyseg_core::{Label, NUM_CLASSES};
 use rayon::prelude::*;
@@ -69,6 +77,9 @@ impl Clustering {
 /// points of one cell stays ≤ eps after rounding of coordinates up to ~1 km.
 const CELL_SIDE_FRACTION: f64 = 0.999;
 
+/// Offsets of the 3×3×3 block come first among [`neighbour_offsets`].
+const NEAR_OFFSETS: usize = 27;
+
 /// Half-width of the neighbour block in cells: with side < eps/√3, cells 3 steps away along
 /// any axis are more than eps away, so offsets −2..=2 cover every neighbour.
 const REACH: i32 = 2;
@@ -101,27 +112,24 @@ pub fn dbscan(positions_m: &[Vec3], labels: &[Label], params: &DbscanParams) -> 
         .par_iter()
         .map(|idx| cluster_group(positions_m, labels, idx, params))
         .collect();
-    assemble(n, labels, &groups, &group_results)
+    assemble(n, labels, &group_results)
 }
 
-/// Per-group output: for each point of the group (group order) its local component and
-/// whether it is core.
+/// Per-group output: for each point of the group (in any order) its index, its local
+/// component and whether it is core.
 struct GroupResult {
+    ids: Vec<u32>,
     component: Vec<Option<u32>>,
     is_core: Vec<bool>,
 }
 
 /// Gives global cluster ids (ordered by smallest point index) and cluster labels.
-fn assemble(
-    n: usize,
-    labels: &[Label],
-    groups: &[Vec<u32>],
-    results: &[GroupResult],
-) -> Clustering {
+fn assemble(n: usize, labels: &[Label], results: &[GroupResult]) -> Clustering {
     let mut is_core = vec![false; n];
     // (smallest point index, group, local component) for every component.
     let mut comps: Vec<(u32, usize, u32)> = Vec::new();
-    for (g, (idx, res)) in groups.iter().zip(results).enumerate() {
+    for (g, res) in results.iter().enumerate() {
+        let idx = &res.ids;
         let ncomp = res
             .component
             .iter()
@@ -158,8 +166,8 @@ fn assemble(
     }
     let mut cluster_of = vec![None; n];
     let mut votes = vec![[0u32; NUM_CLASSES]; comps.len()];
-    for (g, (idx, res)) in groups.iter().zip(results).enumerate() {
-        for (&i, &c) in idx.iter().zip(&res.component) {
+    for (g, res) in results.iter().enumerate() {
+        for (&i, &c) in res.ids.iter().zip(&res.component) {
             if let Some(c) = c {
                 let id = global[g][c as usize];
                 cluster_of[i as usize] = Some(id);
@@ -207,148 +215,16 @@ impl Thresholds {
     fn get(&self, a: Label, b: Label) -> f32 {
         if a == b { self.same2 } else { self.diff2 }
     }
-}
-
-/// A grid over one group's points, sorted by cell so that each cell is a contiguous range
-/// and, after classification, each cell's core points come first in its range.
-struct Grid {
-    side: f64,
-    origin: [f64; 3],
-    /// Per sorted point: position and label.
-    pts: Vec<Vec3>,
-    lbl: Vec<Label>,
-    /// Per sorted point: its index within the group.
-    local: Vec<u32>,
-    /// Per cell: integer coordinates, start of its range (len = cells + 1 for `start`).
-    keys: Vec<[i32; 3]>,
-    start: Vec<u32>,
-    /// Per cell: true when all its points share one label.
-    uniform: Vec<bool>,
-    /// Per cell: its bounds, metres, widened by a hair (see [`Grid::cell_bounds`]).
-    bounds: Vec<(Vec3, Vec3)>,
-    /// CSR adjacency: the non-empty cells of each cell's 5×5×5 block (itself included).
-    nbr_start: Vec<u32>,
-    /// Per cell: end (in `nbr`) of the neighbours in its 3×3×3 block, which come first.
-    nbr_near_end: Vec<u32>,
-    nbr: Vec<u32>,
-}
-
-impl Grid {
-    fn build(positions: &[Vec3], labels: &[Label], idx: &[u32], eps: f32) -> Grid {
-        let side = f64::from(eps) / 3f64.sqrt() * CELL_SIDE_FRACTION;
-        // Gather the group's points first (sequential reads), then work on the copy.
-        let gpos: Vec<Vec3> = idx.iter().map(|&i| positions[i as usize]).collect();
-        let mut lo = [f32::INFINITY; 3];
-        for p in &gpos {
-            for a in 0..3 {
-                lo[a] = lo[a].min(p[a]);
-            }
-        }
-        let origin = lo.map(f64::from);
-        // Cell keys in f32: coordinates minus the minimum are ≥ 0, so truncation is floor.
-        // The relative error (~1e-7 of a few hundred cells) is far inside the 0.1% slack of
-        // CELL_SIDE_FRACTION and of the widened cell bounds.
-        let inv_side = (1.0 / side) as f32;
-        let pkeys: Vec<[i32; 3]> = gpos
-            .iter()
-            .map(|p| [0, 1, 2].map(|a| ((p[a] - lo[a]) * inv_side) as i32))
-            .collect();
-        let order = sort_by_cell(&pkeys);
-        let mut pts = Vec::with_capacity(order.len());
-        let mut lbl = Vec::with_capacity(order.len());
-        let mut local = Vec::with_capacity(order.len());
-        let mut keys = Vec::new();
-        let mut start = Vec::new();
-        let mut uniform = Vec::new();
-        let mut last = u64::MAX;
-        for &l in &order {
-            let k = pack(pkeys[l as usize]);
-            if k != last {
-                keys.push(pkeys[l as usize]);
-                start.push(pts.len() as u32);
-                uniform.push(true);
-                last = k;
-            } else if labels[idx[l as usize] as usize] != lbl[lbl.len() - 1]
-                && let Some(u) = uniform.last_mut()
-            {
-                *u = false;
-            }
-            pts.push(gpos[l as usize]);
-            lbl.push(labels[idx[l as usize] as usize]);
-            local.push(l);
-        }
-        start.push(pts.len() as u32);
-        let lookup = CellLookup::new(&keys);
-        let mut nbr_start = Vec::with_capacity(keys.len() + 1);
-        let mut nbr = Vec::new();
-        let mut nbr_near_end = Vec::with_capacity(keys.len());
-        lookup.neighbour_lists(
-            &keys,
-            &neighbour_offsets(),
-            &mut nbr_start,
-            &mut nbr_near_end,
-            &mut nbr,
-        );
-        nbr_start.push(nbr.len() as u32);
-        let mut grid = Grid {
-            side,
-            origin,
-            pts,
-            lbl,
-            local,
-            keys,
-            start,
-            uniform,
-            bounds: Vec::new(),
-            nbr_start,
-            nbr_near_end,
-            nbr,
-        };
-        grid.bounds = (0..grid.num_cells() as u32)
-            .map(|c| grid.cell_bounds(c))
-            .collect();
-        grid
-    }
-
-    fn num_cells(&self) -> usize {
-        self.keys.len()
-    }
-
-    fn range(&self, c: u32) -> std::ops::Range<usize> {
-        self.start[c as usize] as usize..self.start[c as usize + 1] as usize
-    }
-
-    fn neighbours(&self, c: usize) -> &[u32] {
-        &self.nbr[self.nbr_start[c] as usize..self.nbr_start[c + 1] as usize]
-    }
-
-    /// The neighbours of cell `c` in its 3×3×3 block (`near`) or beyond it.
-    fn neighbours_part(&self, c: usize, near: bool) -> &[u32] {
-        let mid = self.nbr_near_end[c] as usize;
-        if near {
-            &self.nbr[self.nbr_start[c] as usize..mid]
-        } else {
-            &self.nbr[mid..self.nbr_start[c + 1] as usize]
-        }
-    }
-
-    /// Axis-aligned bounds of a cell, metres (f32, widened by a hair so that the
-    /// "whole cell within eps" shortcut stays conservative).
-    fn cell_bounds(&self, c: u32) -> (Vec3, Vec3) {
-        let k = self.keys[c as usize];
-        let mut lo = [0f32; 3];
-        let mut hi = [0f32; 3];
-        for a in 0..3 {
-            let l = self.origin[a] + f64::from(k[a]) * self.side;
-            lo[a] = (l - self.side * 1e-3) as f32;
-            hi[a] = (l + self.side * (1.0 + 1e-3)) as f32;
-        }
-        (lo, hi)
+    /// The larger threshold: no neighbour of any label lies farther.
+    #[inline]
+    fn reach2(&self) -> f32 {
+        self.same2.max(self.diff2)
     }
 }
 
-/// The offsets of the 5×5×5 neighbour block, nearest first (the cell itself first), so
-/// that neighbour counting reaches `min_points` as early as possible.
+/// The offsets of the 5×5×5 neighbour block, nearest first (the cell itself first, then
+/// the rest of its 3×3×3 block), so that neighbour counting reaches `min_points` as early
+/// as possible.
 fn neighbour_offsets() -> Vec<[i32; 3]> {
     let mut o = Vec::with_capacity(125);
     for dz in -REACH..=REACH {
@@ -367,196 +243,120 @@ fn neighbour_offsets() -> Vec<[i32; 3]> {
     o
 }
 
-/// Local point indices ordered by cell (z, then y, then x): a counting sort over the
-/// cells' bounding block when it is small, a comparison sort of packed keys otherwise.
-fn sort_by_cell(pkeys: &[[i32; 3]]) -> Vec<u32> {
-    let m = pkeys.len();
-    let mut lo = [i32::MAX; 3];
-    let mut hi = [i32::MIN; 3];
-    for k in pkeys {
-        for a in 0..3 {
-            lo[a] = lo[a].min(k[a]);
-            hi[a] = hi[a].max(k[a]);
+/// The offsets of [`neighbour_offsets`] that lead to a later cell in key order (z, then
+/// y, then x): each pair of neighbouring cells is met once from its first cell. The first
+/// `near` of them lie in the 3×3×3 block.
+fn forward_offsets() -> (Vec<[i32; 3]>, usize) {
+    let all = neighbour_offsets();
+    let forward = |o: &[i32; 3]| (o[2], o[1], o[0]) > (0, 0, 0);
+    let near = all[..NEAR_OFFSETS].iter().filter(|o| forward(o)).count();
+    (all.into_iter().filter(forward).collect(), near)
+}
+
+/// One group's points in the grid, with what every phase needs per cell.
+struct GroupGrid {
+    grid: CellGrid,
+    /// Per stored point: its label.
+    lbl: Vec<Label>,
+    /// Per cell: all its points share one label.
+    uniform: Vec<bool>,
+    /// Per cell: uniform, and its diagonal is below eps (the grid's cells are not wider
+    /// than eps/√3), so all its points are neighbours of one another.
+    whole: Vec<bool>,
+    /// Per cell: the tight box of its points.
+    bbox: Vec<Aabb>,
+    /// The 125 neighbour offsets, nearest first, prepared for this grid.
+    offs: Offsets,
+}
+
+impl GroupGrid {
+    fn build(positions: &[Vec3], labels: &[Label], idx: &[u32], eps: f32) -> GroupGrid {
+        let side = f64::from(eps) / 3f64.sqrt() * CELL_SIDE_FRACTION;
+        let frame = GridFrame::covering(positions, idx, side);
+        let fine = frame.side_m() <= side;
+        let mut keys: Vec<[i32; 3]> = Vec::with_capacity(idx.len());
+        for &i in idx {
+            keys.push(frame.key(positions[i as usize]));
+        }
+        let grid = CellGrid::new(positions, idx, &keys, REACH);
+        let lbl: Vec<Label> = grid.ids().iter().map(|&i| labels[i as usize]).collect();
+        let ncells = grid.num_cells();
+        let mut uniform = Vec::with_capacity(ncells);
+        let mut bbox = Vec::with_capacity(ncells);
+        for c in 0..ncells as u32 {
+            let r = grid.range(c);
+            let first = lbl[r.start];
+            uniform.push(lbl[r.clone()].iter().all(|&l| l == first));
+            bbox.push(Aabb::of(&grid.pts()[r]));
+        }
+        let whole = uniform.iter().map(|&u| u && fine).collect();
+        let offs = grid.offsets(&neighbour_offsets());
+        GroupGrid {
+            grid,
+            lbl,
+            uniform,
+            whole,
+            bbox,
+            offs,
         }
     }
-    let dims = [0, 1, 2].map(|a| i64::from(hi[a]) - i64::from(lo[a]) + 1);
-    let volume = dims.iter().product::<i64>();
-    if m > 0 && volume <= (m as i64 * 16).max(1 << 16) {
-        let lin = |k: &[i32; 3]| -> usize {
-            let x = i64::from(k[0] - lo[0]);
-            let y = i64::from(k[1] - lo[1]);
-            let z = i64::from(k[2] - lo[2]);
-            ((z * dims[1] + y) * dims[0] + x) as usize
-        };
-        let mut start = vec![0u32; volume as usize + 1];
-        for k in pkeys {
-            start[lin(k) + 1] += 1;
-        }
-        for c in 0..volume as usize {
-            start[c + 1] += start[c];
-        }
-        let mut order = vec![0u32; m];
-        for (l, k) in pkeys.iter().enumerate() {
-            let c = lin(k);
-            order[start[c] as usize] = l as u32;
-            start[c] += 1;
-        }
-        order
-    } else {
-        let mut keyed: Vec<(u64, u32)> = pkeys
-            .iter()
-            .enumerate()
-            .map(|(l, &k)| (pack(k), l as u32))
-            .collect();
-        keyed.sort_unstable();
-        keyed.into_iter().map(|(_, l)| l).collect()
+
+    fn num_cells(&self) -> usize {
+        self.grid.num_cells()
     }
 }
 
-/// Packs three cell coordinates (each within ±2^20) into one sortable u64.
-fn pack(k: [i32; 3]) -> u64 {
-    const OFF: i64 = 1 << 20;
-    let f = |v: i32| ((i64::from(v) + OFF) as u64) & 0x1F_FFFF;
-    (f(k[2]) << 42) | (f(k[1]) << 21) | f(k[0])
+/// The existing neighbour cells of one cell, nearest first, looked up only as far as a
+/// caller walks them: the 3×3×3 block first, the rest of the 5×5×5 block when asked.
+struct Neighbours {
+    at: Anchor,
+    cells: Vec<u32>,
+    len: usize,
+    /// Offsets looked up so far (`NEAR_OFFSETS` or all of them once the far ones are).
+    looked: usize,
 }
 
-/// Cell lookup by integer coordinates: a dense table (padded by [`REACH`] cells on every
-/// side, so neighbour look-ups need no bounds test) when the cells' bounding block is small
-/// (one person), a hash map otherwise (a whole scene).
-enum CellLookup {
-    Dense {
-        lo: [i32; 3],
-        /// Padded dimensions.
-        dims: [i64; 3],
-        table: Vec<u32>,
-    },
-    Hashed(FxHashMap<[i32; 3], u32>),
-}
-
-impl CellLookup {
-    /// Largest dense table, in cells, per occupied cell: a person's cells fill a few
-    /// percent of their bounding block (a surface in a volume), a scene's far less.
-    const DENSE_FACTOR: i64 = 256;
-    /// A dense table this small (4 MiB) is always fine.
-    const DENSE_ALWAYS: i64 = 1 << 20;
-
-    fn new(keys: &[[i32; 3]]) -> Self {
-        let mut lo = [i32::MAX; 3];
-        let mut hi = [i32::MIN; 3];
-        for k in keys {
-            for a in 0..3 {
-                lo[a] = lo[a].min(k[a]);
-                hi[a] = hi[a].max(k[a]);
-            }
-        }
-        let pad = i64::from(REACH);
-        let dims = [0, 1, 2].map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * pad).max(0));
-        let volume = dims.iter().product::<i64>();
-        if !keys.is_empty()
-            && volume <= (keys.len() as i64 * Self::DENSE_FACTOR).max(Self::DENSE_ALWAYS)
-        {
-            let mut table = vec![u32::MAX; volume as usize];
-            let lookup_lo = lo;
-            for (c, k) in keys.iter().enumerate() {
-                table[Self::lin(lookup_lo, dims, *k)] = c as u32;
-            }
-            CellLookup::Dense {
-                lo: lookup_lo,
-                dims,
-                table,
-            }
-        } else {
-            CellLookup::Hashed(
-                keys.iter()
-                    .enumerate()
-                    .map(|(c, &k)| (k, c as u32))
-                    .collect(),
-            )
+impl Neighbours {
+    fn new() -> Self {
+        Neighbours {
+            at: Anchor::default(),
+            cells: vec![0; 125],
+            len: 0,
+            looked: 0,
         }
     }
 
-    /// Index of cell `k` in the padded table.
-    #[inline]
-    fn lin(lo: [i32; 3], dims: [i64; 3], k: [i32; 3]) -> usize {
-        let pad = i64::from(REACH);
-        let [x, y, z] = [0, 1, 2].map(|a| i64::from(k[a] - lo[a]) + pad);
-        ((z * dims[1] + y) * dims[0] + x) as usize
+    /// Starts over at cell `c` (its 3×3×3 block looked up).
+    fn at(&mut self, g: &GroupGrid, c: u32) -> &mut Self {
+        self.at = g.grid.anchor(c);
+        self.len = 0;
+        self.looked = 0;
+        self.look(g, NEAR_OFFSETS);
+        self
     }
 
-    /// For each cell, appends the occupied cells at `key + offset` for each offset, in the
-    /// offsets' order (CSR: `start` gets one entry per cell, `out` the lists).
-    fn neighbour_lists(
-        &self,
-        keys: &[[i32; 3]],
-        offsets: &[[i32; 3]],
-        start: &mut Vec<u32>,
-        near_end: &mut Vec<u32>,
-        out: &mut Vec<u32>,
-    ) {
-        // Offsets come nearest first; the 3×3×3 block is the first NEAR_OFFSETS of them.
-        const NEAR_OFFSETS: usize = 27;
-        match self {
-            CellLookup::Dense { lo, dims, table } => {
-                let deltas: Vec<i64> = offsets
-                    .iter()
-                    .map(|o| {
-                        (i64::from(o[2]) * dims[1] + i64::from(o[1])) * dims[0] + i64::from(o[0])
-                    })
-                    .collect();
-                // Branch-free append: about half the look-ups are empty and a branch on
-                // them mispredicts; write every slot and advance only on a hit.
-                out.reserve(keys.len() * deltas.len());
-                let mut buf = [0u32; 125];
-                for k in keys {
-                    start.push(out.len() as u32);
-                    let base = Self::lin(*lo, *dims, *k) as i64;
-                    let mut n = 0;
-                    let (near_deltas, far_deltas) = deltas.split_at(NEAR_OFFSETS);
-                    for d in near_deltas {
-                        let c = table[(base + d) as usize];
-                        buf[n] = c;
-                        n += usize::from(c != u32::MAX);
-                    }
-                    near_end.push((out.len() + n) as u32);
-                    for d in far_deltas {
-                        let c = table[(base + d) as usize];
-                        buf[n] = c;
-                        n += usize::from(c != u32::MAX);
-                    }
-                    out.extend_from_slice(&buf[..n]);
-                }
-            }
-            CellLookup::Hashed(m) => {
-                for k in keys {
-                    start.push(out.len() as u32);
-                    for (i, o) in offsets.iter().enumerate() {
-                        if i == NEAR_OFFSETS {
-                            near_end.push(out.len() as u32);
-                        }
-                        if let Some(&c) = m.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
-                            out.push(c);
-                        }
-                    }
-                }
-            }
+    fn look(&mut self, g: &GroupGrid, until: usize) {
+        self.len += g.grid.near_cells(
+            self.at,
+            &g.offs,
+            self.looked..until,
+            &mut self.cells[self.len..],
+        );
+        self.looked = until;
+    }
+
+    /// The near neighbours, and a way to the far ones.
+    fn near(&self) -> &[u32] {
+        &self.cells[..self.len]
+    }
+
+    /// All neighbours (the far ones looked up now if they were not).
+    fn all(&mut self, g: &GroupGrid) -> &[u32] {
+        if self.looked < 125 {
+            self.look(g, 125);
         }
+        &self.cells[..self.len]
     }
-}
-
-/// Squared distance from `p` to the nearest and farthest points of the box `[lo, hi]`.
-#[inline]
-fn box_dist2(p: Vec3, lo: Vec3, hi: Vec3) -> (f32, f32) {
-    let mut near = 0.0;
-    let mut far = 0.0;
-    for a in 0..3 {
-        let d_lo = p[a] - lo[a];
-        let d_hi = hi[a] - p[a];
-        let gap = (-d_lo).max(-d_hi).max(0.0);
-        near += gap * gap;
-        let reach = d_lo.abs().max(d_hi.abs());
-        far += reach * reach;
-    }
-    (near, far)
 }
 
 /// Minimal union-find over cells (path halving, union by index).
@@ -594,168 +394,59 @@ fn cluster_group(
     let min_pts = params.min_points;
     if m == 0 || min_pts > m {
         return GroupResult {
+            ids: idx.to_vec(),
             component: vec![None; m],
             is_core: vec![false; m],
         };
     }
     let th = Thresholds::new(params);
     // One label in the group: no label test in the inner loops.
-    let separate = params.label_penalty_m >= params.eps_m;
-    let grid = Grid::build(positions, labels, idx, params.eps_m);
-    let ncells = grid.num_cells();
+    let mixed = params.label_penalty_m < params.eps_m;
+    let mut g = GroupGrid::build(positions, labels, idx, params.eps_m);
+    let mut core = if mixed {
+        core_points::<true>(&g, min_pts, th)
+    } else {
+        core_points::<false>(&g, min_pts, th)
+    };
+    let core_end = core_first(&mut g, &mut core);
+    let core_box = core_boxes(&g, &core_end);
+    let (uf, all_whole) = connect(&g, &core_end, &core_box, th);
+    let mut uf = uf;
+    let unit = |c: u32, i: usize| -> u32 { if all_whole { c } else { i as u32 } };
+    let core_range = |c: u32| g.grid.range(c).start..core_end[c as usize] as usize;
 
-    // 1. Core points (per sorted point).
-    let mut core = vec![false; m];
-    for c in 0..ncells {
-        let r = grid.range(c as u32);
-        if r.len() >= min_pts && grid.uniform[c] {
-            core[r].fill(true);
+    // Components of core points, border points to their nearest core point.
+    let mut component = vec![None; m];
+    for c in 0..g.num_cells() as u32 {
+        for i in core_range(c) {
+            component[i] = Some(uf.find(unit(c, i)));
+        }
+    }
+    let reach2 = th.same2.max(th.diff2);
+    let mut nbrs = Neighbours::new();
+    for c in 0..g.num_cells() as u32 {
+        let r = g.grid.range(c);
+        let border = core_end[c as usize] as usize..r.end;
+        if border.is_empty() {
             continue;
         }
-        if separate {
-            for i in r {
-                core[i] = is_core_point::<false>(&grid, c, i, min_pts, th);
-            }
-        } else {
-            for i in r {
-                core[i] = is_core_point::<true>(&grid, c, i, min_pts, th);
-            }
-        }
-    }
-
-    // 2. Reorder each cell so its core points come first; `core_end[c]` ends them.
-    let mut grid = grid;
-    let mut core_end = vec![0u32; ncells];
-    for c in 0..ncells {
-        let r = grid.range(c as u32);
-        let (s, e) = (r.start, r.end);
-        let mut w = s;
-        for i in s..e {
-            if core[i] {
-                grid.pts.swap(w, i);
-                grid.lbl.swap(w, i);
-                grid.local.swap(w, i);
-                core.swap(w, i);
-                w += 1;
-            }
-        }
-        core_end[c] = w as u32;
-    }
-    let core_range = |c: u32| grid.start[c as usize] as usize..core_end[c as usize] as usize;
-    let has_core = |c: u32| core_end[c as usize] > grid.start[c as usize];
-
-    // Bounding boxes of each cell's core points, to skip hopeless cell pairs quickly.
-    let core_box: Vec<(Vec3, Vec3)> = (0..ncells as u32)
-        .map(|c| {
-            let mut lo = [f32::INFINITY; 3];
-            let mut hi = [f32::NEG_INFINITY; 3];
-            for p in &grid.pts[core_range(c)] {
-                for a in 0..3 {
-                    lo[a] = lo[a].min(p[a]);
-                    hi[a] = hi[a].max(p[a]);
-                }
-            }
-            (lo, hi)
-        })
-        .collect();
-
-    // 3. Connect core points. In a cell of one label all core points are within eps of
-    //    each other, so the cell is the unit of the union-find (a small array that stays
-    //    in L1); cells of several labels (finite label penalty) fall back to points.
-    let reach2 = th.same2.max(th.diff2);
-    let gap2 = |a: usize, b: usize| -> f32 {
-        let ((alo, ahi), (blo, bhi)) = (core_box[a], core_box[b]);
-        let mut g2 = 0.0;
-        for k in 0..3 {
-            let g = (blo[k] - ahi[k]).max(alo[k] - bhi[k]).max(0.0);
-            g2 += g * g;
-        }
-        g2
-    };
-    let all_uniform = grid.uniform.iter().all(|&u| u);
-    // Union-find elements: cells when all are uniform, else sorted points.
-    let unit = |c: u32, i: usize| -> u32 { if all_uniform { c } else { i as u32 } };
-    let mut uf = UnionFind::new(if all_uniform { ncells } else { m });
-    if !all_uniform {
-        for c in 0..ncells as u32 {
-            let r = core_range(c);
-            for i in r.clone() {
-                for j in r.start..i {
-                    if grid.uniform[c as usize]
-                        || dist2(grid.pts[i], grid.pts[j]) <= th.get(grid.lbl[i], grid.lbl[j])
-                    {
-                        uf.union(i as u32, j as u32);
-                    }
-                }
-            }
-        }
-    }
-    // Two passes: the 3×3×3 blocks first, which join almost everything, so that the
-    // farther pairs of the second pass are mostly settled by one `find`.
-    for near in [true, false] {
-        for c in 0..ncells as u32 {
-            if !has_core(c) {
-                continue;
-            }
-            let ra = core_range(c);
-            let uniform_c = grid.uniform[c as usize];
-            for &d in grid.neighbours_part(c as usize, near) {
-                if d <= c || !has_core(d) {
+        let nbrs = nbrs.at(&g, c).all(&g);
+        for i in border {
+            let p = g.grid.pts()[i];
+            let li = g.lbl[i];
+            // (distance², index of the core point, its union-find unit)
+            let mut best: Option<(f32, u32, u32)> = None;
+            for &d in nbrs {
+                let bound = core_box[d as usize].dist2(p);
+                if bound > reach2 || best.is_some_and(|(b2, _, _)| bound > b2) {
                     continue;
                 }
-                let rb = core_range(d);
-                if uniform_c && grid.uniform[d as usize] {
-                    // Already joined (the common case on a surface): nothing to test.
-                    if uf.find(unit(c, ra.start)) == uf.find(unit(d, rb.start)) {
-                        continue;
-                    }
-                    if gap2(c as usize, d as usize) > reach2 {
-                        continue;
-                    }
-                    if let Some((i, j)) = any_pair(&grid, ra.clone(), rb, core_box[d as usize], th)
-                    {
-                        uf.union(unit(c, i), unit(d, j));
-                    }
-                } else {
-                    if gap2(c as usize, d as usize) > reach2 {
-                        continue;
-                    }
-                    for i in ra.clone() {
-                        for j in rb.clone() {
-                            if dist2(grid.pts[i], grid.pts[j]) <= th.get(grid.lbl[i], grid.lbl[j]) {
-                                uf.union(i as u32, j as u32);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-
-    // 4. Components of core points, border points to their nearest core point.
-    let mut component = vec![None; m];
-    let mut is_core = vec![false; m];
-    for c in 0..ncells as u32 {
-        for i in core_range(c) {
-            let l = grid.local[i] as usize;
-            component[l] = Some(uf.find(unit(c, i)));
-            is_core[l] = true;
-        }
-    }
-    for c in 0..ncells as u32 {
-        let r = grid.range(c);
-        for i in core_end[c as usize] as usize..r.end {
-            let p = grid.pts[i];
-            let li = grid.lbl[i];
-            // (distance², original index of the core point, its union-find unit)
-            let mut best: Option<(f32, u32, u32)> = None;
-            for &d in grid.neighbours(c as usize) {
                 for j in core_range(d) {
-                    let d2 = dist2(p, grid.pts[j]);
-                    if d2 > th.get(li, grid.lbl[j]) {
+                    let d2 = dist2(p, g.grid.pts()[j]);
+                    if d2 > th.get(li, g.lbl[j]) {
                         continue;
                     }
-                    let oj = idx[grid.local[j] as usize];
+                    let oj = g.grid.ids()[j];
                     let better = match best {
                         None => true,
                         Some((b2, bo, _)) => d2 < b2 || (d2 == b2 && oj < bo),
@@ -766,7 +457,7 @@ fn cluster_group(
                 }
             }
             if let Some((_, _, u)) = best {
-                component[grid.local[i] as usize] = Some(uf.find(u));
+                component[i] = Some(uf.find(u));
             }
         }
     }
@@ -782,56 +473,146 @@ fn cluster_group(
         }
         *c = *d;
     }
-    GroupResult { component, is_core }
+    GroupResult {
+        ids: g.grid.ids().to_vec(),
+        component,
+        is_core: core,
+    }
 }
 
-/// True when sorted point `i` (in cell `c`) has at least `min_pts` neighbours within eps.
-/// `MIXED = false` when the group holds one label (no label test needed).
+/// Per stored point: whether it is core. `MIXED = false` when the group holds one label.
+fn core_points<const MIXED: bool>(g: &GroupGrid, min_pts: usize, th: Thresholds) -> Vec<bool> {
+    if !MIXED {
+        return core_points_one_label(g, min_pts, th.same2);
+    }
+    let mut core = vec![false; g.grid.pts().len()];
+    let mut nbrs = Neighbours::new();
+    for c in 0..g.num_cells() as u32 {
+        let r = g.grid.range(c);
+        if r.len() >= min_pts && g.whole[c as usize] {
+            core[r].fill(true);
+            continue;
+        }
+        let nbrs = nbrs.at(g, c);
+        for i in r {
+            core[i] = is_core_point::<MIXED>(g, c, i, min_pts, th, nbrs);
+        }
+    }
+    core
+}
+
+/// A neighbour cell as the core test of one cell's points reads it: copied once per cell
+/// into a short list that stays in L1 while each of the cell's points walks it.
+#[derive(Clone, Copy)]
+struct NearCell {
+    bbox: Aabb,
+    start: u32,
+    end: u32,
+}
+
+/// [`core_points`] for a group of one label (every pair of points within eps are
+/// neighbours): the hot loop of the clustering.
+fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> Vec<bool> {
+    let pts = g.grid.pts();
+    let mut core = vec![false; pts.len()];
+    let mut nbrs = Neighbours::new();
+    let mut cells: Vec<NearCell> = Vec::with_capacity(125);
+    let record = |d: u32| {
+        let r = g.grid.range(d);
+        NearCell {
+            bbox: g.bbox[d as usize],
+            start: r.start as u32,
+            end: r.end as u32,
+        }
+    };
+    for c in 0..g.num_cells() as u32 {
+        let r = g.grid.range(c);
+        let whole = g.whole[c as usize];
+        if r.len() >= min_pts && whole {
+            core[r].fill(true);
+            continue;
+        }
+        // The own cell comes first among the neighbours; when whole it counts at once.
+        let nbrs = nbrs.at(g, c);
+        let skip = usize::from(whole);
+        cells.clear();
+        cells.extend(nbrs.near()[skip..].iter().map(|&d| record(d)));
+        let mut far_listed = false;
+        let own = if whole { r.len() } else { 0 };
+        for i in r {
+            let p = pts[i];
+            let mut count = own;
+            let mut k = 0;
+            while count < min_pts {
+                if k == cells.len() {
+                    if far_listed {
+                        break;
+                    }
+                    let near = nbrs.near().len();
+                    cells.extend(nbrs.all(g)[near..].iter().map(|&d| record(d)));
+                    far_listed = true;
+                    continue;
+                }
+                let n = cells[k];
+                k += 1;
+                let (near2, far2) = n.bbox.near_far2(p);
+                if near2 > eps2 {
+                    continue;
+                }
+                let run = &pts[n.start as usize..n.end as usize];
+                if far2 <= eps2 {
+                    count += run.len();
+                } else {
+                    // Branch-free over chunks of 4, stopping once the count is reached.
+                    for chunk in run.chunks(4) {
+                        for &q in chunk {
+                            count += usize::from(dist2(p, q) <= eps2);
+                        }
+                        if count >= min_pts {
+                            break;
+                        }
+                    }
+                }
+            }
+            core[i] = count >= min_pts;
+        }
+    }
+    core
+}
+
+/// True when stored point `i` (in cell `c`, whose neighbours are `nbrs`) has at least
+/// `min_pts` neighbours within eps.
 #[inline]
 fn is_core_point<const MIXED: bool>(
-    grid: &Grid,
-    c: usize,
+    g: &GroupGrid,
+    c: u32,
     i: usize,
     min_pts: usize,
     th: Thresholds,
+    nbrs: &mut Neighbours,
 ) -> bool {
-    let p = grid.pts[i];
-    let li = grid.lbl[i];
-    let reach2 = th.same2.max(th.diff2);
+    let p = g.grid.pts()[i];
+    let li = g.lbl[i];
     let mut count = 0usize;
-    let nbrs = grid.neighbours(c);
-    debug_assert_eq!(nbrs.first(), Some(&(c as u32)), "own cell first");
-    let mut rest = nbrs;
-    // The point's own cell comes first; its diameter is below eps, so when it holds one
-    // label all of it counts.
-    if !MIXED || grid.uniform[c] {
-        count = grid.range(c as u32).len();
+    // The point's own cell comes first among its neighbours; when its diameter is below
+    // eps and it holds one label, all of it counts and it is not visited again.
+    let mut skip = 0;
+    if g.whole[c as usize] {
+        count = g.grid.range(c).len();
         if count >= min_pts {
             return true;
         }
-        rest = &nbrs[1..];
+        skip = 1;
     }
-    for &d in rest {
-        let (lo, hi) = grid.bounds[d as usize];
-        let (near2, far2) = box_dist2(p, lo, hi);
-        if near2 > reach2 {
-            continue;
+    for &d in &nbrs.near()[skip..] {
+        count += neighbours_in::<MIXED>(g, p, li, d, th);
+        if count >= min_pts {
+            return true;
         }
-        let r = grid.range(d);
-        if far2 <= th.same2 && (!MIXED || (grid.uniform[d as usize] && grid.lbl[r.start] == li)) {
-            count += r.len();
-        } else if MIXED {
-            for j in r {
-                if dist2(p, grid.pts[j]) <= th.get(li, grid.lbl[j]) {
-                    count += 1;
-                }
-            }
-        } else {
-            count += grid.pts[r]
-                .iter()
-                .filter(|&&q| dist2(p, q) <= th.same2)
-                .count();
-        }
+    }
+    let near = nbrs.near().len();
+    for &d in &nbrs.all(g)[near..] {
+        count += neighbours_in::<MIXED>(g, p, li, d, th);
         if count >= min_pts {
             return true;
         }
@@ -839,24 +620,175 @@ fn is_core_point<const MIXED: bool>(
     false
 }
 
-/// Some pair of core points, one from each range, within eps (uniform single-label cells).
+/// How many points of cell `d` are neighbours of `p` (label `li`): none when the cell's
+/// box lies beyond eps, all when it lies within (and holds `li` only), else counted.
+#[inline(always)]
+fn neighbours_in<const MIXED: bool>(
+    g: &GroupGrid,
+    p: Vec3,
+    li: Label,
+    d: u32,
+    th: Thresholds,
+) -> usize {
+    let d = d as usize;
+    let (near2, far2) = g.bbox[d].near_far2(p);
+    if near2 > th.reach2() {
+        return 0;
+    }
+    let r = g.grid.range(d as u32);
+    if far2 <= th.same2 && (!MIXED || (g.uniform[d] && g.lbl[r.start] == li)) {
+        r.len()
+    } else if MIXED {
+        g.grid.pts()[r.clone()]
+            .iter()
+            .zip(&g.lbl[r])
+            .filter(|&(&q, &l)| dist2(p, q) <= th.get(li, l))
+            .count()
+    } else {
+        let t = th.same2;
+        g.grid.pts()[r]
+            .iter()
+            .filter(|&&q| dist2(p, q) <= t)
+            .count()
+    }
+}
+
+/// Reorders each cell so its core points come first (with `core`); returns per cell the
+/// end of its core points.
+fn core_first(g: &mut GroupGrid, core: &mut [bool]) -> Vec<u32> {
+    let mut core_end = vec![0u32; g.num_cells()];
+    for c in 0..g.num_cells() as u32 {
+        let r = g.grid.range(c);
+        let (ids, pts) = g.grid.points_mut();
+        let mut w = r.start;
+        for i in r {
+            if core[i] {
+                ids.swap(w, i);
+                pts.swap(w, i);
+                g.lbl.swap(w, i);
+                core.swap(w, i);
+                w += 1;
+            }
+        }
+        core_end[c as usize] = w as u32;
+    }
+    core_end
+}
+
+/// Per cell, the tight box of its core points (the cell's box when all are core).
+fn core_boxes(g: &GroupGrid, core_end: &[u32]) -> Vec<Aabb> {
+    (0..g.num_cells() as u32)
+        .map(|c| {
+            let r = g.grid.range(c);
+            let end = core_end[c as usize] as usize;
+            if end == r.end {
+                g.bbox[c as usize]
+            } else {
+                Aabb::of(&g.grid.pts()[r.start..end])
+            }
+        })
+        .collect()
+}
+
+/// Connects core points (core q within eps of core p): the union-find over cells when
+/// every cell is whole (all its core points are neighbours of one another, a small array
+/// that stays in L1), over stored points otherwise; true in the first case.
+fn connect(
+    g: &GroupGrid,
+    core_end: &[u32],
+    core_box: &[Aabb],
+    th: Thresholds,
+) -> (UnionFind, bool) {
+    let ncells = g.num_cells();
+    let core_range = |c: u32| g.grid.range(c).start..core_end[c as usize] as usize;
+    let has_core = |c: u32| core_end[c as usize] as usize > g.grid.range(c).start;
+    let reach2 = th.same2.max(th.diff2);
+    let all_whole = g.whole.iter().all(|&w| w);
+    let unit = |c: u32, i: usize| -> u32 { if all_whole { c } else { i as u32 } };
+    let mut uf = UnionFind::new(if all_whole {
+        ncells
+    } else {
+        g.grid.pts().len()
+    });
+    let pts = g.grid.pts();
+    if !all_whole {
+        for c in 0..ncells as u32 {
+            let r = core_range(c);
+            for i in r.clone() {
+                for j in r.start..i {
+                    if g.whole[c as usize] || dist2(pts[i], pts[j]) <= th.get(g.lbl[i], g.lbl[j]) {
+                        uf.union(i as u32, j as u32);
+                    }
+                }
+            }
+        }
+    }
+    let (forward, near) = forward_offsets();
+    let offs = g.grid.offsets(&forward);
+    // Two passes: the 3×3×3 blocks first, which join almost everything, so that the
+    // farther pairs of the second pass are mostly settled by one `find`.
+    let mut found = vec![0u32; forward.len()];
+    for pass in [0..near, near..forward.len()] {
+        for c in 0..ncells as u32 {
+            if !has_core(c) {
+                continue;
+            }
+            let at = g.grid.anchor(c);
+            let ra = core_range(c);
+            let whole_c = g.whole[c as usize];
+            let n = g.grid.near_cells(at, &offs, pass.clone(), &mut found);
+            for &d in &found[..n] {
+                if !has_core(d) {
+                    continue;
+                }
+                let rb = core_range(d);
+                if whole_c && g.whole[d as usize] {
+                    // Already joined (the common case on a surface): nothing to test.
+                    if uf.find(unit(c, ra.start)) == uf.find(unit(d, rb.start)) {
+                        continue;
+                    }
+                    if core_box[c as usize].gap2(&core_box[d as usize]) > reach2 {
+                        continue;
+                    }
+                    if let Some((i, j)) = any_pair(g, ra.clone(), rb, core_box[d as usize], th) {
+                        uf.union(unit(c, i), unit(d, j));
+                    }
+                } else {
+                    if core_box[c as usize].gap2(&core_box[d as usize]) > reach2 {
+                        continue;
+                    }
+                    for i in ra.clone() {
+                        for j in rb.clone() {
+                            if dist2(pts[i], pts[j]) <= th.get(g.lbl[i], g.lbl[j]) {
+                                uf.union(i as u32, j as u32);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    (uf, all_whole)
+}
+
+/// Some pair of core points, one from each range, within eps (whole single-label cells).
 fn any_pair(
-    grid: &Grid,
+    g: &GroupGrid,
     a: std::ops::Range<usize>,
     b: std::ops::Range<usize>,
-    core_box: (Vec3, Vec3),
+    b_box: Aabb,
     th: Thresholds,
 ) -> Option<(usize, usize)> {
-    let t = th.get(grid.lbl[a.start], grid.lbl[b.start]);
-    let (blo, bhi) = core_box;
+    let t = th.get(g.lbl[a.start], g.lbl[b.start]);
+    let pts = g.grid.pts();
     for i in a {
-        let p = grid.pts[i];
+        let p = pts[i];
         // Most points of A are too far from all of B: one box test skips them.
-        if box_dist2(p, blo, bhi).0 > t {
+        if b_box.dist2(p) > t {
             continue;
         }
         for j in b.clone() {
-            if dist2(p, grid.pts[j]) <= t {
+            if dist2(p, pts[j]) <= t {
                 return Some((i, j));
             }
         }
@@ -924,6 +856,10 @@ pub fn dbscan_brute_force(
             })
         })
         .collect();
-    let res = GroupResult { component, is_core };
-    assemble(n, labels, &[idx], &[res])
+    let res = GroupResult {
+        ids: idx,
+        component,
+        is_core,
+    };
+    assemble(n, labels, &[res])
 }

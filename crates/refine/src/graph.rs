@@ -1,6 +1,7 @@
 //! Cluster features, the cluster graph and the best body tree (ALGORITHM.md §5.2–§5.3).
 
 use crate::dbscan::Clustering;
+use crate::grid::{Aabb, CellGrid};
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label};
 use rustc_hash::{FxHashMap, FxHashSet};
@@ -61,7 +62,7 @@ pub fn cluster_features(positions_m: &[Vec3], clustering: &Clustering) -> Vec<Cl
 /// The graph of clusters: *inside* and *intersect* edges from the bounding spheres. Tree
 /// edges live in [`BodyTree`].
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Graph {
+pub struct ClusterGraph {
     /// `containers[a]`: the clusters that cluster `a` lies inside (sorted ids).
     pub containers: Vec<Vec<u32>>,
     /// `adjacent[a]`: clusters joined to `a` by an inside (either way) or intersect edge
@@ -69,7 +70,7 @@ pub struct Graph {
     pub adjacent: Vec<Vec<u32>>,
 }
 
-impl Graph {
+impl ClusterGraph {
     /// True when `a` and `b` are joined by an inside or intersect edge.
     pub fn touches(&self, a: u32, b: u32) -> bool {
         self.adjacent[a as usize].binary_search(&b).is_ok()
@@ -78,7 +79,7 @@ impl Graph {
 
 /// Builds the inside / intersect edges. With `d = ‖c_A − c_B‖`: A is inside B when
 /// `d + r_A ≤ r_B · (1 + inside_tolerance)`; A and B intersect when `d ≤ r_A + r_B`.
-pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> Graph {
+pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> ClusterGraph {
     let k = features.len();
     let mut containers = vec![Vec::new(); k];
     let mut adjacent = vec![Vec::new(); k];
@@ -104,7 +105,7 @@ pub fn build_graph(features: &[ClusterFeatures], inside_tolerance: f32) -> Graph
     for v in containers.iter_mut().chain(adjacent.iter_mut()) {
         v.sort_unstable();
     }
-    Graph {
+    ClusterGraph {
         containers,
         adjacent,
     }
@@ -130,7 +131,7 @@ pub fn build_graph_contact(
     features: &[ClusterFeatures],
     contact_gap_m: f32,
     inside_fraction: f32,
-) -> Graph {
+) -> ClusterGraph {
     let index = ContactIndex::new(positions_m, clustering, contact_gap_m);
     let touching = index.touching_pairs();
     let near = index.near_counts(&touching, features, inside_fraction);
@@ -153,98 +154,81 @@ pub fn build_graph_contact(
     for v in containers.iter_mut().chain(adjacent.iter_mut()) {
         v.sort_unstable();
     }
-    Graph {
+    ClusterGraph {
         containers,
         adjacent,
     }
 }
 
-/// Clustered points bucketed by (cell of side `gap_m`, cluster), for the contact graph.
+/// Clustered points bucketed by (cell of side `gap_m`, cluster), for the contact graph: the
+/// crate's grid ([`CellGrid`]) over the clustered points, each cell's points grouped by
+/// cluster.
 struct ContactIndex {
     gap2: f32,
-    /// Clustered positions sorted by (cell, cluster): buckets are runs of it.
-    pts: Vec<Vec3>,
+    /// The clustered points by cell, and within a cell by cluster: buckets are runs of it.
+    grid: CellGrid,
     buckets: Vec<Bucket>,
-    /// Per non-empty cell, the range of its buckets, sorted by cell.
-    cells: Vec<([i32; 3], std::ops::Range<usize>)>,
-    cell_of: FxHashMap<[i32; 3], usize>,
+    /// Per cell of the grid, the range of its buckets.
+    cell_buckets: Vec<std::ops::Range<usize>>,
 }
 
 /// The points of one cluster in one cell, with their bounding box.
 struct Bucket {
     cluster: u32,
     range: std::ops::Range<usize>,
-    lo: Vec3,
-    hi: Vec3,
-}
-
-impl Bucket {
-    fn gap2(&self, o: &Bucket) -> f32 {
-        (0..3)
-            .map(|k| {
-                let g = (self.lo[k] - o.hi[k]).max(o.lo[k] - self.hi[k]).max(0.0);
-                g * g
-            })
-            .sum()
-    }
-    fn point_gap2(&self, p: Vec3) -> f32 {
-        (0..3)
-            .map(|k| {
-                let g = (self.lo[k] - p[k]).max(p[k] - self.hi[k]).max(0.0);
-                g * g
-            })
-            .sum()
-    }
+    bbox: Aabb,
 }
 
 impl ContactIndex {
     fn new(positions_m: &[Vec3], clustering: &Clustering, gap_m: f32) -> Self {
         let inv = 1.0 / gap_m;
         let cell = |p: Vec3| [0, 1, 2].map(|a| (p[a] * inv).floor() as i32);
-        let mut sorted: Vec<([i32; 3], u32, Vec3)> = positions_m
-            .iter()
-            .zip(&clustering.cluster_of)
-            .filter_map(|(&p, c)| c.map(|c| (cell(p), c, p)))
-            .collect();
-        sorted.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
-        let mut buckets: Vec<Bucket> = Vec::new();
-        let mut cells: Vec<([i32; 3], std::ops::Range<usize>)> = Vec::new();
-        let mut i = 0;
-        while i < sorted.len() {
-            let (key, cluster) = (sorted[i].0, sorted[i].1);
-            let mut j = i;
-            let (mut lo, mut hi) = (sorted[i].2, sorted[i].2);
-            while j < sorted.len() && sorted[j].0 == key && sorted[j].1 == cluster {
-                for a in 0..3 {
-                    lo[a] = lo[a].min(sorted[j].2[a]);
-                    hi[a] = hi[a].max(sorted[j].2[a]);
-                }
-                j += 1;
-            }
-            let b = buckets.len();
-            buckets.push(Bucket {
-                cluster,
-                range: i..j,
-                lo,
-                hi,
-            });
-            match cells.last_mut() {
-                Some((k, r)) if *k == key => r.end = b + 1,
-                _ => cells.push((key, b..b + 1)),
-            }
-            i = j;
+        // Clustered points ordered by cluster (a counting sort): the grid keeps that
+        // order within each cell, so each cell's points come grouped by cluster.
+        let k = clustering.num_clusters();
+        let mut start = vec![0u32; k + 1];
+        for c in clustering.cluster_of.iter().flatten() {
+            start[*c as usize + 1] += 1;
         }
-        let cell_of = cells
-            .iter()
-            .enumerate()
-            .map(|(i, (k, _))| (*k, i))
-            .collect();
+        for c in 0..k {
+            start[c + 1] += start[c];
+        }
+        let mut ids = vec![0u32; start[k] as usize];
+        for (i, c) in clustering.cluster_of.iter().enumerate() {
+            if let Some(c) = c {
+                let s = &mut start[*c as usize];
+                ids[*s as usize] = i as u32;
+                *s += 1;
+            }
+        }
+        let keys: Vec<[i32; 3]> = ids.iter().map(|&i| cell(positions_m[i as usize])).collect();
+        let grid = CellGrid::new(positions_m, &ids, &keys, 1);
+        let mut buckets: Vec<Bucket> = Vec::new();
+        let mut cell_buckets = Vec::with_capacity(grid.num_cells());
+        for c in 0..grid.num_cells() as u32 {
+            let first = buckets.len();
+            let r = grid.range(c);
+            let mut i = r.start;
+            while i < r.end {
+                let cluster = clustering.cluster_of[grid.ids()[i] as usize].unwrap_or(u32::MAX);
+                let mut j = i;
+                while j < r.end && clustering.cluster_of[grid.ids()[j] as usize] == Some(cluster) {
+                    j += 1;
+                }
+                buckets.push(Bucket {
+                    cluster,
+                    range: i..j,
+                    bbox: Aabb::of(&grid.pts()[i..j]),
+                });
+                i = j;
+            }
+            cell_buckets.push(first..buckets.len());
+        }
         ContactIndex {
             gap2: gap_m * gap_m,
-            pts: sorted.into_iter().map(|t| t.2).collect(),
+            grid,
             buckets,
-            cells,
-            cell_of,
+            cell_buckets,
         }
     }
 
@@ -252,21 +236,22 @@ impl ContactIndex {
     /// cells (the same cell included) whose boxes come within the gap, each ordered pair
     /// once.
     fn for_each_near_bucket_pair(&self, mut f: impl FnMut(usize, usize)) {
-        for (key, own) in &self.cells {
-            for dz in -1..=1 {
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
-                        let Some(&o) = self.cell_of.get(&[key[0] + dx, key[1] + dy, key[2] + dz])
-                        else {
-                            continue;
-                        };
-                        for ai in own.clone() {
-                            for bi in self.cells[o].1.clone() {
-                                let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
-                                if a.cluster != b.cluster && a.gap2(b) <= self.gap2 {
-                                    f(ai, bi);
-                                }
-                            }
+        let around: Vec<[i32; 3]> = (-1..=1)
+            .flat_map(|z| (-1..=1).flat_map(move |y| (-1..=1).map(move |x| [x, y, z])))
+            .collect();
+        let offs = self.grid.offsets(&around);
+        for c in 0..self.grid.num_cells() as u32 {
+            let at = self.grid.anchor(c);
+            let own = self.cell_buckets[c as usize].clone();
+            for o in 0..around.len() {
+                let Some(d) = self.grid.near_cell(at, &offs, o) else {
+                    continue;
+                };
+                for ai in own.clone() {
+                    for bi in self.cell_buckets[d as usize].clone() {
+                        let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
+                        if a.cluster != b.cluster && a.bbox.gap2(&b.bbox) <= self.gap2 {
+                            f(ai, bi);
                         }
                     }
                 }
@@ -276,8 +261,8 @@ impl ContactIndex {
 
     /// True when a point of bucket `b` lies within the gap of `p`.
     fn near(&self, p: Vec3, b: &Bucket) -> bool {
-        b.point_gap2(p) <= self.gap2
-            && self.pts[b.range.clone()]
+        b.bbox.dist2(p) <= self.gap2
+            && self.grid.pts()[b.range.clone()]
                 .iter()
                 .any(|&q| bodyseg_core::math::dist2(p, q) <= self.gap2)
     }
@@ -288,7 +273,9 @@ impl ContactIndex {
         self.for_each_near_bucket_pair(|ai, bi| {
             let (a, b) = (&self.buckets[ai], &self.buckets[bi]);
             if a.cluster < b.cluster && !touching.contains(&(a.cluster, b.cluster)) {
-                let hit = self.pts[a.range.clone()].iter().any(|&p| self.near(p, b));
+                let hit = self.grid.pts()[a.range.clone()]
+                    .iter()
+                    .any(|&p| self.near(p, b));
                 if hit {
                     touching.insert((a.cluster, b.cluster));
                 }
@@ -341,7 +328,7 @@ impl ContactIndex {
             let f = flags
                 .entry((ai, pair.1))
                 .or_insert_with(|| vec![false; a.range.len()]);
-            for (flag, &p) in f.iter_mut().zip(&self.pts[a.range.clone()]) {
+            for (flag, &p) in f.iter_mut().zip(&self.grid.pts()[a.range.clone()]) {
                 if !*flag && self.near(p, &self.buckets[bi]) {
                     *flag = true;
                 }
@@ -458,7 +445,7 @@ impl BodyTree {
 /// with the largest unused cluster of its label adjacent (intersecting, inside or
 /// containing) to its parent; ties go to the smaller cluster id. A slot whose parent slot
 /// is empty stays empty.
-pub fn best_tree_paper(features: &[ClusterFeatures], graph: &Graph) -> BodyTree {
+pub fn best_tree_paper(features: &[ClusterFeatures], graph: &ClusterGraph) -> BodyTree {
     let largest = |cands: &mut dyn Iterator<Item = u32>| -> Option<u32> {
         cands.fold(None, |best: Option<u32>, c| match best {
             Some(b) if features[b as usize].size >= features[c as usize].size => Some(b),
@@ -508,7 +495,7 @@ pub fn best_tree_paper(features: &[ClusterFeatures], graph: &Graph) -> BodyTree 
 /// Greedy slot filling ([`best_tree_paper`]) gives an upper-arm slot to the largest
 /// upper-arm cluster even when it carries no lower arm (a mislabelled patch on the torso),
 /// leaving a real arm and its forearm out of the tree; this search does not.
-pub fn best_tree_coverage(features: &[ClusterFeatures], graph: &Graph) -> BodyTree {
+pub fn best_tree_coverage(features: &[ClusterFeatures], graph: &ClusterGraph) -> BodyTree {
     let size = |c: u32| features[c as usize].size;
     let with_label = |cands: &[u32], class: Class| -> Vec<u32> {
         let want = Label::from(class);

@@ -4,7 +4,7 @@
 //! Place in the pipeline: `LabeledCloud` (projected labels) + `PersonBox`es →
 //! [`refine`] → `RefinedCloud` (same points, same order, repaired labels).
 //!
-//! Per person box, in parallel: label-aware DBSCAN ([`dbscan`], Ester et al. 1996),
+//! Per person box, in parallel: label-aware DBSCAN ([`dbscan()`], Ester et al. 1996),
 //! cluster features and graph ([`graph`]), the best body tree, then the steps
 //! ([`steps`]): M merges clusters lying inside a cluster of another label, R removes
 //! clusters cut off from the body tree, N gives noise points the label of the nearest
@@ -20,7 +20,13 @@
 //! ([`PointEvidence::label_probs`]). After the steps, `floor_contact_m` gives lower-leg
 //! points on the floor back to the background ([`floor`]), `smooth_radius_m` gives each
 //! body point the body label most points around it carry ([`smooth_labels`]), and
-//! `foreign_colour_density` arm labels on colours the person does not wear ([`colour`]).
+//! `foreign_color_density` arm labels on colors the person does not wear ([`color`]).
+//!
+//! Every spatial search (DBSCAN's neighbour counts, N's nearest clustered point and votes,
+//! smoothing's cell counts, R's bridges, the contact graph) runs on one grid (`grid.rs`:
+//! cells keyed without overflow for any finite input, dense or hashed look-up, tested
+//! against brute force). Lengths that set a grid's cells are checked against the cloud's
+//! extent ([`RefineConfig::validate_for_extent`]).
 //!
 //! # Conventions
 //! - Positions in metres, any right-handed frame (the world frame in the pipeline).
@@ -28,17 +34,21 @@
 //!   person's point list, which keeps the cloud's order).
 //! - Nothing here depends on point order beyond that numbering: ties are broken by index.
 
-pub mod colour;
+pub mod color;
 pub mod config;
 pub mod dbscan;
 pub mod floor;
 pub mod graph;
+mod grid;
 pub mod steps;
 
-pub use config::{GraphMode, NoiseMode, RefineConfig, RefineError, Steps, TreeMode, VoteMode};
+pub use config::{
+    GraphMode, MAX_COUNT, MAX_NOISE_K, MAX_RADIUS_M, NoiseMode, RefineConfig, RefineError, Steps,
+    TreeMode, VoteMode,
+};
 pub use dbscan::{Clustering, DbscanParams, dbscan, dbscan_brute_force};
 pub use graph::{
-    BodyTree, ClusterFeatures, Graph, best_tree_coverage, best_tree_paper, build_graph,
+    BodyTree, ClusterFeatures, ClusterGraph, best_tree_coverage, best_tree_paper, build_graph,
     build_graph_contact, cluster_features,
 };
 pub use steps::{
@@ -49,6 +59,7 @@ pub use steps::{
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, LabeledCloud, PersonBox, RefinedCloud};
 use rayon::prelude::*;
+use steps::NoiseNearest;
 
 /// Everything the refinement computed for one person, for tests, figures and reports.
 #[derive(Clone, Debug)]
@@ -58,7 +69,7 @@ pub struct PersonRefinement {
     /// Per cluster features.
     pub features: Vec<ClusterFeatures>,
     /// The cluster graph.
-    pub graph: Graph,
+    pub graph: ClusterGraph,
     /// The best body tree.
     pub tree: BodyTree,
     /// Cluster labels after M (equal to DBSCAN's when M is off).
@@ -66,7 +77,7 @@ pub struct PersonRefinement {
     /// Cluster labels after R (equal to the above when R is off or the tree is invalid).
     pub labels_after_remove: Vec<Label>,
     /// Final per-point labels of the person's points: never unknown, except where
-    /// `foreign_colour_density` found an arm label of a colour this person does not wear
+    /// `foreign_color_density` found an arm label of a color this person does not wear
     /// (it abstains: the fuse gives the point another person's label, or background).
     pub point_labels: Vec<Label>,
 }
@@ -101,7 +112,7 @@ pub struct PersonStructure {
     /// Per cluster features.
     pub features: Vec<ClusterFeatures>,
     /// The cluster graph.
-    pub graph: Graph,
+    pub graph: ClusterGraph,
     /// The best body tree.
     pub tree: BodyTree,
 }
@@ -150,6 +161,37 @@ pub fn apply_steps(
     steps: Steps,
     cfg: &RefineConfig,
 ) -> PersonRefinement {
+    let evidence = PersonEvidence {
+        label_probs,
+        doubted,
+        nearest: None,
+    };
+    apply_steps_with(structure, positions_m, labels, evidence, steps, cfg)
+}
+
+/// What [`apply_steps`] may be given beside the structure: the parser's evidence, and N's
+/// search when it was done already for another configuration of the same clustering.
+#[derive(Clone, Copy, Default)]
+struct PersonEvidence<'a> {
+    label_probs: Option<&'a [f32]>,
+    doubted: Option<&'a [bool]>,
+    nearest: Option<&'a NoiseNearest>,
+}
+
+/// [`apply_steps`] with a [`PersonEvidence`].
+fn apply_steps_with(
+    structure: PersonStructure,
+    positions_m: &[Vec3],
+    labels: &[Label],
+    evidence: PersonEvidence<'_>,
+    steps: Steps,
+    cfg: &RefineConfig,
+) -> PersonRefinement {
+    let PersonEvidence {
+        label_probs,
+        doubted,
+        nearest,
+    } = evidence;
     let (merge, remove, noise) = match steps {
         Steps::Reference => (false, false, false),
         Steps::Run {
@@ -227,7 +269,10 @@ pub fn apply_steps(
             .as_ref()
             .map(|(doubted, _)| doubted.iter().map(|&d| !d).collect());
         point_labels = match cfg.noise {
-            NoiseMode::Nearest => reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m),
+            NoiseMode::Nearest => match nearest {
+                Some(n) => n.relabel(&point_labels),
+                None => reassign_noise(positions_m, &point_labels, &is_noise, cfg.eps_m),
+            },
             NoiseMode::Weighted | NoiseMode::Probability => reassign_noise_weighted(
                 positions_m,
                 &point_labels,
@@ -354,7 +399,7 @@ pub struct PointEvidence<'a> {
     /// (`bodyseg_project::FrameProjector::vote_labels`); needed by `vote = multi_view`.
     pub voted: Option<&'a [Label]>,
     /// The parser's probability of each point's projected label (the softmax of that
-    /// label at the point's colour pixel); used by `noise = "probability"`. Where the
+    /// label at the point's color pixel); used by `noise = "probability"`. Where the
     /// vote changed a label, its probability is not the new label's: such points count 1.
     pub label_probs: Option<&'a [f32]>,
 }
@@ -378,13 +423,14 @@ pub fn refine_variants_with(
 ) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
     cloud.validate()?;
+    cfg.validate_for_extent(extent_m(&cloud.positions_m))?;
     let PointEvidence { voted, label_probs } = evidence;
-    let colours = match &cloud.colors {
-        _ if cfg.foreign_colour_density == 0.0 => None,
+    let colors = match &cloud.colors {
+        _ if cfg.foreign_color_density == 0.0 => None,
         Some(c) => Some(c.as_slice()),
         None => {
-            return Err(RefineError::NoColours {
-                density: cfg.foreign_colour_density,
+            return Err(RefineError::NoColors {
+                density: cfg.foreign_color_density,
             });
         }
     };
@@ -474,30 +520,45 @@ pub fn refine_variants_with(
                 });
                 let doubted = doubted.as_deref();
                 let structure = analyse_person(pos, cluster_lab, cfg);
+                // N's search depends on the clustering only: once for every run with N.
+                let nearest = (cfg.noise == NoiseMode::Nearest && runs.iter().any(Steps::noise))
+                    .then(|| {
+                        let is_noise: Vec<bool> = structure
+                            .clustering
+                            .cluster_of
+                            .iter()
+                            .map(Option::is_none)
+                            .collect();
+                        NoiseNearest::new(pos, &is_noise, cfg.eps_m)
+                    });
+                let evidence = PersonEvidence {
+                    label_probs: probs,
+                    doubted,
+                    nearest: nearest.as_ref(),
+                };
                 // Every run but the last works on a copy; the last (the only one of a
                 // plain run) takes the structure itself.
                 let mut refinements: Vec<PersonRefinement> = Vec::with_capacity(runs.len());
                 if let Some((&last, rest)) = runs.split_last() {
                     for &s in rest {
-                        refinements.push(apply_steps(
+                        refinements.push(apply_steps_with(
                             structure.clone(),
                             pos,
                             lab,
-                            probs,
-                            doubted,
+                            evidence,
                             s,
                             cfg,
                         ));
                     }
-                    refinements.push(apply_steps(structure, pos, lab, probs, doubted, last, cfg));
+                    refinements.push(apply_steps_with(structure, pos, lab, evidence, last, cfg));
                 }
-                if let Some(colours) = colours {
-                    let colours: Vec<[u8; 3]> = idx.iter().map(|&i| colours[i as usize]).collect();
+                if let Some(colors) = colors {
+                    let colors: Vec<[u8; 3]> = idx.iter().map(|&i| colors[i as usize]).collect();
                     for r in &mut refinements {
-                        colour::drop_foreign_arms(
+                        color::drop_foreign_arms(
                             &mut r.point_labels,
-                            &colours,
-                            cfg.foreign_colour_density,
+                            &colors,
+                            cfg.foreign_color_density,
                             // Unknown: this person abstains; another whose box holds the
                             // point (a hand reaching into it) may keep it.
                             Label::UNKNOWN,
@@ -554,6 +615,19 @@ pub fn refine_variants_with(
         out.clusters = vec![None; cloud.len()];
     }
     Ok(out)
+}
+
+/// The largest extent of `positions` along an axis, metres (0 when empty).
+fn extent_m(positions: &[Vec3]) -> f32 {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in positions {
+        for a in 0..3 {
+            lo[a] = if p[a] < lo[a] { p[a] } else { lo[a] };
+            hi[a] = if p[a] > hi[a] { p[a] } else { hi[a] };
+        }
+    }
+    (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max)
 }
 
 /// Fuse (§5.7): a point inside exactly one box takes that person's label; inside several,
@@ -630,7 +704,7 @@ fn fuse_labels(
                     take(&mut labels, &mut clusters);
                     seen[i] = AGREE;
                 }
-                // Unknown is a person abstaining (a colour it does not wear): the others
+                // Unknown is a person abstaining (a color it does not wear): the others
                 // decide; when all abstain, background (below).
                 AGREE if l.is_unknown() => {}
                 AGREE if labels[i].is_unknown() => take(&mut labels, &mut clusters),

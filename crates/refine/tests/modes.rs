@@ -787,7 +787,7 @@ fn merge_into_background_takes_a_patch_on_a_wall_but_never_a_foot_on_the_floor()
 }
 
 #[test]
-fn foreign_colours_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm() {
+fn foreign_colors_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm() {
     let mut s = Scene::default();
     let torso = slab_body(&mut s);
     // An arm held out from the body's side, and an orange bar (a robot link) the parser
@@ -812,16 +812,16 @@ fn foreign_colours_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm
     );
     let mut cloud = s.cloud();
     let (skin, shirt, orange) = ([200, 150, 120], [40, 60, 160], [215, 115, 15]);
-    let mut colours = vec![skin; cloud.len()];
+    let mut colors = vec![skin; cloud.len()];
     for (p, c) in [
         (torso, shirt),
         (upper, shirt),
         (forearm, skin),
         (bar, orange),
     ] {
-        colours[s.parts[p].clone()].fill(c);
+        colors[s.parts[p].clone()].fill(c);
     }
-    cloud.colors = Some(colours);
+    cloud.colors = Some(colors);
     let boxes = [PersonBox {
         id: 0,
         center_m: [0.15, 0.1, 1.2],
@@ -830,7 +830,7 @@ fn foreign_colours_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm
     }];
     let off = contact("M-R-N");
     let on = RefineConfig {
-        foreign_colour_density: 0.03,
+        foreign_color_density: 0.03,
         ..off.clone()
     };
     let run = |cfg: &RefineConfig| refine(&cloud, &boxes, cfg).expect("valid").cloud.labels;
@@ -844,15 +844,15 @@ fn foreign_colours_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm
     assert!(all(&s, &out, upper, Class::UpperArms), "the sleeve");
     assert!(all(&s, &out, torso, Class::Torso));
 
-    // Without colours the mode cannot run: a clear error, not a silent skip.
+    // Without colors the mode cannot run: a clear error, not a silent skip.
     cloud.colors = None;
-    let err = refine(&cloud, &boxes, &on).expect_err("no colours");
-    assert!(matches!(err, RefineError::NoColours { .. }), "{err}");
-    assert!(err.to_string().contains("foreign_colour_density"), "{err}");
+    let err = refine(&cloud, &boxes, &on).expect_err("no colors");
+    assert!(matches!(err, RefineError::NoColors { .. }), "{err}");
+    assert!(err.to_string().contains("foreign_color_density"), "{err}");
 }
 
 #[test]
-fn foreign_colours_leave_a_hand_reaching_into_another_persons_box_to_its_owner() {
+fn foreign_colors_leave_a_hand_reaching_into_another_persons_box_to_its_owner() {
     // Person A at x = 0 (skin A, blue shirt); person B at x = 0.8 (skin B, green shirt), its
     // forearm reaching into A's box, nearer A's box centre than B's. Half of the forearm's
     // points have no projected label (DSA left them unknown), so where A and B disagree the
@@ -883,7 +883,7 @@ fn foreign_colours_leave_a_hand_reaching_into_another_persons_box_to_its_owner()
     }
     let (skin_a, shirt_a) = ([200, 150, 120], [40, 60, 160]);
     let (skin_b, shirt_b) = ([170, 110, 70], [40, 160, 60]);
-    let mut colours = vec![skin_a; cloud.len()];
+    let mut colors = vec![skin_a; cloud.len()];
     for (p, c) in [
         (torso_a, shirt_a),
         (torso_b, shirt_b),
@@ -891,9 +891,9 @@ fn foreign_colours_leave_a_hand_reaching_into_another_persons_box_to_its_owner()
         (upper_b, shirt_b),
         (forearm_b, skin_b),
     ] {
-        colours[s.parts[p].clone()].fill(c);
+        colors[s.parts[p].clone()].fill(c);
     }
-    cloud.colors = Some(colours);
+    cloud.colors = Some(colors);
     let boxes = [
         PersonBox {
             id: 0,
@@ -909,7 +909,7 @@ fn foreign_colours_leave_a_hand_reaching_into_another_persons_box_to_its_owner()
         },
     ];
     let cfg = RefineConfig {
-        foreign_colour_density: 0.03,
+        foreign_color_density: 0.03,
         ..contact("M-N")
     };
     let out = refine(&cloud, &boxes, &cfg).expect("valid").cloud.labels;

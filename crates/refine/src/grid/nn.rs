@@ -1,0 +1,300 @@
+//! [`NnIndex`]: exact nearest-neighbour and radius queries on a [`CellGrid`].
+
+use super::{Aabb, CellGrid, sort_by_key};
+use bodyseg_core::math::{Vec3, dist2};
+
+/// Fine cells per block edge in [`NnIndex`].
+const NN_BLOCK_CELLS: i32 = 4;
+
+/// Exact nearest-neighbour and radius queries over a fixed point set: a [`CellGrid`] of
+/// side `eps` (at least 1/64 of the points' extent, at most 64 cells along the longest
+/// axis), each cell with the tight box of its points, cells grouped into blocks of 4×4×4
+/// with their boxes, so a far query ranks the blocks and opens only those that can hold a
+/// nearer point.
+pub(crate) struct NnIndex {
+    grid: CellGrid,
+    /// Cells are placed relative to `lo`, side `1 / inv_side`, `dims` per axis.
+    lo: Vec3,
+    inv_side: f32,
+    dims: [i32; 3],
+    cell_box: Vec<Aabb>,
+    /// Cells grouped by block (CSR over the non-empty blocks).
+    block_cells: Vec<u32>,
+    block_start: Vec<u32>,
+    block_box: Vec<Aabb>,
+}
+
+impl NnIndex {
+    /// Indexes the points `idx` of `positions` (cells of side `eps_m`, or 1/64 of the
+    /// points' extent when that is larger).
+    pub(crate) fn new(positions: &[Vec3], idx: &[u32], eps_m: f32) -> Self {
+        let bounds = Aabb::of_ids(positions, idx);
+        let extent = (0..3)
+            .map(|a| bounds.hi[a] - bounds.lo[a])
+            .fold(0.0f32, f32::max);
+        // Cells of side eps, but never more than ~64 along the longest axis (the block
+        // scan of a far query stays short, and the cells per axis stay bounded whatever
+        // the radius or the coordinates).
+        let side = eps_m.max(extent / 64.0).max(1e-6);
+        let inv_side = 1.0 / side;
+        let dims = [0, 1, 2].map(|a| {
+            (((bounds.hi[a] - bounds.lo[a]) * inv_side) as i32)
+                .saturating_add(1)
+                .clamp(1, 1 << 16)
+        });
+        let lo = bounds.lo;
+        let max = [dims[0] - 1, dims[1] - 1, dims[2] - 1];
+        let mut keys: Vec<[i32; 3]> = Vec::with_capacity(idx.len());
+        for &i in idx {
+            let p = positions[i as usize];
+            let k = |a: usize| (((p[a] - lo[a]) * inv_side) as i32).max(0).min(max[a]);
+            keys.push([k(0), k(1), k(2)]);
+        }
+        let grid = CellGrid::new(positions, idx, &keys, 0);
+        let ncells = grid.num_cells();
+        let cell_box: Vec<Aabb> = (0..ncells as u32)
+            .map(|c| Aabb::of(&grid.pts()[grid.range(c)]))
+            .collect();
+        // Blocks: the cells are in key order, so bucket them by block key.
+        let bdims = dims.map(|d| (d + NN_BLOCK_CELLS - 1) / NN_BLOCK_CELLS);
+        let block_keys: Vec<[i32; 3]> = (0..ncells as u32)
+            .map(|c| grid.key(c).map(|v| v / NN_BLOCK_CELLS))
+            .collect();
+        let cell_ids: Vec<u32> = (0..ncells as u32).collect();
+        let order = sort_by_key(&block_keys);
+        let mut block_cells = Vec::with_capacity(ncells);
+        let mut block_start = vec![0u32];
+        let mut block_box = Vec::new();
+        let mut last = None;
+        for &o in &order {
+            let bk = block_keys[o as usize];
+            if last.is_some_and(|l| l != bk) {
+                block_start.push(block_cells.len() as u32);
+            }
+            if last != Some(bk) {
+                block_box.push(Aabb::EMPTY);
+                last = Some(bk);
+            }
+            let c = cell_ids[o as usize];
+            block_cells.push(c);
+            if let Some(b) = block_box.last_mut() {
+                b.union(&cell_box[c as usize]);
+            }
+        }
+        block_start.push(block_cells.len() as u32);
+        if block_box.is_empty() {
+            block_start = vec![0];
+        }
+        debug_assert!(bdims.iter().all(|&d| d >= 1));
+        NnIndex {
+            grid,
+            lo: bounds.lo,
+            inv_side,
+            dims,
+            cell_box,
+            block_cells,
+            block_start,
+            block_box,
+        }
+    }
+
+    /// The key of `q`'s cell, unclamped (may lie outside `0..dims`).
+    #[inline]
+    fn key_of(&self, q: Vec3) -> [i32; 3] {
+        let k = |a: usize| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32;
+        [k(0), k(1), k(2)]
+    }
+
+    fn inside(&self, k: [i32; 3]) -> bool {
+        (0..3).all(|a| k[a] >= 0 && k[a] < self.dims[a])
+    }
+
+    /// The nearest indexed point to `q` (ties: smaller id); `None` when the index is
+    /// empty.
+    ///
+    /// Near the points (most noise: unknown points on a body, points at its edges) the
+    /// answer lies in the query's own 3×3×3 block of cells: the own cell is scanned, then
+    /// the block, stopping as soon as the best point is nearer than the block's walls.
+    /// Farther, the block nearest to `q` is opened first so the bound is tight, then every
+    /// other block is checked against it in one linear pass (a few hundred box tests).
+    pub(crate) fn nearest(&self, q: Vec3) -> Option<u32> {
+        self.nearest_with(q, &mut Vec::new())
+    }
+
+    /// [`NnIndex::nearest`] with `scratch` for the far search's block bounds (no
+    /// allocation per query).
+    pub(crate) fn nearest_with(&self, q: Vec3, scratch: &mut Vec<f32>) -> Option<u32> {
+        let mut best: Option<(f32, u32)> = None;
+        let k = self.key_of(q);
+        if self.inside(k) {
+            if let Some(own) = self.grid.cell(k) {
+                self.scan_cell(q, own as usize, &mut best);
+                if best.is_some_and(|(b2, _)| b2 <= self.wall_dist2(q, k, 0)) {
+                    return best.map(|(_, j)| j);
+                }
+            }
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let n = [k[0] + dx, k[1] + dy, k[2] + dz];
+                        if (dx, dy, dz) == (0, 0, 0) {
+                            continue;
+                        }
+                        if let Some(c) = self.grid.cell(n)
+                            && best.is_none_or(|(b2, _)| self.cell_box[c as usize].dist2(q) <= b2)
+                        {
+                            self.scan_cell(q, c as usize, &mut best);
+                        }
+                    }
+                }
+            }
+            if best.is_some_and(|(b2, _)| b2 <= self.wall_dist2(q, k, 1)) {
+                return best.map(|(_, j)| j);
+            }
+        }
+        let blb = scratch;
+        blb.clear();
+        blb.extend(self.block_box.iter().map(|bx| bx.dist2(q)));
+        let b0 = (0..blb.len()).min_by(|&a, &b| blb[a].total_cmp(&blb[b]))?;
+        let c0 = self
+            .cells_of_block(b0)
+            .iter()
+            .min_by(|&&a, &&b| {
+                self.cell_box[a as usize]
+                    .dist2(q)
+                    .total_cmp(&self.cell_box[b as usize].dist2(q))
+            })
+            .copied()?;
+        self.scan_cell(q, c0 as usize, &mut best);
+        for (b, &lb) in blb.iter().enumerate() {
+            if best.is_some_and(|(b2, _)| lb > b2) {
+                continue;
+            }
+            for &c in self.cells_of_block(b) {
+                if c != c0 && best.is_none_or(|(b2, _)| self.cell_box[c as usize].dist2(q) <= b2) {
+                    self.scan_cell(q, c as usize, &mut best);
+                }
+            }
+        }
+        best.map(|(_, j)| j)
+    }
+
+    /// Calls `f(squared distance, id)` for every indexed point within `r2` of `q`, in no
+    /// particular order (the same for the same query): for votes that sum all of them;
+    /// `cells` is scratch.
+    pub(crate) fn for_each_within(
+        &self,
+        q: Vec3,
+        r2: f32,
+        cells: &mut Vec<(f32, u32)>,
+        mut f: impl FnMut(f32, u32),
+    ) {
+        self.cells_within(q, r2, cells);
+        for &(_, c) in cells.iter() {
+            let r = self.grid.range(c);
+            for (&j, &p) in self.grid.ids()[r.clone()].iter().zip(&self.grid.pts()[r]) {
+                let d2 = dist2(q, p);
+                if d2 <= r2 {
+                    f(d2, j);
+                }
+            }
+        }
+    }
+
+    /// The non-empty cells whose box lies within `r2` of `q`, as (squared distance, cell),
+    /// in the order of their keys (z, y, x). The block of cells walked is bounded by the
+    /// grid's cells per axis, whatever the radius.
+    fn cells_within(&self, q: Vec3, r2: f32, cells: &mut Vec<(f32, u32)>) {
+        cells.clear();
+        let kc = self.key_of(q);
+        // In cells; a huge (or NaN) radius walks the whole grid, never more.
+        let reach = (r2.sqrt() * self.inv_side).ceil();
+        let reach = if reach < (1u32 << 30) as f32 {
+            (reach as i64).max(1)
+        } else {
+            i64::from(i32::MAX)
+        };
+        let range = |a: usize| {
+            let lo = (i64::from(kc[a]) - reach).max(0);
+            let hi = (i64::from(kc[a]) + reach).min(i64::from(self.dims[a]) - 1);
+            lo as i32..=hi as i32
+        };
+        for z in range(2) {
+            for y in range(1) {
+                for x in range(0) {
+                    let Some(c) = self.grid.cell([x, y, z]) else {
+                        continue;
+                    };
+                    let d = self.cell_box[c as usize].dist2(q);
+                    if d <= r2 {
+                        cells.push((d, c));
+                    }
+                }
+            }
+        }
+    }
+
+    /// The at most `k` indexed points nearest to `q` within squared distance `r2`, as
+    /// `(squared distance, id)` sorted by distance then id, into `out`. Every cell within
+    /// reach of `r2` is searched, nearest first; `cells` is scratch.
+    pub(crate) fn knn_within(
+        &self,
+        q: Vec3,
+        k: usize,
+        r2: f32,
+        out: &mut Vec<(f32, u32)>,
+        cells: &mut Vec<(f32, u32)>,
+    ) {
+        out.clear();
+        self.cells_within(q, r2, cells);
+        cells.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(d, c) in cells.iter() {
+            if out.len() == k && out.last().is_some_and(|&(w, _)| d > w) {
+                break;
+            }
+            let r = self.grid.range(c);
+            for (&j, &p) in self.grid.ids()[r.clone()].iter().zip(&self.grid.pts()[r]) {
+                let d2 = dist2(q, p);
+                if d2 > r2 {
+                    continue;
+                }
+                let beats = |&(w, wj): &(f32, u32)| d2 < w || (d2 == w && j < wj);
+                if out.len() == k && !out.last().is_some_and(beats) {
+                    continue;
+                }
+                let at = out.partition_point(|e| !beats(e));
+                out.insert(at, (d2, j));
+                out.truncate(k);
+            }
+        }
+    }
+
+    /// Squared distance from `q` (in cell `k`) to the walls of the block of cells within
+    /// `r` cells of `k`, shaved by a hair: no point outside that block is nearer.
+    fn wall_dist2(&self, q: Vec3, k: [i32; 3], r: i32) -> f32 {
+        let side = 1.0 / self.inv_side;
+        let mut m = f32::INFINITY;
+        for a in 0..3 {
+            let lo = self.lo[a] + (k[a] - r) as f32 * side;
+            let hi = self.lo[a] + (k[a] + r + 1) as f32 * side;
+            m = m.min(q[a] - lo).min(hi - q[a]);
+        }
+        let m = m.max(0.0);
+        m * m * (1.0 - 1e-4)
+    }
+
+    fn cells_of_block(&self, b: usize) -> &[u32] {
+        &self.block_cells[self.block_start[b] as usize..self.block_start[b + 1] as usize]
+    }
+
+    #[inline]
+    fn scan_cell(&self, q: Vec3, c: usize, best: &mut Option<(f32, u32)>) {
+        let r = self.grid.range(c as u32);
+        for (&j, &p) in self.grid.ids()[r.clone()].iter().zip(&self.grid.pts()[r]) {
+            let d2 = dist2(q, p);
+            if best.is_none_or(|(b2, bj)| d2 < b2 || (d2 == b2 && j < bj)) {
+                *best = Some((d2, j));
+            }
+        }
+    }
+}
