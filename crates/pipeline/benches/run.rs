@@ -50,8 +50,11 @@ fn bench(c: &mut Criterion) {
     let mut options = RunOptions::new(&rec, PipelineConfig::default(), &out);
     options.figures = FigureChoice::Off;
     let processor = FrameProcessor::open(&options).unwrap_or_else(|e| panic!("{e:#}"));
-    let frames =
-        bodyseg_pipeline::list_frames(&rec, processor.rig()).unwrap_or_else(|e| panic!("{e:#}"));
+    let frames = processor
+        .recording()
+        .frames()
+        .unwrap_or_else(|e| panic!("{e:#}"))
+        .complete;
     let with_truth: Vec<FrameInputs> = frames
         .iter()
         .map(|f| {

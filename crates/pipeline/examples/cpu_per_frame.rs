@@ -66,7 +66,7 @@ fn main() -> Result<()> {
     let mut options = RunOptions::new(&rec, PipelineConfig::default(), &out);
     options.figures = FigureChoice::Off;
     let processor = FrameProcessor::open(&options)?;
-    let frames = bodyseg_pipeline::list_frames(&rec, processor.rig())?;
+    let frames = processor.recording().frames()?.complete;
     let inputs = frames
         .iter()
         .map(|f| {

@@ -3,7 +3,8 @@
 
 use crate::config::PipelineConfig;
 use crate::fs::write_text;
-use crate::project::{ProjectOptions, check_frame, read_and_project};
+use crate::project::{ProjectOptions, read_and_project};
+use crate::recording::{Recording, check_stem};
 use crate::refine::resolved_config_path;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
@@ -71,11 +72,6 @@ pub fn read_cloud(path: &Path) -> Result<LabeledCloud> {
     }
 }
 
-/// The boxes file of a recording frame: `REC/boxes/<frame>.json`.
-pub fn boxes_path(recording: &Path, frame: &str) -> PathBuf {
-    recording.join("boxes").join(format!("{frame}.json"))
-}
-
 /// Finds (or, in file mode, reads) the person boxes of one cloud or recording frame
 /// ([`bodyseg_people::find_boxes`]) and writes them as boxes JSON (FORMATS.md), with the
 /// resolved configuration beside them and, if asked, a top-view preview PNG.
@@ -114,7 +110,7 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
             (Some(cloud), stem)
         }
         BoxesInput::Recording { recording, frame } => {
-            check_frame(frame)?;
+            check_stem(frame)?;
             let cloud = if mode != BoxMode::File || opts.preview.is_some() {
                 let project = ProjectOptions {
                     recording: recording.clone(),
@@ -137,8 +133,9 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
     let (mut boxes, took) = timed(|| -> Result<PersonBoxes> {
         match (&opts.input, &cloud) {
             (BoxesInput::Recording { recording, frame }, _) if mode == BoxMode::File => {
-                let path = boxes_path(recording, frame);
-                Ok(bodyseg_io::read_boxes(&path).context("boxes file (mode file)")?)
+                Ok(Recording::open(recording)?
+                    .read_boxes(frame)
+                    .context("boxes file (mode file)")?)
             }
             (_, Some(cloud)) => Ok(bodyseg_people::find_boxes(cloud, &cfg.boxes)
                 .with_context(|| format!("frame {frame}"))?),
@@ -301,9 +298,5 @@ mod tests {
         assert!(count(BOX_COLOR) > 100, "box outline drawn");
         assert_eq!(count(Class::Head.color().map(|x| x.saturating_add(60))), 1);
         assert!(read_cloud(Path::new("x.xyz")).is_err());
-        assert_eq!(
-            boxes_path(Path::new("rec"), "000003"),
-            Path::new("rec/boxes/000003.json")
-        );
     }
 }

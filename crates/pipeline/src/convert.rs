@@ -17,7 +17,8 @@ use crate::batch::{
     text_hash,
 };
 use crate::config::PipelineConfig;
-use crate::run::{FigureChoice, FrameProcessor, ParserChoice, RunOptions, RunSummary, list_frames};
+use crate::recording::Recording;
+use crate::run::{FigureChoice, FrameProcessor, ParserChoice, RunOptions, RunSummary};
 use crate::stage::{Stage, plural, timed};
 use crate::threedpeople::{ThreeDPeopleCamera, list_3dpeople_views, read_3dpeople_view};
 use anyhow::{Context, Result, bail};
@@ -91,13 +92,13 @@ fn summary(
 /// `input` is not a folder, or holds no recording.
 pub fn list_recordings(input: &Path) -> Result<Vec<(String, PathBuf)>> {
     bodyseg_io::require_folder(input, "dataset")?;
-    if input.join("rig.toml").is_file() {
+    if Recording::is_recording(input) {
         return Ok(vec![(String::new(), input.to_path_buf())]);
     }
     let mut found: Vec<(String, PathBuf)> = std::fs::read_dir(input)
         .with_context(|| format!("{}: cannot list", input.display()))?
         .flatten()
-        .filter(|e| e.path().join("rig.toml").is_file())
+        .filter(|e| Recording::is_recording(&e.path()))
         .map(|e| (e.file_name().to_string_lossy().into_owned(), e.path()))
         .filter(|(name, _)| !name.starts_with('.'))
         .collect();
@@ -146,7 +147,7 @@ fn convert_recordings(
             let processor = FrameProcessor::open(&run)
                 .with_context(|| format!("recording {}", path.display()))?
                 .with_prefix(prefix.clone());
-            for frame in list_frames(path, processor.rig())? {
+            for frame in processor.recording().frames()?.complete {
                 jobs.push((format!("{prefix}{frame}"), (k, frame)));
             }
             processors.push(processor);

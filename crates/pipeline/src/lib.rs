@@ -37,11 +37,11 @@ mod config;
 mod convert;
 mod eval;
 mod figure;
-mod frame_files;
 mod fs;
 mod parse;
 mod project;
 mod projection_study;
+mod recording;
 mod refine;
 mod rig;
 mod run;
@@ -57,9 +57,7 @@ pub use batch::{
 pub use bodyseg_calib::Board;
 pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
-pub use boxes::{
-    BoxesInput, BoxesOptions, BoxesSummary, boxes_file, boxes_path, read_cloud, top_view,
-};
+pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, read_cloud, top_view};
 pub use boxes_study::{
     BoxStats, FrameMatch, MATCH_IOU, box_stats, describe_box, match_boxes, study_frame,
 };
@@ -79,21 +77,23 @@ pub use figure::{FigurePanel, LabelView, PanelView, figure_image, panel_view};
 pub use fs::write_text;
 pub use parse::{
     BUNDLED_MODEL, LOCAL_RUNTIME_LIBRARY, ParseOptions, ParseSource, ParseSummary,
-    RUNTIME_LIBRARY_ENV, color_path, load_segmenter, palette_preview, parse_file, resolve_model,
+    RUNTIME_LIBRARY_ENV, load_segmenter, palette_preview, parse_file, resolve_model,
     resolve_runtime_library,
 };
-pub use project::{ProjectOptions, ProjectSummary, depth_path, parsing_path, project_file};
+pub use project::{ProjectOptions, ProjectSummary, project_file};
 pub use projection_study::{ProjectionStats, camera_images, parsing_images, projection_stats};
+pub use recording::{
+    FrameList, Layer, Recording, RecordingWriter, Sensor, check_camera_name, check_stem,
+};
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
 pub use run::{
     ABLATION, FigureChoice, FrameInputs, FrameProcessor, ParserChoice, RunOptions, RunSummary,
-    list_frames, run_recording,
+    run_recording,
 };
 pub use stage::Stage;
 pub use synth::{
     SceneSource, SynthOptions, SynthSummary, load_scene, synth_chessboard, synth_recording,
-    write_frame,
 };
 pub use threedpeople::{
     MAX_PALETTE_TOLERANCE, THREEDPEOPLE_PALETTE, ThreeDPeopleCamera, ThreeDPeopleView,

@@ -2,9 +2,8 @@
 //! label images (class ids) and palette previews, per camera.
 
 use crate::config::PipelineConfig;
-use crate::frame_files::read_color;
 use crate::fs::write_text;
-use crate::project::check_frame;
+use crate::recording::{Layer, Layout, Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
 use bodyseg_core::{Class, LabelImage, RgbImage};
@@ -65,18 +64,6 @@ pub struct ParseSummary {
     pub written: Vec<PathBuf>,
     /// Per stage (read, parse, write): time and a one-line summary.
     pub stages: Vec<Stage>,
-}
-
-/// The colour image of `camera` for `frame`: `REC/<camera>/color/<frame>.png`, `.jpg` or
-/// `.jpeg`, the first that exists (`.png` when none does, for the error message).
-pub fn color_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
-    let folder = recording.join(camera).join("color");
-    let candidates: Vec<PathBuf> = ["png", "jpg", "jpeg"]
-        .iter()
-        .map(|ext| folder.join(format!("{frame}.{ext}")))
-        .collect();
-    bodyseg_io::first_existing_file(&candidates)
-        .unwrap_or_else(|| folder.join(format!("{frame}.png")))
 }
 
 /// Candidate locations of a project-relative file: beside the executable and its parent
@@ -174,18 +161,15 @@ pub fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> {
 /// the ONNX Runtime library is missing or invalid; writing fails. Each names the file.
 /// Nothing is written unless every view was parsed.
 pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
-    check_frame(&opts.frame)?;
+    check_stem(&opts.frame)?;
     let cfg = &opts.config;
-    let rig_path = opts.recording.join("rig.toml");
-    let ((cameras, images), read) = timed(|| -> Result<_> {
-        let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
-        let mut images = Vec::with_capacity(rig.cameras.len());
-        for camera in &rig.cameras {
-            let (image, _) = read_color(&opts.recording, camera, &opts.frame)?;
-            images.push(image);
-        }
-        let names: Vec<String> = rig.cameras.iter().map(|c| c.name.clone()).collect();
-        Ok((names, images))
+    let ((rec, cameras, images), read) = timed(|| -> Result<_> {
+        let rec = Recording::open(&opts.recording)?;
+        let images = (0..rec.rig().cameras.len())
+            .map(|i| Ok(rec.read_colour(i, &opts.frame)?.0))
+            .collect::<Result<Vec<_>>>()?;
+        let names: Vec<String> = rec.cameras().map(str::to_string).collect();
+        Ok((rec, names, images))
     })?;
     let mut stages = vec![Stage::new(
         "read",
@@ -205,9 +189,11 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
         let mut segmenter: Box<dyn Segmenter> = match &model {
             Some(path) => Box::new(load_segmenter(cfg, path)?),
             None => {
-                let recording = opts.recording.clone();
+                let rec = rec.clone();
                 Box::new(RecordedSegmenter::new(Box::new(move |camera, frame| {
-                    let path = crate::project::parsing_path(&recording, camera, frame);
+                    let path = rec
+                        .image_path(camera, Layer::Parsing, frame)
+                        .map_err(|e| format!("{e:#}"))?;
                     bodyseg_io::read_label_png(&path).map_err(|e| e.to_string())
                 })))
             }
@@ -258,12 +244,10 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
 
     let (written, took) = timed(|| -> Result<Vec<PathBuf>> {
         let mut written = Vec::new();
+        let out = Layout::new(&opts.out);
         for ((camera, image), view) in cameras.iter().zip(&images).zip(&parsed) {
-            let folder = opts.out.join(camera);
-            let labels_path = folder.join("parsing").join(format!("{}.png", opts.frame));
-            let preview_path = folder
-                .join("parsing_preview")
-                .join(format!("{}.png", opts.frame));
+            let labels_path = out.image_path(camera, Layer::Parsing, &opts.frame)?;
+            let preview_path = out.parsing_preview_path(camera, &opts.frame)?;
             for p in [&labels_path, &preview_path] {
                 if let Some(parent) = p.parent() {
                     bodyseg_io::create_folder(parent).context("output folder (--out)")?;

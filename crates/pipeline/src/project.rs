@@ -2,16 +2,16 @@
 //! labelled world-frame PLY.
 
 use crate::config::PipelineConfig;
-use crate::frame_files::{read_color, read_depth, read_parsing};
 use crate::fs::write_text;
+use crate::recording::{Layer, Recording, check_stem};
 use crate::refine::resolved_config_path;
 use crate::stage::{Stage, plural, timed};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use bodyseg_calib::Rig;
 use bodyseg_core::{LabelImage, LabeledCloud, RgbImage};
 use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
 use bodyseg_project::{CameraImages, FrameProjector, ProjectMode};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// What [`project_file`] reads, writes and how.
 #[derive(Clone, Debug)]
@@ -51,22 +51,6 @@ pub struct ProjectSummary {
     pub stages: Vec<Stage>,
 }
 
-/// The depth image of `camera` for `frame`: `REC/<camera>/depth/<frame>.png`.
-pub fn depth_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
-    recording
-        .join(camera)
-        .join("depth")
-        .join(format!("{frame}.png"))
-}
-
-/// The predicted label image of `camera` for `frame`: `REC/<camera>/parsing/<frame>.png`.
-pub fn parsing_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
-    recording
-        .join(camera)
-        .join("parsing")
-        .join(format!("{frame}.png"))
-}
-
 /// One camera's images, read and checked against the rig.
 struct CameraFiles {
     depth: DepthImage,
@@ -76,15 +60,11 @@ struct CameraFiles {
 }
 
 /// Reads and checks one camera's depth and parsing PNGs.
-fn read_camera(rig: &Rig, index: usize, opts: &ProjectOptions) -> Result<CameraFiles> {
-    let camera = &rig.cameras[index];
-    let name = &camera.name;
-    bodyseg_io::require_folder(&opts.recording.join(name), "camera")
-        .with_context(|| format!("camera {name} of rig.toml"))?;
-    let (depth, _) = read_depth(&opts.recording, camera, &opts.frame)?;
-    let (labels, _) = read_parsing(&opts.recording, camera, &opts.frame)?;
+fn read_camera(rec: &Recording, index: usize, opts: &ProjectOptions) -> Result<CameraFiles> {
+    let (depth, _) = rec.read_depth(index, &opts.frame)?;
+    let (labels, _) = rec.read_labels(index, Layer::Parsing, &opts.frame)?;
     let colour = if opts.config.boxes.uses_colours() {
-        Some(read_color(&opts.recording, camera, &opts.frame)?.0)
+        Some(rec.read_colour(index, &opts.frame)?.0)
     } else {
         None
     };
@@ -95,26 +75,17 @@ fn read_camera(rig: &Rig, index: usize, opts: &ProjectOptions) -> Result<CameraF
     })
 }
 
-/// Checks that a frame stem names a file, not a path.
-pub(crate) fn check_frame(frame: &str) -> Result<()> {
-    if frame.is_empty() || frame == "." || frame == ".." || frame.contains(['/', '\\']) {
-        bail!("frame {frame:?}: give the file stem of a frame (e.g. 000012), not a path");
-    }
-    Ok(())
-}
-
 /// The read and project stages of [`project_file`] (also `bodyseg boxes --recording`):
 /// the rig, the labelled cloud and the two stages' records.
 pub(crate) fn read_and_project(opts: &ProjectOptions) -> Result<(Rig, LabeledCloud, Vec<Stage>)> {
-    check_frame(&opts.frame)?;
+    check_stem(&opts.frame)?;
     let cfg = &opts.config;
-    let rig_path = opts.recording.join("rig.toml");
     let ((rig, cameras), read) = timed(|| -> Result<_> {
-        let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
-        let cameras = (0..rig.cameras.len())
-            .map(|i| read_camera(&rig, i, opts))
+        let rec = Recording::open(&opts.recording)?;
+        let cameras = (0..rec.rig().cameras.len())
+            .map(|i| read_camera(&rec, i, opts))
             .collect::<Result<Vec<_>>>()?;
-        Ok((rig, cameras))
+        Ok((rec.rig().clone(), cameras))
     })?;
     let mut stages = vec![Stage::new(
         "read",
@@ -221,30 +192,4 @@ pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
         resolved_config,
         stages,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn frame_paths_follow_the_recording_layout() {
-        assert_eq!(
-            depth_path(Path::new("rec"), "cam0", "000012"),
-            Path::new("rec/cam0/depth/000012.png")
-        );
-        assert_eq!(
-            parsing_path(Path::new("rec"), "cam0", "000012"),
-            Path::new("rec/cam0/parsing/000012.png")
-        );
-    }
-
-    #[test]
-    fn frame_must_be_a_stem() {
-        assert!(check_frame("000012").is_ok());
-        for bad in ["", "..", "a/b", "..\\x"] {
-            let e = check_frame(bad).expect_err("a path").to_string();
-            assert!(e.contains("file stem"), "{e}");
-        }
-    }
 }

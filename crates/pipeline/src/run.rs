@@ -20,10 +20,9 @@ use crate::batch::{
 };
 use crate::config::PipelineConfig;
 use crate::figure::{FigurePanel, LabelView, figure_image, panel_view};
-use crate::frame_files::{read_color, read_depth, read_depth_labels, read_parsing};
 use crate::fs::write_text;
 use crate::parse::{load_segmenter, resolve_model};
-use crate::project::check_frame;
+use crate::recording::{Layer, Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
@@ -131,35 +130,6 @@ pub struct RunSummary {
 /// The configurations of the paper's table, in its order.
 pub const ABLATION: [Steps; 5] = Steps::PAPER;
 
-/// Every frame of a recording: the stems (sorted) of `<camera>/depth/*.png` present for
-/// every camera of the rig.
-///
-/// # Errors
-/// A camera's depth folder is missing or unreadable (the error names it).
-pub fn list_frames(recording: &Path, rig: &Rig) -> Result<Vec<String>> {
-    let mut common: Option<BTreeSet<String>> = None;
-    for camera in &rig.cameras {
-        let folder = recording.join(&camera.name).join("depth");
-        bodyseg_io::require_folder(&folder, "depth folder")
-            .with_context(|| format!("camera {} of rig.toml", camera.name))?;
-        let entries = std::fs::read_dir(&folder)
-            .with_context(|| format!("{}: cannot list", folder.display()))?;
-        let stems: BTreeSet<String> = entries
-            .flatten()
-            .filter_map(|e| {
-                let name = e.file_name().to_string_lossy().into_owned();
-                let stem = name.strip_suffix(".png")?;
-                (!stem.starts_with('.')).then(|| stem.to_string())
-            })
-            .collect();
-        common = Some(match common {
-            None => stems,
-            Some(c) => c.intersection(&stems).cloned().collect(),
-        });
-    }
-    Ok(common.unwrap_or_default().into_iter().collect())
-}
-
 /// One frame's inputs, decoded and checked against the rig: what the stages after
 /// parsing need.
 #[derive(Clone, Debug)]
@@ -183,8 +153,7 @@ pub struct FrameInputs {
 /// and what to write. Built once per run; frames go through [`FrameProcessor::read`]
 /// then [`FrameProcessor::process`], from any number of threads.
 pub struct FrameProcessor {
-    recording: PathBuf,
-    rig: Rig,
+    recording: Recording,
     config: PipelineConfig,
     segmenter: Option<Mutex<OnnxSegmenter>>,
     /// Idle per-worker buffers; a worker takes one per frame.
@@ -218,8 +187,8 @@ struct Scratch {
 impl std::fmt::Debug for FrameProcessor {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("FrameProcessor")
-            .field("recording", &self.recording)
-            .field("cameras", &self.rig.cameras.len())
+            .field("recording", &self.recording.root())
+            .field("cameras", &self.rig().cameras.len())
             .field("model", &self.segmenter.is_some())
             .field("has_truth", &self.has_truth)
             .finish_non_exhaustive()
@@ -235,12 +204,9 @@ impl FrameProcessor {
     /// `rig.toml` cannot be read or is invalid; the model or the ONNX Runtime library is
     /// missing; recorded predictions are asked for and the recording has none.
     pub fn open(opts: &RunOptions) -> Result<FrameProcessor> {
-        let rig_path = opts.recording.join("rig.toml");
-        let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
-        let recorded_present = rig
-            .cameras
-            .iter()
-            .all(|c| opts.recording.join(&c.name).join("parsing").is_dir());
+        let recording = Recording::open(&opts.recording)?;
+        let rig = recording.rig();
+        let recorded_present = recording.has_layer(Layer::Parsing);
         let use_model = match opts.parser {
             ParserChoice::Model => true,
             ParserChoice::Recorded => {
@@ -261,20 +227,20 @@ impl FrameProcessor {
         } else {
             None
         };
-        let template = FrameProjector::new(&rig)
-            .with_context(|| format!("{}: cannot project with this rig", rig_path.display()))?;
-        let has_truth = rig
-            .cameras
-            .iter()
-            .all(|c| opts.recording.join(&c.name).join("depth_labels").is_dir());
+        let template = FrameProjector::new(rig).with_context(|| {
+            format!(
+                "{}: cannot project with this rig",
+                recording.rig_path().display()
+            )
+        })?;
+        let has_truth = recording.has_layer(Layer::DepthLabels);
         let views = rig
             .cameras
             .iter()
             .map(|c| LabelView::new(c, opts.config.backproject.stride))
             .collect();
         Ok(FrameProcessor {
-            recording: opts.recording.clone(),
-            rig,
+            recording,
             config: opts.config.clone(),
             segmenter,
             scratch: Mutex::new(Vec::new()),
@@ -302,7 +268,12 @@ impl FrameProcessor {
 
     /// The rig of the recording.
     pub fn rig(&self) -> &Rig {
-        &self.rig
+        self.recording.rig()
+    }
+
+    /// The recording.
+    pub fn recording(&self) -> &Recording {
+        &self.recording
     }
 
     /// Whether the recording has per-depth-pixel ground truth (`depth_labels/`).
@@ -328,7 +299,7 @@ impl FrameProcessor {
     /// A file is missing, does not decode, or has another size than the rig says; the
     /// parser fails. Each error names the file.
     pub fn read(&self, frame: &str, stages: &mut Vec<Stage>) -> Result<FrameInputs> {
-        check_frame(frame)?;
+        check_stem(frame)?;
         let rec = &self.recording;
         let mut sources = Vec::new();
         let mut note = |path: &Path| sources.extend(InputFile::of(path));
@@ -337,22 +308,22 @@ impl FrameProcessor {
             let mut recorded = Vec::new();
             let mut colour = Vec::new();
             let mut truth = Vec::new();
-            for camera in &self.rig.cameras {
-                let (d, path) = read_depth(rec, camera, frame)?;
+            for index in 0..rec.rig().cameras.len() {
+                let (d, path) = rec.read_depth(index, frame)?;
                 note(&path);
                 depth.push(d);
                 if self.segmenter.is_some() || self.needs_colours() {
-                    let (image, path) = read_color(rec, camera, frame)?;
+                    let (image, path) = rec.read_colour(index, frame)?;
                     note(&path);
                     colour.push(image);
                 }
                 if self.segmenter.is_none() {
-                    let (labels, path) = read_parsing(rec, camera, frame)?;
+                    let (labels, path) = rec.read_labels(index, Layer::Parsing, frame)?;
                     note(&path);
                     recorded.push(labels);
                 }
                 if self.has_truth {
-                    let (labels, path) = read_depth_labels(rec, camera, frame)?;
+                    let (labels, path) = rec.read_labels(index, Layer::DepthLabels, frame)?;
                     note(&path);
                     truth.push(labels);
                 }
@@ -362,14 +333,14 @@ impl FrameProcessor {
         stages.push(Stage::new(
             "read",
             took,
-            plural(self.rig.cameras.len(), "camera", "cameras"),
+            plural(self.rig().cameras.len(), "camera", "cameras"),
         ));
         let labels = match &self.segmenter {
             None => recorded,
             Some(segmenter) => {
                 let (parsed, took) = timed(|| -> Result<Vec<LabelImage>> {
                     let views: Vec<ViewInput<'_>> = self
-                        .rig
+                        .rig()
                         .cameras
                         .iter()
                         .zip(&colour)
@@ -518,8 +489,9 @@ impl FrameProcessor {
 
         let (boxes, took) = timed(|| -> Result<PersonBoxes> {
             let mut boxes = if cfg.boxes.mode == BoxMode::File {
-                let path = crate::boxes::boxes_path(&self.recording, frame);
-                bodyseg_io::read_boxes(&path).context("boxes file (boxes.mode = file)")?
+                self.recording
+                    .read_boxes(frame)
+                    .context("boxes file (boxes.mode = file)")?
             } else {
                 bodyseg_people::find_boxes(cloud, &cfg.boxes)?
             };
@@ -604,7 +576,7 @@ impl FrameProcessor {
                 })?;
                 if self.label_images {
                     for (index, (camera, view)) in
-                        self.rig.cameras.iter().zip(&self.views).enumerate()
+                        self.rig().cameras.iter().zip(&self.views).enumerate()
                     {
                         view.render_into(c, index as u8, Some(hits), keys, label_image);
                         writer.write(
@@ -675,7 +647,7 @@ impl FrameProcessor {
         variants: &RefinedVariants,
         truth: Option<&[Label]>,
     ) -> RgbImage {
-        let view = panel_view(cloud, &boxes.boxes, &self.rig);
+        let view = panel_view(cloud, &boxes.boxes, self.rig());
         let mut panels = vec![FigurePanel::Labels {
             title: "INPUT".into(),
             labels: &cloud.labels,
@@ -786,14 +758,13 @@ pub fn run_recording(
     progress: &(dyn Fn(BatchProgress) + Sync),
 ) -> Result<RunSummary> {
     let (setup, took) = timed(|| -> Result<_> {
-        bodyseg_io::require_folder(&opts.recording, "recording")?;
         let processor = FrameProcessor::open(opts)?;
-        let all = list_frames(&opts.recording, processor.rig())?;
+        let all = processor.recording().frames()?.complete;
         let frames = match &opts.frames {
             None => all,
             Some(want) => {
                 for f in want {
-                    check_frame(f)?;
+                    check_stem(f)?;
                     if !all.contains(f) {
                         bail!(
                             "frame {f}: not in {} (no depth image for every camera)",
@@ -827,7 +798,7 @@ pub fn run_recording(
         format!(
             "{}, {}, labels from {}{}",
             plural(frames.len(), "frame", "frames"),
-            plural(processor.rig.cameras.len(), "camera", "cameras"),
+            plural(processor.rig().cameras.len(), "camera", "cameras"),
             if processor.uses_model() {
                 "the model"
             } else {
