@@ -9,7 +9,8 @@
 //! - [`OnnxSegmenter`]: SCHP-compatible networks in ONNX, run by ONNX Runtime, which is
 //!   loaded at run time from a shared library ([`load_runtime`]); the model's sidecar JSON
 //!   is a [`ModelSpec`]. Pre- and post-processing are SCHP's ([`transform`]).
-//! - [`RecordedSegmenter`]: label images computed earlier (a recording's `parsing/`).
+//! - [`RecordedSegmenter`]: label images computed earlier (a recording's `parsing/`,
+//!   read by the caller and handed over in [`ViewInput::recorded`]).
 //!
 //! This crate does no file I/O: model bytes, sidecar text and images come from the
 //! caller (bodyseg-pipeline reads them with bodyseg-io). `ort` and `ndarray` types do not
@@ -35,5 +36,5 @@ pub mod transform;
 pub use config::ParsingConfig;
 pub use error::ParsingError;
 pub use onnx::{OnnxOptions, OnnxSegmenter, load_runtime};
-pub use segmenter::{LabelSource, ParsedView, RecordedSegmenter, Segmenter, ViewInput};
+pub use segmenter::{ParsedView, RecordedSegmenter, Segmenter, ViewInput};
 pub use spec::{ChannelOrder, MAX_INPUT_SIZE, ModelSpec, sidecar_path};

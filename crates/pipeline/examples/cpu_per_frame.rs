@@ -12,7 +12,7 @@
 
 use anyhow::{Context, Result};
 use bodyseg_pipeline::{
-    FigureChoice, FrameInputs, FrameProcessor, FrameWriter, PipelineConfig, RunOptions,
+    FigureChoice, FrameProcessor, FrameWriter, ParsedFrame, PipelineConfig, RunOptions,
     SceneSource, SynthOptions, synth_recording,
 };
 use rayon::prelude::*;
@@ -70,13 +70,14 @@ fn main() -> Result<()> {
     let inputs = frames
         .iter()
         .map(|f| {
-            let mut inputs = processor.read(f, &mut Vec::new())?;
+            let frame = processor.read(f, &mut Vec::new())?;
+            let mut parsed = processor.parse(frame, &mut Vec::new())?;
             if !eval {
-                inputs.truth = None;
+                parsed.frame.truth = None;
             }
-            Ok(inputs)
+            Ok(parsed)
         })
-        .collect::<Result<Vec<FrameInputs>>>()?;
+        .collect::<Result<Vec<ParsedFrame>>>()?;
     let two = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     // Each pass writes into a fresh folder, as `bodyseg run` does (no file replaced);
     // the folders are removed after the timing.

@@ -2,8 +2,8 @@
 //! (+ a top-view preview PNG).
 
 use crate::config::PipelineConfig;
+use crate::frame::read_and_project;
 use crate::fs::write_text;
-use crate::project::{ProjectOptions, read_and_project};
 use crate::recording::{Recording, check_stem};
 use crate::refine::resolved_config_path;
 use crate::stage::{Stage, plural, timed};
@@ -112,15 +112,7 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
         BoxesInput::Recording { recording, frame } => {
             check_stem(frame)?;
             let cloud = if mode != BoxMode::File || opts.preview.is_some() {
-                let project = ProjectOptions {
-                    recording: recording.clone(),
-                    frame: frame.clone(),
-                    config: cfg.clone(),
-                    out: opts.out.clone(),
-                    ascii: false,
-                    write_resolved_config: false,
-                };
-                let (_, cloud, s) = read_and_project(&project)?;
+                let (_, cloud, s) = read_and_project(recording, frame, cfg)?;
                 stages.extend(s);
                 Some(cloud)
             } else {

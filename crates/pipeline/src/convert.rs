@@ -182,9 +182,7 @@ fn convert_recordings(
           stages: &mut Vec<Stage>|
          -> Result<FrameRecord> {
             let (k, frame) = f.job;
-            let p = &processors[*k];
-            let inputs = p.read(frame, stages)?;
-            p.process(&inputs, writer, stages)
+            processors[*k].run_frame(frame, writer, stages)
         },
     )?;
     let fps = outcome.frames_per_second();

@@ -37,6 +37,7 @@ mod config;
 mod convert;
 mod eval;
 mod figure;
+mod frame;
 mod fs;
 mod parse;
 mod project;
@@ -74,6 +75,7 @@ pub use eval::{
     merge_reports, render_report,
 };
 pub use figure::{FigurePanel, LabelView, PanelView, figure_image, panel_view};
+pub use frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
 pub use fs::write_text;
 pub use parse::{
     BUNDLED_MODEL, LOCAL_RUNTIME_LIBRARY, ParseOptions, ParseSource, ParseSummary,
@@ -88,8 +90,7 @@ pub use recording::{
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
 pub use run::{
-    ABLATION, FigureChoice, FrameInputs, FrameProcessor, ParserChoice, RunOptions, RunSummary,
-    run_recording,
+    ABLATION, FigureChoice, FrameProcessor, ParserChoice, RunOptions, RunSummary, run_recording,
 };
 pub use stage::Stage;
 pub use synth::{

@@ -2,14 +2,13 @@
 //! label images (class ids) and palette previews, per camera.
 
 use crate::config::PipelineConfig;
+use crate::frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
 use crate::fs::write_text;
 use crate::recording::{Layer, Layout, Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
 use bodyseg_core::{Class, LabelImage, RgbImage};
-use bodyseg_parsing::{
-    ModelSpec, OnnxSegmenter, ParsedView, RecordedSegmenter, Segmenter, ViewInput, sidecar_path,
-};
+use bodyseg_parsing::{ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, sidecar_path};
 use std::path::{Path, PathBuf};
 
 /// The bundled model, relative to the project root (its sidecar: the same with `.json`).
@@ -163,14 +162,18 @@ pub fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> {
 pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     check_stem(&opts.frame)?;
     let cfg = &opts.config;
-    let ((rec, cameras, images), read) = timed(|| -> Result<_> {
+    // The colour images for the previews; the recorded predictions for --recorded.
+    let needs = FrameNeeds {
+        colour: true,
+        parsing: opts.source == ParseSource::Recorded,
+        ..FrameNeeds::default()
+    };
+    let ((rec, frame), read) = timed(|| -> Result<_> {
         let rec = Recording::open(&opts.recording)?;
-        let images = (0..rec.rig().cameras.len())
-            .map(|i| Ok(rec.read_colour(i, &opts.frame)?.0))
-            .collect::<Result<Vec<_>>>()?;
-        let names: Vec<String> = rec.cameras().map(str::to_string).collect();
-        Ok((rec, names, images))
+        let frame = Frame::read(&rec, &opts.frame, needs)?;
+        Ok((rec, frame))
     })?;
+    let cameras: Vec<String> = rec.cameras().map(str::to_string).collect();
     let mut stages = vec![Stage::new(
         "read",
         read,
@@ -185,36 +188,24 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
         ParseSource::Model => Some(resolve_model(cfg)?),
         ParseSource::Recorded => None,
     };
-    let (parsed, took) = timed(|| -> Result<Vec<ParsedView>> {
+    let (parsed, took) = timed(|| -> Result<ParsedFrame> {
         let mut segmenter: Box<dyn Segmenter> = match &model {
             Some(path) => Box::new(load_segmenter(cfg, path)?),
-            None => {
-                let rec = rec.clone();
-                Box::new(RecordedSegmenter::new(Box::new(move |camera, frame| {
-                    let path = rec
-                        .image_path(camera, Layer::Parsing, frame)
-                        .map_err(|e| format!("{e:#}"))?;
-                    bodyseg_io::read_label_png(&path).map_err(|e| e.to_string())
-                })))
-            }
+            None => Box::new(RecordedSegmenter::new()),
         };
-        let views: Vec<ViewInput<'_>> = cameras
-            .iter()
-            .zip(&images)
-            .map(|(camera, image)| ViewInput {
-                camera,
-                frame: &opts.frame,
-                image: Some(image),
-            })
-            .collect();
-        segmenter
-            .segment(&views)
+        parse_frame(frame, rec.rig(), segmenter.as_mut())
             .with_context(|| format!("{}: frame {}", opts.recording.display(), opts.frame))
     })?;
+    let images = parsed
+        .frame
+        .colour
+        .as_deref()
+        .context("the colour images were read")?;
     let body_pixels: Vec<usize> = parsed
+        .labels
         .iter()
-        .map(|p| {
-            p.labels
+        .map(|labels| {
+            labels
                 .labels
                 .iter()
                 .filter(|l| l.class().is_some_and(|c| c != Class::Background))
@@ -237,7 +228,7 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
         took,
         format!(
             "{} ({what}), {} body pixels",
-            plural(parsed.len(), "view", "views"),
+            plural(parsed.labels.len(), "view", "views"),
             body_pixels.iter().sum::<usize>()
         ),
     ));
@@ -245,7 +236,7 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     let (written, took) = timed(|| -> Result<Vec<PathBuf>> {
         let mut written = Vec::new();
         let out = Layout::new(&opts.out);
-        for ((camera, image), view) in cameras.iter().zip(&images).zip(&parsed) {
+        for ((camera, image), labels) in cameras.iter().zip(images).zip(&parsed.labels) {
             let labels_path = out.image_path(camera, Layer::Parsing, &opts.frame)?;
             let preview_path = out.parsing_preview_path(camera, &opts.frame)?;
             for p in [&labels_path, &preview_path] {
@@ -253,10 +244,10 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
                     bodyseg_io::create_folder(parent).context("output folder (--out)")?;
                 }
             }
-            bodyseg_io::write_label_png(&labels_path, &view.labels)
+            bodyseg_io::write_label_png(&labels_path, labels)
                 .with_context(|| format!("camera {camera}: label image"))?;
-            let (w, h) = (view.labels.width, view.labels.height);
-            bodyseg_io::write_rgb_png(&preview_path, w, h, &palette_preview(image, &view.labels))
+            let (w, h) = (labels.width, labels.height);
+            bodyseg_io::write_rgb_png(&preview_path, w, h, &palette_preview(image, labels))
                 .with_context(|| format!("camera {camera}: preview"))?;
             written.push(labels_path);
             written.push(preview_path);

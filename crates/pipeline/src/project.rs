@@ -2,15 +2,13 @@
 //! labelled world-frame PLY.
 
 use crate::config::PipelineConfig;
+use crate::frame::read_and_project;
 use crate::fs::write_text;
-use crate::recording::{Layer, Recording, check_stem};
 use crate::refine::resolved_config_path;
-use crate::stage::{Stage, plural, timed};
+use crate::stage::{Stage, timed};
 use anyhow::{Context, Result};
-use bodyseg_calib::Rig;
-use bodyseg_core::{LabelImage, LabeledCloud, RgbImage};
-use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
-use bodyseg_project::{CameraImages, FrameProjector, ProjectMode};
+use bodyseg_io::{PlyFormat, PlyWriteOptions};
+use bodyseg_project::ProjectMode;
 use std::path::PathBuf;
 
 /// What [`project_file`] reads, writes and how.
@@ -51,93 +49,6 @@ pub struct ProjectSummary {
     pub stages: Vec<Stage>,
 }
 
-/// One camera's images, read and checked against the rig.
-struct CameraFiles {
-    depth: DepthImage,
-    labels: LabelImage,
-    /// Read only when the points' colours are wanted (geometry-mode boxes).
-    colour: Option<RgbImage>,
-}
-
-/// Reads and checks one camera's depth and parsing PNGs.
-fn read_camera(rec: &Recording, index: usize, opts: &ProjectOptions) -> Result<CameraFiles> {
-    let (depth, _) = rec.read_depth(index, &opts.frame)?;
-    let (labels, _) = rec.read_labels(index, Layer::Parsing, &opts.frame)?;
-    let colour = if opts.config.boxes.uses_colours() {
-        Some(rec.read_colour(index, &opts.frame)?.0)
-    } else {
-        None
-    };
-    Ok(CameraFiles {
-        depth,
-        labels,
-        colour,
-    })
-}
-
-/// The read and project stages of [`project_file`] (also `bodyseg boxes --recording`):
-/// the rig, the labelled cloud and the two stages' records.
-pub(crate) fn read_and_project(opts: &ProjectOptions) -> Result<(Rig, LabeledCloud, Vec<Stage>)> {
-    check_stem(&opts.frame)?;
-    let cfg = &opts.config;
-    let ((rig, cameras), read) = timed(|| -> Result<_> {
-        let rec = Recording::open(&opts.recording)?;
-        let cameras = (0..rec.rig().cameras.len())
-            .map(|i| read_camera(&rec, i, opts))
-            .collect::<Result<Vec<_>>>()?;
-        Ok((rec.rig().clone(), cameras))
-    })?;
-    let mut stages = vec![Stage::new(
-        "read",
-        read,
-        format!(
-            "{}, frame {}",
-            plural(rig.cameras.len(), "camera", "cameras"),
-            opts.frame
-        ),
-    )];
-    tracing::info!(recording = %opts.recording.display(), frame = %opts.frame, "read frame");
-
-    let (cloud, took) = timed(|| {
-        let images: Vec<CameraImages<'_>> = cameras
-            .iter()
-            .map(|c| CameraImages {
-                depth_raw: &c.depth.depth_mm,
-                labels: &c.labels,
-            })
-            .collect();
-        let colour: Option<Vec<&RgbImage>> = cameras.iter().map(|c| c.colour.as_ref()).collect();
-        let context = || format!("{}: frame {}", opts.recording.display(), opts.frame);
-        let projector = FrameProjector::new(&rig).with_context(context)?;
-        let backproject = cfg.backproject.options();
-        match colour {
-            // Geometry-mode boxes split people from what is nobody's by colour too.
-            Some(colour) => {
-                projector.project_frame_coloured(&images, &colour, &backproject, &cfg.project)
-            }
-            None => projector.project_frame(&images, &backproject, &cfg.project),
-        }
-        .with_context(context)
-    })?;
-    let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
-    let mode = cfg.project.mode;
-    let mode_name = match mode {
-        ProjectMode::Naive => "naive",
-        ProjectMode::Dsa => "dsa",
-    };
-    stages.push(Stage::new(
-        "project",
-        took,
-        format!(
-            "{}, {} unknown (mode {mode_name})",
-            plural(cloud.len(), "point", "points"),
-            unknown
-        ),
-    ));
-
-    Ok((rig, cloud, stages))
-}
-
 /// Projects the labels of one frame of a recording onto its depth points
 /// ([`bodyseg_project::project_frame`]) and writes the labelled world-frame cloud (PLY,
 /// FORMATS.md): cameras in rig order, pixels row-major, every back-projected point kept
@@ -151,7 +62,7 @@ pub(crate) fn read_and_project(opts: &ProjectOptions) -> Result<(Rig, LabeledClo
 /// written unless every earlier step succeeded.
 pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
     let cfg = &opts.config;
-    let (rig, cloud, mut stages) = read_and_project(opts)?;
+    let (rig, cloud, mut stages) = read_and_project(&opts.recording, &opts.frame, cfg)?;
     let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
     let mut points_per_camera = vec![0; rig.cameras.len()];
     for o in &cloud.origins {

@@ -15,11 +15,10 @@
 //! run.json                         this run's log: frames processed, skipped, failed; times
 //! ```
 
-use crate::batch::{
-    BatchFrame, BatchOutcome, BatchProgress, FrameRecord, FrameWriter, InputFile, Shard,
-};
+use crate::batch::{BatchFrame, BatchOutcome, BatchProgress, FrameRecord, FrameWriter, Shard};
 use crate::config::PipelineConfig;
 use crate::figure::{FigurePanel, LabelView, figure_image, panel_view};
+use crate::frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
 use crate::fs::write_text;
 use crate::parse::{load_segmenter, resolve_model};
 use crate::recording::{Layer, Recording, check_stem};
@@ -28,8 +27,8 @@ use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
 use bodyseg_core::{Label, LabelImage, LabeledCloud, PersonBoxes, RgbImage};
 use bodyseg_eval::Report;
-use bodyseg_io::{DepthImage, Durability, PlyFormat, PlyWriteOptions};
-use bodyseg_parsing::{OnnxSegmenter, Segmenter, ViewInput};
+use bodyseg_io::{Durability, PlyFormat, PlyWriteOptions};
+use bodyseg_parsing::{RecordedSegmenter, Segmenter};
 use bodyseg_people::BoxMode;
 use bodyseg_project::{CameraImages, FrameProjector, Hits};
 use bodyseg_refine::{NoiseMode, PointEvidence, RefinedVariants, Steps, VoteMode};
@@ -130,32 +129,20 @@ pub struct RunSummary {
 /// The configurations of the paper's table, in its order.
 pub const ABLATION: [Steps; 5] = Steps::PAPER;
 
-/// One frame's inputs, decoded and checked against the rig: what the stages after
-/// parsing need.
-#[derive(Clone, Debug)]
-pub struct FrameInputs {
-    /// The frame stem.
-    pub frame: String,
-    /// Raw depth per camera, rig order.
-    pub depth: Vec<DepthImage>,
-    /// 2D labels per camera (the parser's), colour sensor size.
-    pub labels: Vec<LabelImage>,
-    /// Ground truth per depth pixel per camera (`depth_labels/`), when the recording has it.
-    pub truth: Option<Vec<LabelImage>>,
-    /// Colour images per camera, rig order, when the refinement needs the points' colours
-    /// (`refine.foreign_colour_density` > 0); else empty.
-    pub colour: Vec<RgbImage>,
-    /// The files read (for the frame's record: changed inputs make the frame redone).
-    pub sources: Vec<InputFile>,
-}
-
 /// A recording opened for processing: the rig, the parser, per-worker projection buffers
 /// and what to write. Built once per run; frames go through [`FrameProcessor::read`]
-/// then [`FrameProcessor::process`], from any number of threads.
+/// ([`Frame`]), [`FrameProcessor::parse`] ([`ParsedFrame`]) and
+/// [`FrameProcessor::process`] (project → boxes → refine → score → write), from any
+/// number of threads.
 pub struct FrameProcessor {
     recording: Recording,
     config: PipelineConfig,
-    segmenter: Option<Mutex<OnnxSegmenter>>,
+    /// The 2D parser: the ONNX model or the recorded predictions. Behind a lock: a
+    /// segmenter parses one frame at a time (the model batches the frame's views).
+    segmenter: Mutex<Box<dyn Segmenter + Send>>,
+    /// What the segmenter needs read ([`FrameNeeds::of`]).
+    segmenter_needs: FrameNeeds,
+    uses_model: bool,
     /// Idle per-worker buffers; a worker takes one per frame.
     scratch: Mutex<Vec<Scratch>>,
     template: FrameProjector,
@@ -189,7 +176,7 @@ impl std::fmt::Debug for FrameProcessor {
         f.debug_struct("FrameProcessor")
             .field("recording", &self.recording.root())
             .field("cameras", &self.rig().cameras.len())
-            .field("model", &self.segmenter.is_some())
+            .field("model", &self.uses_model)
             .field("has_truth", &self.has_truth)
             .finish_non_exhaustive()
     }
@@ -221,12 +208,13 @@ impl FrameProcessor {
             }
             ParserChoice::Auto => !recorded_present,
         };
-        let segmenter = if use_model {
+        let segmenter: Box<dyn Segmenter + Send> = if use_model {
             let model = resolve_model(&opts.config)?;
-            Some(Mutex::new(load_segmenter(&opts.config, &model)?))
+            Box::new(load_segmenter(&opts.config, &model)?)
         } else {
-            None
+            Box::new(RecordedSegmenter::new())
         };
+        let segmenter_needs = FrameNeeds::of(segmenter.as_ref());
         let template = FrameProjector::new(rig).with_context(|| {
             format!(
                 "{}: cannot project with this rig",
@@ -242,7 +230,9 @@ impl FrameProcessor {
         Ok(FrameProcessor {
             recording,
             config: opts.config.clone(),
-            segmenter,
+            segmenter: Mutex::new(segmenter),
+            segmenter_needs,
+            uses_model: use_model,
             scratch: Mutex::new(Vec::new()),
             template,
             has_truth,
@@ -283,7 +273,7 @@ impl FrameProcessor {
 
     /// Whether the 2D labels come from the ONNX model.
     pub fn uses_model(&self) -> bool {
-        self.segmenter.is_some()
+        self.uses_model
     }
 
     /// Whether the refinement or the box finder needs the points' camera colours (then the
@@ -293,85 +283,68 @@ impl FrameProcessor {
         self.config.refine.foreign_colour_density > 0.0 || self.config.boxes.uses_colours()
     }
 
-    /// Reads and decodes one frame's images and runs the parser (stages `read`, `parse`).
+    /// What [`FrameProcessor::read`] reads besides depth: what the segmenter needs, the
+    /// colour images when the points' colours are wanted, the truth when there is one.
+    pub fn needs(&self) -> FrameNeeds {
+        FrameNeeds {
+            depth: true,
+            colour: self.segmenter_needs.colour || self.needs_colours(),
+            parsing: self.segmenter_needs.parsing,
+            truth: self.has_truth,
+        }
+    }
+
+    /// Reads and decodes one frame's images (stage `read`).
     ///
     /// # Errors
-    /// A file is missing, does not decode, or has another size than the rig says; the
-    /// parser fails. Each error names the file.
-    pub fn read(&self, frame: &str, stages: &mut Vec<Stage>) -> Result<FrameInputs> {
-        check_stem(frame)?;
-        let rec = &self.recording;
-        let mut sources = Vec::new();
-        let mut note = |path: &Path| sources.extend(InputFile::of(path));
-        let ((depth, recorded, colour, truth), took) = timed(|| -> Result<_> {
-            let mut depth = Vec::new();
-            let mut recorded = Vec::new();
-            let mut colour = Vec::new();
-            let mut truth = Vec::new();
-            for index in 0..rec.rig().cameras.len() {
-                let (d, path) = rec.read_depth(index, frame)?;
-                note(&path);
-                depth.push(d);
-                if self.segmenter.is_some() || self.needs_colours() {
-                    let (image, path) = rec.read_colour(index, frame)?;
-                    note(&path);
-                    colour.push(image);
-                }
-                if self.segmenter.is_none() {
-                    let (labels, path) = rec.read_labels(index, Layer::Parsing, frame)?;
-                    note(&path);
-                    recorded.push(labels);
-                }
-                if self.has_truth {
-                    let (labels, path) = rec.read_labels(index, Layer::DepthLabels, frame)?;
-                    note(&path);
-                    truth.push(labels);
-                }
-            }
-            Ok((depth, recorded, colour, truth))
-        })?;
+    /// A file is missing, does not decode, or has another size than the rig says. Each
+    /// error names the file.
+    pub fn read(&self, frame: &str, stages: &mut Vec<Stage>) -> Result<Frame> {
+        let (frame, took) = timed(|| Frame::read(&self.recording, frame, self.needs()))?;
         stages.push(Stage::new(
             "read",
             took,
             plural(self.rig().cameras.len(), "camera", "cameras"),
         ));
-        let labels = match &self.segmenter {
-            None => recorded,
-            Some(segmenter) => {
-                let (parsed, took) = timed(|| -> Result<Vec<LabelImage>> {
-                    let views: Vec<ViewInput<'_>> = self
-                        .rig()
-                        .cameras
-                        .iter()
-                        .zip(&colour)
-                        .map(|(c, image)| ViewInput {
-                            camera: &c.name,
-                            frame,
-                            image: Some(image),
-                        })
-                        .collect();
-                    let mut s = segmenter
-                        .lock()
-                        .map_err(|_| anyhow::anyhow!("the parser failed on an earlier frame"))?;
-                    let parsed = s.segment(&views)?;
-                    Ok(parsed.into_iter().map(|p| p.labels).collect())
-                })?;
-                stages.push(Stage::new("parse", took, "model".into()));
-                parsed
-            }
-        };
-        Ok(FrameInputs {
-            frame: frame.to_string(),
-            depth,
-            labels,
-            truth: self.has_truth.then_some(truth),
-            sources,
-            colour: if self.needs_colours() {
-                colour
-            } else {
-                Vec::new()
-            },
-        })
+        Ok(frame)
+    }
+
+    /// Runs the parser on a frame (stage `parse`): the model on its colour images or the
+    /// recorded predictions, through [`parse_frame`]. The colour images are kept only when
+    /// the later stages use them.
+    ///
+    /// # Errors
+    /// The parser fails, or failed on an earlier frame (its lock is poisoned).
+    pub fn parse(&self, frame: Frame, stages: &mut Vec<Stage>) -> Result<ParsedFrame> {
+        let (mut parsed, took) = timed(|| -> Result<ParsedFrame> {
+            let mut segmenter = self
+                .segmenter
+                .lock()
+                .map_err(|_| anyhow::anyhow!("the parser failed on an earlier frame"))?;
+            parse_frame(frame, self.rig(), segmenter.as_mut())
+        })?;
+        if !self.needs_colours() {
+            parsed.frame.colour = None;
+        }
+        let source = if self.uses_model { "model" } else { "recorded" };
+        stages.push(Stage::new("parse", took, source.into()));
+        Ok(parsed)
+    }
+
+    /// Reads, parses and processes one frame ([`FrameProcessor::read`],
+    /// [`FrameProcessor::parse`], [`FrameProcessor::process`]).
+    ///
+    /// # Errors
+    /// As those three.
+    pub fn run_frame(
+        &self,
+        frame: &str,
+        writer: &mut FrameWriter,
+        stages: &mut Vec<Stage>,
+    ) -> Result<FrameRecord> {
+        let frame = self.read(frame, stages)?;
+        let parsed = self.parse(frame, stages)?;
+        self.process(&parsed, writer, stages)
     }
 
     /// Projects, finds boxes, refines, evaluates and writes one frame (stages `project`,
@@ -382,11 +355,11 @@ impl FrameProcessor {
     /// The inputs do not fit the rig; file-mode boxes are missing; writing fails.
     pub fn process(
         &self,
-        inputs: &FrameInputs,
+        parsed: &ParsedFrame,
         writer: &mut FrameWriter,
         stages: &mut Vec<Stage>,
     ) -> Result<FrameRecord> {
-        let frame = inputs.frame.as_str();
+        let frame = parsed.frame.stem.as_str();
         // Buffers for this worker, reused from frame to frame: no page faults on
         // megabytes of fresh memory per frame.
         let mut scratch = self
@@ -403,7 +376,7 @@ impl FrameProcessor {
                 voted: Vec::new(),
                 label_probs: Vec::new(),
             });
-        let result = self.process_with(inputs, writer, stages, &mut scratch);
+        let result = self.process_with(parsed, writer, stages, &mut scratch);
         if let Ok(mut p) = self.scratch.lock() {
             p.push(scratch);
         }
@@ -412,7 +385,7 @@ impl FrameProcessor {
 
     fn process_with(
         &self,
-        inputs: &FrameInputs,
+        parsed: &ParsedFrame,
         writer: &mut FrameWriter,
         stages: &mut Vec<Stage>,
         scratch: &mut Scratch,
@@ -426,12 +399,13 @@ impl FrameProcessor {
             voted,
             label_probs,
         } = scratch;
-        let frame = inputs.frame.as_str();
+        let inputs = &parsed.frame;
+        let frame = inputs.stem.as_str();
         let cfg = &self.config;
         let images: Vec<CameraImages<'_>> = inputs
             .depth
             .iter()
-            .zip(&inputs.labels)
+            .zip(&parsed.labels)
             .map(|(d, l)| CameraImages {
                 depth_raw: &d.depth_mm,
                 labels: l,
@@ -439,7 +413,7 @@ impl FrameProcessor {
             .collect();
         // Recorded label images carry no probabilities; the model's do.
         let with_probs = cfg.refine.noise == NoiseMode::Probability
-            && inputs.labels.iter().any(|l| l.probs.is_some());
+            && parsed.labels.iter().any(|l| l.probs.is_some());
         let ((), took) = timed(|| -> Result<()> {
             if self.label_images || with_probs || self.needs_colours() {
                 // The label images and the label probabilities reuse where the points
@@ -463,7 +437,12 @@ impl FrameProcessor {
                 hits.label_probs_into(cloud, &images, label_probs);
             }
             if self.needs_colours() {
-                let colour: Vec<&RgbImage> = inputs.colour.iter().collect();
+                let colour: Vec<&RgbImage> = inputs
+                    .colour
+                    .as_ref()
+                    .context("the colour images were not read")?
+                    .iter()
+                    .collect();
                 cloud.colors = Some(hits.colors_of(cloud, &colour));
             }
             Ok(())
@@ -632,7 +611,7 @@ impl FrameProcessor {
             unknown,
             people: boxes.boxes.len(),
             outputs: Vec::new(),
-            inputs: inputs.sources.clone(),
+            inputs: inputs.inputs.clone(),
             scores,
         })
     }
@@ -822,8 +801,7 @@ pub fn run_recording(
         opts.redo,
         progress,
         &|f: BatchFrame<'_, ()>, writer: &mut FrameWriter, stages: &mut Vec<Stage>| {
-            let inputs = processor.read(f.id, stages)?;
-            processor.process(&inputs, writer, stages)
+            processor.run_frame(f.id, writer, stages)
         },
     )?;
     let fps = outcome.frames_per_second();
