@@ -18,8 +18,8 @@
 #![allow(missing_docs)]
 
 use bodyseg_pipeline::{
-    FigureChoice, FrameProcessor, FrameWriter, ParsedFrame, PipelineConfig, RunOptions,
-    SceneSource, SynthOptions, synth_recording,
+    FrameProcessor, FrameWriter, ParsedFrame, ParserChoice, PipelineConfig, SceneSource,
+    SynthOptions, synth_recording,
 };
 use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
@@ -48,9 +48,8 @@ fn bench(c: &mut Criterion) {
     synth_recording(&synth, &|_| {}).unwrap_or_else(|e| panic!("synth: {e:#}"));
     let out = dir.path().join("out");
     std::fs::create_dir_all(&out).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
-    let mut options = RunOptions::new(&rec, PipelineConfig::default(), &out);
-    options.figures = FigureChoice::Off;
-    let processor = FrameProcessor::open(&options).unwrap_or_else(|e| panic!("{e:#}"));
+    let processor = FrameProcessor::open(&rec, &PipelineConfig::default(), ParserChoice::Auto)
+        .unwrap_or_else(|e| panic!("{e:#}"));
     let frames = processor
         .recording()
         .frames()

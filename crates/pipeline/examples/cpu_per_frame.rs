@@ -12,8 +12,8 @@
 
 use anyhow::{Context, Result};
 use bodyseg_pipeline::{
-    FigureChoice, FrameProcessor, FrameWriter, ParsedFrame, PipelineConfig, RunOptions,
-    SceneSource, SynthOptions, synth_recording,
+    FrameProcessor, FrameWriter, ParsedFrame, ParserChoice, PipelineConfig, SceneSource,
+    SynthOptions, synth_recording,
 };
 use rayon::prelude::*;
 use std::time::Instant;
@@ -63,9 +63,7 @@ fn main() -> Result<()> {
     };
     synth_recording(&synth, &|_| {})?;
     let out = dir.path().join("out");
-    let mut options = RunOptions::new(&rec, PipelineConfig::default(), &out);
-    options.figures = FigureChoice::Off;
-    let processor = FrameProcessor::open(&options)?;
+    let processor = FrameProcessor::open(&rec, &PipelineConfig::default(), ParserChoice::Auto)?;
     let frames = processor.recording().frames()?.complete;
     let inputs = frames
         .iter()

@@ -3,14 +3,13 @@
 
 use crate::config::PipelineConfig;
 use crate::frame::read_and_project;
-use crate::fs::write_text;
+use crate::outputs::{read_cloud, resolved_config_path, write_text};
 use crate::recording::{Recording, check_stem};
-use crate::refine::resolved_config_path;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_core::{Class, LabeledCloud, PersonBox, PersonBoxes};
 use bodyseg_people::BoxMode;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Where [`boxes_file`] takes its cloud from.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -51,25 +50,6 @@ pub struct BoxesSummary {
     pub boxes: PersonBoxes,
     /// Per stage (read, project, boxes, write): time and a one-line summary.
     pub stages: Vec<Stage>,
-}
-
-/// Reads a cloud by its extension: `.pcd` with [`bodyseg_io::read_pcd`], `.ply` with
-/// [`bodyseg_io::read_ply`].
-///
-/// # Errors
-/// Another extension, or the reader's error (naming the file).
-pub fn read_cloud(path: &Path) -> Result<LabeledCloud> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    match ext.as_deref() {
-        Some("pcd") => Ok(bodyseg_io::read_pcd(path)?),
-        Some("ply") => Ok(bodyseg_io::read_ply(path)?),
-        _ => bail!(
-            "{}: unknown cloud format: give a .ply or .pcd file",
-            path.display()
-        ),
-    }
 }
 
 /// Finds (or, in file mode, reads) the person boxes of one cloud or recording frame
@@ -289,6 +269,5 @@ mod tests {
         let count = |c: [u8; 3]| rgb.chunks_exact(3).filter(|p| *p == c).count();
         assert!(count(BOX_COLOR) > 100, "box outline drawn");
         assert_eq!(count(Class::Head.color().map(|x| x.saturating_add(60))), 1);
-        assert!(read_cloud(Path::new("x.xyz")).is_err());
     }
 }

@@ -191,7 +191,7 @@ pub const CALIBRATE_AVAILABLE: bool = cfg!(feature = "opencv");
 #[cfg(feature = "opencv")]
 mod imp {
     use super::*;
-    use crate::fs::write_text;
+    use crate::outputs::write_text;
     use crate::stage::plural;
     use anyhow::{Context, bail};
     use bodyseg_calib::{

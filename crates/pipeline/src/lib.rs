@@ -38,12 +38,15 @@ mod convert;
 mod eval;
 mod figure;
 mod frame;
-mod fs;
+mod model;
+mod outputs;
 mod parse;
+mod processor;
 mod project;
 mod projection_study;
 mod recording;
 mod refine;
+mod report;
 mod rig;
 mod run;
 mod stage;
@@ -58,7 +61,7 @@ pub use batch::{
 pub use bodyseg_calib::Board;
 pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
-pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, read_cloud, top_view};
+pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, top_view};
 pub use boxes_study::{
     BoxStats, FrameMatch, MATCH_IOU, box_stats, describe_box, match_boxes, study_frame,
 };
@@ -76,22 +79,22 @@ pub use eval::{
 };
 pub use figure::{FigurePanel, LabelView, PanelView, figure_image, panel_view};
 pub use frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
-pub use fs::write_text;
-pub use parse::{
-    BUNDLED_MODEL, LOCAL_RUNTIME_LIBRARY, ParseOptions, ParseSource, ParseSummary,
-    RUNTIME_LIBRARY_ENV, load_segmenter, palette_preview, parse_file, resolve_model,
-    resolve_runtime_library,
+pub use model::{
+    BUNDLED_MODEL, LOCAL_RUNTIME_LIBRARY, ParserChoice, RUNTIME_LIBRARY_ENV, load_segmenter,
+    resolve_model, resolve_runtime_library,
 };
+pub use outputs::{read_cloud, resolved_config_path, write_text};
+pub use parse::{ParseOptions, ParseSource, ParseSummary, palette_preview, parse_file};
+pub use processor::{ABLATION, FrameProcessor};
 pub use project::{ProjectOptions, ProjectSummary, project_file};
 pub use projection_study::{ProjectionStats, camera_images, parsing_images, projection_stats};
 pub use recording::{
     FrameList, Layer, Recording, RecordingWriter, Sensor, check_camera_name, check_stem,
 };
-pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
+pub use refine::{RefineOptions, RefineSummary, refine_file};
+pub use report::RunSummary;
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
-pub use run::{
-    ABLATION, FigureChoice, FrameProcessor, ParserChoice, RunOptions, RunSummary, run_recording,
-};
+pub use run::{FigureChoice, RunOptions, run_recording};
 pub use stage::Stage;
 pub use synth::{
     SceneSource, SynthOptions, SynthSummary, load_scene, synth_chessboard, synth_recording,

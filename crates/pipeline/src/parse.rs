@@ -3,23 +3,14 @@
 
 use crate::config::PipelineConfig;
 use crate::frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
-use crate::fs::write_text;
+use crate::model::{load_segmenter, resolve_model};
+use crate::outputs::write_text;
 use crate::recording::{Layer, Layout, Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
 use bodyseg_core::{Class, LabelImage, RgbImage};
-use bodyseg_parsing::{ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, sidecar_path};
-use std::path::{Path, PathBuf};
-
-/// The bundled model, relative to the project root (its sidecar: the same with `.json`).
-pub const BUNDLED_MODEL: &str = "models/bodyseg_parser_small.onnx";
-
-/// Where `scripts/setup_onnxruntime.sh` puts the ONNX Runtime library, relative to the
-/// project root.
-pub const LOCAL_RUNTIME_LIBRARY: &str = ".deps/onnxruntime/libonnxruntime.so";
-
-/// Environment variable naming the ONNX Runtime library (ort's convention).
-pub const RUNTIME_LIBRARY_ENV: &str = "ORT_DYLIB_PATH";
+use bodyseg_parsing::{RecordedSegmenter, Segmenter};
+use std::path::PathBuf;
 
 /// Which segmenter [`parse_file`] runs.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -63,77 +54,6 @@ pub struct ParseSummary {
     pub written: Vec<PathBuf>,
     /// Per stage (read, parse, write): time and a one-line summary.
     pub stages: Vec<Stage>,
-}
-
-/// Candidate locations of a project-relative file: beside the executable and its parent
-/// folders (a `target/release/bodyseg` of a checkout), the current folder, and the
-/// checkout this binary was built from.
-fn project_candidates(relative: &str) -> Vec<PathBuf> {
-    let mut roots: Vec<PathBuf> = Vec::new();
-    if let Ok(exe) = std::env::current_exe() {
-        roots.extend(exe.ancestors().skip(1).take(4).map(Path::to_path_buf));
-    }
-    if let Ok(cwd) = std::env::current_dir() {
-        roots.push(cwd);
-    }
-    roots.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."));
-    roots.into_iter().map(|r| r.join(relative)).collect()
-}
-
-/// The ONNX Runtime library: `parsing.runtime_library`, else `ORT_DYLIB_PATH`, else the
-/// project-local copy of `scripts/setup_onnxruntime.sh`.
-///
-/// # Errors
-/// None of them is set or exists; the message says how to get the library.
-pub fn resolve_runtime_library(config: &PipelineConfig) -> Result<PathBuf> {
-    if !config.parsing.runtime_library.is_empty() {
-        return Ok(PathBuf::from(&config.parsing.runtime_library));
-    }
-    if let Some(path) = std::env::var_os(RUNTIME_LIBRARY_ENV).filter(|p| !p.is_empty()) {
-        return Ok(PathBuf::from(path));
-    }
-    bodyseg_io::first_existing_file(&project_candidates(LOCAL_RUNTIME_LIBRARY)).with_context(|| {
-        format!(
-            "ONNX Runtime library not found: run scripts/setup_onnxruntime.sh (it writes \
-                 {LOCAL_RUNTIME_LIBRARY}), or set {RUNTIME_LIBRARY_ENV} or \
-                 parsing.runtime_library to a libonnxruntime.so"
-        )
-    })
-}
-
-/// The model file: `parsing.model`, else the bundled model.
-///
-/// # Errors
-/// The bundled model is not found (neither beside the executable, in the current folder,
-/// nor in the checkout the binary was built from).
-pub fn resolve_model(config: &PipelineConfig) -> Result<PathBuf> {
-    if !config.parsing.model.is_empty() {
-        return Ok(PathBuf::from(&config.parsing.model));
-    }
-    bodyseg_io::first_existing_file(&project_candidates(BUNDLED_MODEL))
-        .with_context(|| format!("bundled model {BUNDLED_MODEL} not found: pass --model FILE.onnx"))
-}
-
-/// Loads an ONNX model and its sidecar (`model.json`) into an [`OnnxSegmenter`].
-///
-/// # Errors
-/// The model or sidecar cannot be read, the sidecar is invalid, the runtime library is
-/// missing, or the model does not follow the contract; each names the file.
-pub fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
-    let sidecar = sidecar_path(model);
-    let text = bodyseg_io::read_text(&sidecar)
-        .context("model sidecar (the model's .json: input_size, channel_order, mean, std, ...)")?;
-    let spec = ModelSpec::from_json(&text, &sidecar)?;
-    let library = resolve_runtime_library(config)?;
-    let bytes = bodyseg_io::read_bytes(model).context("parsing model")?;
-    let segmenter = OnnxSegmenter::new(
-        &library,
-        &bytes,
-        model,
-        spec,
-        &config.parsing.onnx_options(),
-    )?;
-    Ok(segmenter)
 }
 
 /// A palette preview: body pixels in their class colour, background as the dimmed image.
@@ -292,21 +212,6 @@ mod tests {
         assert_eq!(
             palette_preview(&image, &labels),
             vec![30, 20, 10, 128, 0, 0]
-        );
-    }
-
-    #[test]
-    fn explicit_paths_win() {
-        let mut cfg = PipelineConfig::default();
-        cfg.parsing.runtime_library = "/x/libonnxruntime.so".into();
-        cfg.parsing.model = "m.onnx".into();
-        assert_eq!(
-            resolve_runtime_library(&cfg).expect("configured"),
-            Path::new("/x/libonnxruntime.so")
-        );
-        assert_eq!(
-            resolve_model(&cfg).expect("configured"),
-            Path::new("m.onnx")
         );
     }
 }

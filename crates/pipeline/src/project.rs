@@ -3,11 +3,9 @@
 
 use crate::config::PipelineConfig;
 use crate::frame::read_and_project;
-use crate::fs::write_text;
-use crate::refine::resolved_config_path;
+use crate::outputs::{ply_options, resolved_config_path, write_text};
 use crate::stage::{Stage, timed};
 use anyhow::{Context, Result};
-use bodyseg_io::{PlyFormat, PlyWriteOptions};
 use bodyseg_project::ProjectMode;
 use std::path::PathBuf;
 
@@ -71,14 +69,7 @@ pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
         }
     }
     let mode = cfg.project.mode;
-    let ply = PlyWriteOptions {
-        format: if opts.ascii {
-            PlyFormat::Ascii
-        } else {
-            PlyFormat::BinaryLittleEndian
-        },
-        ..Default::default()
-    };
+    let ply = ply_options(opts.ascii);
     let resolved_config = opts
         .write_resolved_config
         .then(|| resolved_config_path(&opts.out));

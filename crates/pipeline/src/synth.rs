@@ -4,7 +4,7 @@
 //! place when every frame is written, so a crash or an error never leaves a half-written
 //! recording under the requested name.
 
-use crate::fs::write_text;
+use crate::outputs::write_text;
 use crate::recording::{Layer, RecordingWriter};
 use crate::stage::{Stage, plural};
 use anyhow::{Context, Result};
