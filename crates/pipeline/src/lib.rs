@@ -31,7 +31,6 @@
 mod allocator;
 mod batch;
 mod boxes;
-mod boxes_study;
 mod calibrate;
 mod config;
 mod convert;
@@ -43,7 +42,6 @@ mod outputs;
 mod parse;
 mod processor;
 mod project;
-mod projection_study;
 mod recording;
 mod refine;
 mod report;
@@ -62,9 +60,6 @@ pub use bodyseg_calib::Board;
 pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, top_view};
-pub use boxes_study::{
-    BoxStats, FrameMatch, MATCH_IOU, box_stats, describe_box, match_boxes, study_frame,
-};
 pub use calibrate::{
     CALIBRATE_AVAILABLE, CalibrateSummary, IntrinsicsCalibOptions, StereoCalibOptions, ViewReport,
     WorldCalibOptions, calibrate_intrinsics, calibrate_stereo, calibrate_world,
@@ -87,7 +82,6 @@ pub use outputs::{read_cloud, resolved_config_path, write_text};
 pub use parse::{ParseOptions, ParseSource, ParseSummary, palette_preview, parse_file};
 pub use processor::{ABLATION, FrameProcessor};
 pub use project::{ProjectOptions, ProjectSummary, project_file};
-pub use projection_study::{ProjectionStats, camera_images, parsing_images, projection_stats};
 pub use recording::{
     FrameList, Layer, Recording, RecordingWriter, Sensor, check_camera_name, check_stem,
 };

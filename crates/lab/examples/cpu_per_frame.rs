@@ -2,7 +2,7 @@
 //! configurations scored), next to the wall time: CPU time stays meaningful on a loaded
 //! machine where criterion's wall-clock figures do not.
 //!
-//! `cargo run --release -p bodyseg-pipeline --example cpu_per_frame [ROUNDS] [eval]`
+//! `cargo run --release -p bodyseg-lab --example cpu_per_frame [ROUNDS] [eval]`
 //!
 //! The bench's setup (8 synthetic `handover` frames decoded in memory, a 2-thread pool,
 //! mimalloc keeping freed memory, a fresh output folder per pass); ROUNDS (default 6)
