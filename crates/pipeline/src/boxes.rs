@@ -39,7 +39,7 @@ pub struct BoxesOptions {
     /// Top-view PNG of the cloud with the boxes drawn, if wanted.
     pub preview: Option<PathBuf>,
     /// Also write the resolved configuration beside the output
-    /// ([`resolved_config_path`]).
+    /// (`out.ply` → `out.config.resolved.toml`).
     pub write_resolved_config: bool,
 }
 

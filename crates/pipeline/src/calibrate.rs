@@ -185,9 +185,6 @@ fn without_opencv() -> anyhow::Error {
     )
 }
 
-/// Whether this build has the `calibrate` commands (the `opencv` feature).
-pub const CALIBRATE_AVAILABLE: bool = cfg!(feature = "opencv");
-
 #[cfg(feature = "opencv")]
 mod imp {
     use super::*;

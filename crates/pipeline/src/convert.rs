@@ -92,7 +92,7 @@ fn summary(
 ///
 /// # Errors
 /// `input` is not a folder, or holds no recording.
-pub fn list_recordings(input: &Path) -> Result<Vec<(String, PathBuf)>> {
+pub(crate) fn list_recordings(input: &Path) -> Result<Vec<(String, PathBuf)>> {
     bodyseg_io::require_folder(input, "dataset")?;
     if Recording::is_recording(input) {
         return Ok(vec![(String::new(), input.to_path_buf())]);

@@ -9,14 +9,14 @@ use bodyseg_parsing::{ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, si
 use std::path::{Path, PathBuf};
 
 /// The bundled model, relative to the project root (its sidecar: the same with `.json`).
-pub const BUNDLED_MODEL: &str = "models/bodyseg_parser_small.onnx";
+pub(crate) const BUNDLED_MODEL: &str = "models/bodyseg_parser_small.onnx";
 
 /// Where `scripts/setup_onnxruntime.sh` puts the ONNX Runtime library, relative to the
 /// project root.
-pub const LOCAL_RUNTIME_LIBRARY: &str = ".deps/onnxruntime/libonnxruntime.so";
+pub(crate) const LOCAL_RUNTIME_LIBRARY: &str = ".deps/onnxruntime/libonnxruntime.so";
 
 /// Environment variable naming the ONNX Runtime library (ort's convention).
-pub const RUNTIME_LIBRARY_ENV: &str = "ORT_DYLIB_PATH";
+pub(crate) const RUNTIME_LIBRARY_ENV: &str = "ORT_DYLIB_PATH";
 
 /// Where a run's 2D labels come from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -50,7 +50,7 @@ fn project_candidates(relative: &str) -> Vec<PathBuf> {
 ///
 /// # Errors
 /// None of them is set or exists; the message says how to get the library.
-pub fn resolve_runtime_library(config: &PipelineConfig) -> Result<PathBuf> {
+pub(crate) fn resolve_runtime_library(config: &PipelineConfig) -> Result<PathBuf> {
     if !config.parsing.runtime_library.is_empty() {
         return Ok(PathBuf::from(&config.parsing.runtime_library));
     }
@@ -71,7 +71,7 @@ pub fn resolve_runtime_library(config: &PipelineConfig) -> Result<PathBuf> {
 /// # Errors
 /// The bundled model is not found (neither beside the executable, in the current folder,
 /// nor in the checkout the binary was built from).
-pub fn resolve_model(config: &PipelineConfig) -> Result<PathBuf> {
+pub(crate) fn resolve_model(config: &PipelineConfig) -> Result<PathBuf> {
     if !config.parsing.model.is_empty() {
         return Ok(PathBuf::from(&config.parsing.model));
     }
@@ -84,7 +84,7 @@ pub fn resolve_model(config: &PipelineConfig) -> Result<PathBuf> {
 /// # Errors
 /// The model or sidecar cannot be read, the sidecar is invalid, the runtime library is
 /// missing, or the model does not follow the contract; each names the file.
-pub fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
+pub(crate) fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
     let sidecar = sidecar_path(model);
     let text = bodyseg_io::read_text(&sidecar)
         .context("model sidecar (the model's .json: input_size, channel_order, mean, std, ...)")?;

@@ -16,7 +16,7 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 
 /// Where the resolved configuration of an output goes: `refined.ply` →
 /// `refined.config.resolved.toml`, in the same folder.
-pub fn resolved_config_path(out: &Path) -> PathBuf {
+pub(crate) fn resolved_config_path(out: &Path) -> PathBuf {
     let stem = out
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -29,7 +29,7 @@ pub fn resolved_config_path(out: &Path) -> PathBuf {
 ///
 /// # Errors
 /// Another extension, or the reader's error (naming the file).
-pub fn read_cloud(path: &Path) -> Result<LabeledCloud> {
+pub(crate) fn read_cloud(path: &Path) -> Result<LabeledCloud> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());

@@ -57,7 +57,7 @@ pub struct ParseSummary {
 }
 
 /// A palette preview: body pixels in their class colour, background as the dimmed image.
-pub fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> {
+pub(crate) fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> {
     let mut out = Vec::with_capacity(labels.num_pixels() * 3);
     for (i, label) in labels.labels.iter().enumerate() {
         match label.class().filter(|c| *c != Class::Background) {

@@ -28,7 +28,7 @@ use std::path::Path;
 use std::sync::Mutex;
 
 /// The configurations of the paper's table, in its order.
-pub const ABLATION: [Steps; 5] = Steps::PAPER;
+pub(crate) const ABLATION: [Steps; 5] = Steps::PAPER;
 
 /// A recording opened for processing: the rig, the parser, per-worker projection buffers
 /// and what to write. Built once per run; frames go through [`FrameProcessor::read`]

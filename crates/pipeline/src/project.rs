@@ -26,7 +26,7 @@ pub struct ProjectOptions {
     /// Write ASCII PLY instead of binary little-endian.
     pub ascii: bool,
     /// Also write the resolved configuration beside the output
-    /// ([`resolved_config_path`]).
+    /// (`out.ply` → `out.config.resolved.toml`).
     pub write_resolved_config: bool,
 }
 

@@ -10,7 +10,7 @@
 //! ```
 //!
 //! Every path is built by [`Layout`], which checks camera names and frame stems
-//! ([`check_camera_name`], [`check_stem`]): a name from `rig.toml` or the command line never leads out of the
+//! (letters, digits, `_`, `-`, `.`; not `.` or `..`): a name from `rig.toml` or the command line never leads out of the
 //! recording folder.
 
 use anyhow::{Context, Result, bail};
@@ -117,7 +117,7 @@ fn is_valid_name(name: &str) -> bool {
 /// # Errors
 /// The name is empty, holds another character (a path separator, a space, ...) or is
 /// `.` / `..`; the message names it.
-pub fn check_camera_name(name: &str) -> Result<()> {
+pub(crate) fn check_camera_name(name: &str) -> Result<()> {
     if !is_valid_name(name) {
         bail!(
             "camera {name:?}: a camera name names its folder of the recording: use letters, \
@@ -132,7 +132,7 @@ pub fn check_camera_name(name: &str) -> Result<()> {
 ///
 /// # Errors
 /// As [`check_camera_name`].
-pub fn check_stem(stem: &str) -> Result<()> {
+pub(crate) fn check_stem(stem: &str) -> Result<()> {
     if !is_valid_name(stem) {
         bail!(
             "frame {stem:?}: give the file stem of a frame (e.g. 000012), not a path: \
@@ -225,7 +225,7 @@ impl Recording {
     ///
     /// # Errors
     /// `root` is not a folder; `rig.toml` is missing or invalid; a camera's name is not a
-    /// valid folder name ([`check_camera_name`], [`check_stem`]) or its folder is missing (the error names both).
+    /// valid folder name (letters, digits, `_`, `-`, `.`; not `.` or `..`) or its folder is missing (the error names both).
     pub fn open(root: &Path) -> Result<Recording> {
         bodyseg_io::require_folder(root, "recording")?;
         let rig = bodyseg_calib::read_rig_toml(&root.join(RIG_FILE))?;
@@ -272,7 +272,7 @@ impl Recording {
     /// `.jpg` or `.jpeg` that exists).
     ///
     /// # Errors
-    /// `camera` or `stem` is not a valid name ([`check_camera_name`], [`check_stem`]).
+    /// `camera` or `stem` is not a valid name (letters, digits, `_`, `-`, `.`; not `.` or `..`).
     pub fn image_path(&self, camera: &str, layer: Layer, stem: &str) -> Result<PathBuf> {
         self.layout.image_path(camera, layer, stem)
     }

@@ -20,7 +20,7 @@ pub struct RefineOptions {
     /// Write ASCII PLY instead of binary little-endian.
     pub ascii: bool,
     /// Also write the resolved configuration beside the output
-    /// ([`resolved_config_path`]).
+    /// (`out.ply` → `out.config.resolved.toml`).
     pub write_resolved_config: bool,
 }
 

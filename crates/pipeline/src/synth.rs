@@ -52,7 +52,7 @@ pub struct SynthOptions {
     /// Write `preview/<stem>.png` per frame.
     pub previews: bool,
     /// Instead of people, write chessboard calibration views for the scene's rig
-    /// ([`synth_chessboard`]).
+    /// (see `bodyseg synth --chessboard`).
     pub chessboard: Option<ChessboardConfig>,
 }
 
@@ -70,7 +70,7 @@ pub struct SynthSummary {
 }
 
 /// The scene configuration of `source` with `overrides` applied, validated.
-pub fn load_scene(source: &SceneSource, overrides: &[String]) -> Result<SceneConfig> {
+pub(crate) fn load_scene(source: &SceneSource, overrides: &[String]) -> Result<SceneConfig> {
     match source {
         SceneSource::Preset(name) => {
             let base = preset(name)?;
@@ -211,7 +211,10 @@ pub fn synth_recording(
 /// OUT/floor/<cam>/color.png    the floor board seen by every camera at once
 /// OUT/floor/<cam>/ir.png
 /// ```
-pub fn synth_chessboard(options: &SynthOptions, board: &ChessboardConfig) -> Result<SynthSummary> {
+pub(crate) fn synth_chessboard(
+    options: &SynthOptions,
+    board: &ChessboardConfig,
+) -> Result<SynthSummary> {
     let start = Instant::now();
     let scene = load_scene(&options.scene, &options.overrides)?;
     let set = chessboard_set(&scene.rig, board, options.seed)?;
