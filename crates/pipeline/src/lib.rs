@@ -53,6 +53,7 @@ mod convert;
 mod eval;
 mod figure;
 mod frame;
+mod layers;
 mod model;
 mod outputs;
 mod parse;

@@ -4,6 +4,7 @@
 //! place when every frame is written, so a crash or an error never leaves a half-written
 //! recording under the requested name.
 
+use crate::layers::Setting;
 use crate::outputs::write_text;
 use crate::recording::{Layer, RecordingWriter};
 use crate::stage::{Stage, plural};
@@ -69,25 +70,27 @@ pub struct SynthSummary {
     pub stages: Vec<Stage>,
 }
 
-/// The scene configuration of `source` with `overrides` applied, validated.
+/// The scene configuration of `source` with `overrides` (`KEY=VALUE`, dotted keys) applied,
+/// validated.
 pub(crate) fn load_scene(source: &SceneSource, overrides: &[String]) -> Result<SceneConfig> {
-    match source {
+    let (text, name) = match source {
         SceneSource::Preset(name) => {
             let base = preset(name)?;
             if overrides.is_empty() {
                 return Ok(base);
             }
-            Ok(
-                SceneConfig::from_toml_with_overrides(&base.to_toml(), overrides)
-                    .with_context(|| format!("preset `{name}`"))?,
-            )
+            (base.to_toml(), format!("preset `{name}`"))
         }
-        SceneSource::File(path) => {
-            let text = bodyseg_io::read_text(path)?;
-            Ok(SceneConfig::from_toml_with_overrides(&text, overrides)
-                .with_context(|| path.display().to_string())?)
-        }
+        SceneSource::File(path) => (bodyseg_io::read_text(path)?, path.display().to_string()),
+    };
+    let mut table: toml::Table = toml::from_str(&text)
+        .map_err(|e| anyhow::anyhow!("{name}: scene config: {}", e.message().trim()))?;
+    for item in overrides {
+        Setting::parse(item)
+            .and_then(|s| s.apply(&mut table))
+            .with_context(|| format!("--set {item}"))?;
     }
+    SceneConfig::from_table(table).with_context(|| name.clone())
 }
 
 /// Writes every file of one frame of `synth` into a recording being written: per camera
