@@ -10,7 +10,8 @@
   SCHP pre-processing -> model -> post-processing chain (scripts/parsing_common.py).
 - preprocess_golden.json: SCHP pre-processing (ALGORITHM.md §2) for 640x480 and 1920x1080
   images into a 512x512 input: both affine matrices and the bilinear samples at fixed input
-  pixels, of the pattern image `pattern_rgb` below (the Rust test builds the same image).
+  pixels before their rounding to whole grey levels (the Rust test rounds them, so it can
+  tell a tie), of the pattern image `pattern_rgb` below (the Rust test builds the same image).
 
     pip install onnx onnxruntime numpy
     python3 scripts/gen_parsing_test_model.py
@@ -111,7 +112,7 @@ def main():
 
     pre = {"input_size": 512, "cases": []}
     for w, h in [(640, 480), (1920, 1080)]:
-        samples = pc.warp_to_input(pattern_rgb(w, h), 512)
+        samples = pc.warp_to_input_unrounded(pattern_rgb(w, h), 512)
         coords = sorted({(x, y) for x in [0, 1, 100, 255, 256, 300, 510, 511] for y in [0, 63, 64, 65, 66, 127, 128, 255, 383, 384, 447, 448, 449, 511]}
                         | {(int(a), int(b)) for a, b in np.random.default_rng(w).integers(0, 512, (40, 2))})
         pre["cases"].append({

@@ -6,8 +6,9 @@ scripts/gen_parsing_test_model.py. Formulas: shared/ALGORITHM.md §2.
 
   centre (cx, cy) = ((w-1)/2, (h-1)/2),  k = (S-1)/max(w-1, h-1)
   x' = (x - cx)*k + (S-1)/2,  y' = (y - cy)*k + (S-1)/2
-  bilinear sampling, a neighbour outside the image counts as 0 (border 0), before
-  normalisation ((v/255 - mean)/std in the sidecar's channel order).
+  bilinear sampling, a neighbour outside the image counts as 0 (border 0), each sample
+  rounded to a whole grey level (ties to even: SCHP's cv2.warpAffine writes a uint8 image),
+  before normalisation ((v/255 - mean)/std in the sidecar's channel order).
 """
 
 import numpy as np
@@ -56,13 +57,20 @@ def bilinear_border0(src, xs, ys):
     return top * wy0[:, None, None] + bot * wy1[:, None, None]
 
 
-def warp_to_input(rgb, s):
-    """rgb uint8 [h, w, 3] -> float64 [s, s, 3] in [0, 255], RGB, not normalised."""
+def warp_to_input_unrounded(rgb, s):
+    """rgb uint8 [h, w, 3] -> float64 [s, s, 3] in [0, 255], RGB, the bilinear samples
+    before SCHP's rounding to whole grey levels."""
     h, w = rgb.shape[:2]
     k, cx, cy = input_transform(w, h, s)
     c = (s - 1) / 2.0
     grid = np.arange(s, dtype=np.float64)
     return bilinear_border0(rgb, (grid - c) / k + cx, (grid - c) / k + cy)
+
+
+def warp_to_input(rgb, s):
+    """rgb uint8 [h, w, 3] -> float64 [s, s, 3] of whole grey levels 0..255 (rounded, ties to
+    even, as SCHP's uint8 warp), RGB, not normalised."""
+    return np.rint(warp_to_input_unrounded(rgb, s))
 
 
 def warp_labels_to_input(labels, s, fill=255):

@@ -57,11 +57,19 @@ cargo clippy --release --workspace --all-targets --all-features -- -D warnings
 step "python3 scripts/check_boundaries.py"
 python3 scripts/check_boundaries.py
 
-step "python3 scripts/export_schp_onnx.py --dry-run (when torch, onnx and onnxruntime are installed)"
+step "python3 scripts/export_schp_onnx.py --dry-run and scripts/test_export_schp.py (when torch, onnx and onnxruntime are installed)"
 if python3 -c "import torch, onnx, onnxruntime" >/dev/null 2>&1; then
     python3 scripts/export_schp_onnx.py --dry-run 2>&1 | grep -v -i warning
+    python3 scripts/test_export_schp.py
 else
     echo "skipped: pip install torch onnx onnxruntime to check the SCHP export script"
+fi
+
+step "python3 scripts/test_real_parsing.py (real-image benchmark scripts; when numpy and pillow are installed)"
+if python3 -c "import numpy, PIL" >/dev/null 2>&1; then
+    python3 scripts/test_real_parsing.py
+else
+    echo "skipped: pip install numpy pillow scipy to test the benchmark scripts"
 fi
 
 step "cargo test --workspace --all-features --release"

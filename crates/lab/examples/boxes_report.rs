@@ -14,7 +14,7 @@ use bodyseg_synth::{Synth, preset};
 
 /// A row's mode: geometry without colours is the same split on positions only.
 fn row_name(cfg: &BoxesConfig) -> String {
-    match (cfg.mode, cfg.colour_split) {
+    match (cfg.mode, cfg.color_split) {
         (BoxMode::Geometry, false) => "geometry (no colours)".into(),
         (mode, _) => mode.name().into(),
     }
@@ -34,7 +34,7 @@ fn main() -> anyhow::Result<()> {
         },
         BoxesConfig {
             mode: BoxMode::Geometry,
-            colour_split: false,
+            color_split: false,
             ..BoxesConfig::default()
         },
     ];

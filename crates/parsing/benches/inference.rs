@@ -1,7 +1,9 @@
 //! Guards the parsing issue's figure: 2D parsing of one 960×540 colour view with the
 //! bundled model (`models/bodyseg_parser_small.onnx`) on 2 ONNX Runtime threads, whole
 //! chain (SCHP pre-processing, inference, logits upsampling, warp back, softmax/argmax).
-//! Also 3 views in one batch (a frame of the default 3-camera rig). Input: frame 0 of the
+//! Also 3 views in one batch (a frame of the default 3-camera rig), and SCHP's pre-processing
+//! of one view alone (warp into the 512×512 input, rounded to whole grey levels, and
+//! normalisation), which an SCHP export runs before its ~1 s network. Input: frame 0 of the
 //! `robot_cell` synth preset, seed 1 (three people, table, robot arm).
 //!
 //! Needs `scripts/setup_onnxruntime.sh` (or ORT_DYLIB_PATH) and the bundled model.
@@ -10,6 +12,7 @@
 #![allow(missing_docs)]
 
 use bodyseg_core::RgbImage;
+use bodyseg_parsing::transform::{InputTransform, normalize_to_chw, warp_to_input};
 use bodyseg_parsing::{ModelSpec, OnnxOptions, OnnxSegmenter, Segmenter, ViewInput};
 use bodyseg_synth::{Synth, preset};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -36,10 +39,11 @@ fn segmenter() -> OnnxSegmenter {
         .expect("ONNX Runtime (scripts/setup_onnxruntime.sh) and the bundled model")
 }
 
-fn inference(c: &mut Criterion) {
+/// The colour views of frame 0 of `robot_cell`, seed 1 (960 wide).
+fn views() -> Vec<RgbImage> {
     let config = preset("robot_cell").expect("preset");
     let frame = Synth::new(config, 1).expect("synth").frame(0);
-    let images: Vec<RgbImage> = frame
+    frame
         .cameras
         .iter()
         .map(|cam| {
@@ -47,7 +51,33 @@ fn inference(c: &mut Criterion) {
             let h = (cam.color.len() / 3 / w) as u32;
             RgbImage::new(w as u32, h, cam.color.clone()).expect("960 wide RGB")
         })
-        .collect();
+        .collect()
+}
+
+fn preprocess(c: &mut Criterion) {
+    let image = views().swap_remove(0);
+    // SCHP's sidecar as scripts/export_schp_onnx.py writes it.
+    let sidecar = r#"{"input_size": [512, 512], "channel_order": "BGR",
+        "mean": [0.406, 0.456, 0.485], "std": [0.225, 0.224, 0.229],
+        "class_names": ["background", "head", "torso", "upper_arms", "lower_arms",
+                        "upper_legs", "lower_legs"],
+        "output_stride": 4, "align_corners": true}"#;
+    let spec = ModelSpec::from_json(sidecar, Path::new("schp.json")).expect("SCHP sidecar");
+    let t = InputTransform::new(image.width, image.height, spec.input_side());
+    let mut group = c.benchmark_group("preprocess_960x540_to_512");
+    group.throughput(Throughput::Elements(1));
+    group.bench_function(BenchmarkId::new("views", 1), |b| {
+        b.iter(|| {
+            let mut input = Vec::with_capacity(3 * 512 * 512);
+            normalize_to_chw(&warp_to_input(black_box(&image), &t), &spec, &mut input);
+            black_box(input)
+        })
+    });
+    group.finish();
+}
+
+fn inference(c: &mut Criterion) {
+    let images = views();
     let mut seg = segmenter();
     let mut group = c.benchmark_group("parse_960x540_2threads");
     group.sample_size(10);
@@ -70,5 +100,5 @@ fn inference(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, inference);
+criterion_group!(benches, preprocess, inference);
 criterion_main!(benches);

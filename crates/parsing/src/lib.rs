@@ -11,6 +11,8 @@
 //!   is a [`ModelSpec`]. Pre- and post-processing are SCHP's ([`transform`]).
 //! - [`RecordedSegmenter`]: label images computed earlier (a recording's `parsing/`,
 //!   read by the caller and handed over in [`ViewInput::recorded`]).
+//! - [`blazepose`]: BlazePose landmarks + mask → the 7 classes (issue 29), pure functions;
+//!   its segmenter on person regions comes with the pipeline integration.
 //!
 //! This crate does no file I/O: model bytes, sidecar text and images come from the
 //! caller (bodyseg-pipeline reads them with bodyseg-io). `ort` and `ndarray` types do not
@@ -26,6 +28,7 @@
 //!   `channel_order`, `mean` and `std` (on pixels / 255) say what the network wants.
 //! - Probabilities are softmax values in `[0, 1]`.
 
+pub mod blazepose;
 mod config;
 mod error;
 mod onnx;

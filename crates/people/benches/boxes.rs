@@ -46,8 +46,8 @@ fn bench(c: &mut Criterion) {
         );
     }
     // Skin on heads and arms, a shirt, trousers; the background grey, orange where x > 0.5.
-    let mut coloured = cloud.clone();
-    coloured.colors = Some(
+    let mut colored = cloud.clone();
+    colored.colors = Some(
         cloud
             .labels
             .iter()
@@ -66,8 +66,8 @@ fn bench(c: &mut Criterion) {
         ..BoxesConfig::default()
     };
     group.bench_with_input(
-        BenchmarkId::new("geometry_colours", coloured.len()),
-        &coloured,
+        BenchmarkId::new("geometry_colours", colored.len()),
+        &colored,
         |b, cloud| b.iter(|| find_boxes(black_box(cloud), &cfg)),
     );
     group.finish();

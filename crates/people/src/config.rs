@@ -83,10 +83,8 @@ pub struct BoxesConfig {
     /// `min_height_m`. Without labels, what stands up to ≈ 1 m in a workcell looks like a
     /// crouching person from above: a robot's shoulder joint on its pedestal (0.97 m in
     /// bodyseg-synth), a storage box (up to 0.9 m), a table with things on it; crouching
-    /// adults are ≈ 1.05 m and up. (0.9 → 1.0 on the box study's fifteen `robot_cell` seed
-    /// groups: 5 frames with such an extra box mended, none lost, no other preset changed.)
-    /// Lower it to find people sitting on the floor. Must be > 0 and <
-    /// `max_height_m`. Default 1.0.
+    /// adults are ≈ 1.05 m and up. Lower it to find people sitting on the floor. Must be
+    /// > 0 and < `max_height_m`. Default 1.0.
     pub geometry_min_height_m: f32,
     /// A person's top is at most this high, metres. Must be > `min_height_m` and
     /// `geometry_min_height_m`.
@@ -146,8 +144,10 @@ pub struct BoxesConfig {
     /// between people and what is nobody's (a robot): the robot's part spreads cheaply
     /// only through its own colours (those it wears more than the people there) and pays
     /// to step into a person's, so a sleeve or a hand reaching along a robot link stays
-    /// its owner's. false = positions only. Default true.
-    pub colour_split: bool,
+    /// its owner's. false = positions only. Default true. (Key `colour_split`, the former
+    /// spelling, is read too.)
+    #[serde(alias = "colour_split")]
+    pub color_split: bool,
 }
 
 impl Default for BoxesConfig {
@@ -173,16 +173,22 @@ impl Default for BoxesConfig {
             max_reach_m: 0.9,
             column_radius_m: 0.2,
             min_column_fill: 0.7,
-            colour_split: true,
+            color_split: true,
         }
     }
 }
 
 impl BoxesConfig {
-    /// Whether box finding reads the points' colours (geometry mode with `colour_split`):
+    /// Whether box finding reads the points' colours (geometry mode with `color_split`):
     /// then a pipeline samples them from the colour images.
+    pub fn uses_colors(&self) -> bool {
+        self.mode == BoxMode::Geometry && self.color_split
+    }
+
+    /// [`BoxesConfig::uses_colors`] under its former spelling, kept while callers move to
+    /// the new one.
     pub fn uses_colours(&self) -> bool {
-        self.mode == BoxMode::Geometry && self.colour_split
+        self.uses_colors()
     }
 
     /// The lowest top a person may have in this mode, metres: `geometry_min_height_m` in
@@ -281,6 +287,28 @@ impl BoxesConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde::de::value::{Error, MapDeserializer};
+
+    /// The configuration read from the boolean keys `fields` (the others default).
+    fn from_bools(fields: &[(&'static str, bool)]) -> Result<BoxesConfig, Error> {
+        BoxesConfig::deserialize(MapDeserializer::new(fields.iter().copied()))
+    }
+
+    #[test]
+    fn the_color_split_is_read_under_both_spellings() {
+        assert!(BoxesConfig::default().color_split);
+        for key in ["color_split", "colour_split"] {
+            let cfg = from_bools(&[(key, false)]).expect(key);
+            assert!(!cfg.color_split, "{key}");
+            let geometry = BoxesConfig {
+                mode: BoxMode::Geometry,
+                ..cfg
+            };
+            assert!(!geometry.uses_colors() && !geometry.uses_colours(), "{key}");
+        }
+        // Unknown keys are still refused.
+        assert!(from_bools(&[("colur_split", false)]).is_err());
+    }
 
     #[test]
     fn geometry_mode_has_its_own_lowest_top_checked_against_the_highest() {

@@ -82,11 +82,11 @@ pub(crate) fn voxelize(points: impl Iterator<Item = (usize, Vec3, u8)>, voxel_m:
 /// once) finds every point's neighbours once, when the graph is built; they are stored
 /// (compressed rows, with the squared distance), since the finders walk the graph several
 /// times (components, splits, growth). With the graph built only among the voxels walked
-/// (see [`Graph::new`]), `cargo bench -p bodyseg-people --bench boxes`, same session:
+/// (see [`VoxelGraph::new`]), `cargo bench -p bodyseg-people --bench boxes`, same session:
 /// labels 5.69 → 3.72 ms, geometry 21.4 → 17.1 ms, geometry with colours 24.4 → 17.0 ms;
 /// keeping the rows where they are found instead of copying them into point order, 3.29,
 /// 15.8 and 16.1 ms (a later run).
-pub(crate) struct Graph {
+pub(crate) struct VoxelGraph {
     /// Per point `i`, its neighbours are `edges[rows[i].0..rows[i].1]` (rows laid out in
     /// the grid's cell order; empty for points the graph is not built among).
     rows: Vec<(u32, u32)>,
@@ -94,11 +94,11 @@ pub(crate) struct Graph {
     edges: Vec<(u32, f32)>,
 }
 
-impl Graph {
+impl VoxelGraph {
     /// Builds the graph among the points where `among` is true: the others have no
     /// edges (the finders only ever walk kept voxels: geometry mode's above the floor,
     /// labels mode's dense ones), so the floor's voxels cost nothing.
-    pub fn new(centers: &[Vec3], gap_m: f32, among: &[bool]) -> Graph {
+    pub fn new(centers: &[Vec3], gap_m: f32, among: &[bool]) -> VoxelGraph {
         let n = centers.len();
         let inv = 1.0 / gap_m;
         let gap2 = gap_m * gap_m;
@@ -156,7 +156,7 @@ impl Graph {
                 rows[i as usize] = (first, edges.len() as u32);
             }
         }
-        Graph { rows, edges }
+        VoxelGraph { rows, edges }
     }
 
     /// Calls `f(j, distance²)` for every neighbour `j` of point `i` (not `i` itself).
@@ -183,7 +183,7 @@ impl Graph {
         self.components_along(keep, |_, _| true)
     }
 
-    /// [`Graph::components`] joining two points only where `joined(i, j)` (e.g. along a
+    /// [`VoxelGraph::components`] joining two points only where `joined(i, j)` (e.g. along a
     /// body: parts that touch within one body, not a hand on someone's trunk).
     pub fn components_along(
         &self,
@@ -270,7 +270,7 @@ impl Graph {
         self.split_scaled(centers, members, seeds, |_, _| 1.0, |_, i, j| penalty(i, j))
     }
 
-    /// [`Graph::split_with`] where group g's edge lengths into voxel j count `scale(g, j)`
+    /// [`VoxelGraph::split_with`] where group g's edge lengths into voxel j count `scale(g, j)`
     /// times and its edge from i to j pays `penalty(g, i, j)` metres more: a group that
     /// spreads more cheaply claims more of what lies between it and the others, and one
     /// that pays to cross a boundary (a colour edge) claims less of what lies beyond it.
@@ -371,7 +371,7 @@ mod tests {
             pts.push([i as f32 * 0.05, 0.0, 0.0]);
             pts.push([i as f32 * 0.05, 0.3, 0.0]);
         }
-        let g = Graph::new(&pts, 0.1, &vec![true; pts.len()]);
+        let g = VoxelGraph::new(&pts, 0.1, &vec![true; pts.len()]);
         let comps = g.components(&vec![true; pts.len()]);
         assert_eq!(comps.len(), 2);
         assert!(comps[0].iter().all(|&i| i % 2 == 0));
@@ -408,8 +408,8 @@ mod tests {
             ]);
         }
         let among: Vec<bool> = (0..pts.len()).map(|i| i % 3 != 0).collect();
-        let full = Graph::new(&pts, 0.07, &vec![true; pts.len()]);
-        let part = Graph::new(&pts, 0.07, &among);
+        let full = VoxelGraph::new(&pts, 0.07, &vec![true; pts.len()]);
+        let part = VoxelGraph::new(&pts, 0.07, &among);
         for i in 0..pts.len() {
             let want: Vec<u32> = if among[i] {
                 let mut n = full.neighbors(i);

@@ -240,7 +240,7 @@ pub(crate) fn read_and_project(
     config: &PipelineConfig,
 ) -> Result<(Rig, LabeledCloud, Vec<Stage>)> {
     check_stem(stem)?;
-    let colour = config.boxes.uses_colours();
+    let colour = config.boxes.uses_colors();
     let mut segmenter = RecordedSegmenter::new();
     let needs = FrameNeeds {
         depth: true,

@@ -179,7 +179,7 @@ impl FrameProcessor {
     /// colour images are read, and sampled where the points land): foreign colours, and
     /// geometry mode's split between people and what is nobody's.
     fn needs_colours(&self) -> bool {
-        self.config.refine.foreign_colour_density > 0.0 || self.config.boxes.uses_colours()
+        self.config.refine.foreign_colour_density > 0.0 || self.config.boxes.uses_colors()
     }
 
     /// What [`FrameProcessor::read`] reads besides depth: what the segmenter needs, the

@@ -6,7 +6,7 @@
 //! (same label, touching), so M, R and N keep them. Sleeves are the shirt's colour and
 //! hands and bare forearms the face's skin, so an arm point whose colour is rare on the
 //! person's head and torso is not the person's. Measured on the tune sets of
-//! configs/benchmarks/improved.toml.
+//! docs/notes/2026-11-30-improved-refinement-tuning.md.
 //!
 //! What it cannot know: gloves, or sleeves of another colour than the shirt (a jacket
 //! over a shirt whose front shows), are arms of a colour the head and torso do not have,

@@ -94,7 +94,7 @@ pub fn remove_nodes(labels: &[Label], graph: &Graph, tree: &BodyTree) -> Vec<Lab
 /// still the body's surface. A forearm or a foot joined to the body by a strip the parser
 /// hesitated on (an elbow, a knee, a hidden ankle) was cut off and removed; an object or a
 /// clump of flying pixels with no body points between it and the person still is. Measured
-/// on the tune sets of configs/benchmarks/improved.toml.
+/// on the tune sets of docs/notes/2026-11-30-improved-refinement-tuning.md.
 pub fn restore_bridged(
     removed: &[Label],
     before: &[Label],
@@ -320,14 +320,14 @@ pub fn reassign_noise_weighted(
 /// the parser hesitated, and the few nearest sure points lie on whichever side happens to
 /// be denser there; the sure points across a limb's width say better which part the strip
 /// belongs to. For DBSCAN's own noise (sparse points, flying pixels, a hand too sparse to
-/// cluster) the narrow vote stays better. Measured in docs/notes/noise_oracle.md.
+/// cluster) the narrow vote stays better. Measured in docs/notes/2026-12-01-noise-oracle.md.
 ///
 /// How: the clustered points are counted per label in cells of `radius_m / 8`; each cell
 /// votes from its centroid with its counts, the nearest cells first until they hold about
 /// `k` points (`k` over the mean count of a cell); the doubted points of one cell share
 /// the vote asked from the cell's centre and differ only by their own label. Point by
 /// point, a few hundred voters each made the refinement 15 times slower (tune sets,
-/// docs/notes/noise_oracle.md); this is within 0.2 BIoU of it.
+/// docs/notes/2026-12-01-noise-oracle.md); this is within 0.2 BIoU of it.
 ///
 /// A doubted point with no clustered point within the radius keeps its own label, unless
 /// that is unknown or `self_weight` is 0 (then the nearest clustered point's). Ties go to
@@ -400,7 +400,7 @@ pub fn reassign_doubted_wide(
 /// lower leg on the thigh), and the parser's part boundaries are ragged; the surface around
 /// a point says better which part it lies on. A vote over body labels only, so that the
 /// floor or a wall does not outvote a foot or a hand. Measured on the tune sets of
-/// configs/benchmarks/improved.toml.
+/// docs/notes/2026-11-30-improved-refinement-tuning.md.
 ///
 /// How: as [`reassign_doubted_wide`], the body points are counted per label in cells of
 /// `radius_m / 8`, and the points of one cell share the vote asked from its centre.
@@ -619,7 +619,8 @@ pub(crate) fn quantile(v: &mut [f32], q: f64) -> f32 {
 /// threshold (0.6) made whole forearms noise, and the larger sure parts around them outvoted
 /// them in N: on the benchmark of docs/results.md lower arms lost 1.2–3.5 IoU against no
 /// probabilities. Relative to each label's median only the points the parser doubted more
-/// than it usually doubts that part go (tuning in `configs/benchmarks/improved.toml`).
+/// than it usually doubts that part go (tuning in
+/// `docs/notes/2026-11-30-improved-refinement-tuning.md`).
 pub fn doubtful_as_unknown(labels: &[Label], probs: &[f32], ratio: f32) -> Vec<Label> {
     let mut by_class: [Vec<f32>; NUM_CLASSES] = Default::default();
     for (l, &p) in labels.iter().zip(probs) {
