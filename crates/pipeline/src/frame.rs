@@ -289,16 +289,9 @@ pub(crate) fn read_and_project(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::recording::tests::rig;
     use bodyseg_core::Label;
     use bodyseg_parsing::{ParsedView, ParsingError};
-
-    fn rig() -> Rig {
-        let preset = bodyseg_synth::preset("single").expect("preset");
-        bodyseg_synth::Synth::new(preset, 1)
-            .expect("synth")
-            .true_rig()
-            .clone()
-    }
 
     fn frame(parsing: Option<Vec<LabelImage>>) -> Frame {
         Frame {

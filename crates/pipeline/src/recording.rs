@@ -577,7 +577,7 @@ impl RecordingWriter {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn layout() -> Layout {
@@ -646,8 +646,8 @@ mod tests {
         assert!(l.boxes_path("..").is_err());
     }
 
-    /// The rig of the `single` preset (three Kinect v2-like cameras).
-    fn rig() -> Rig {
+    /// The rig of the `single` preset (three Kinect v2-like cameras), for tests.
+    pub(crate) fn rig() -> Rig {
         let preset = bodyseg_synth::preset("single").expect("preset");
         bodyseg_synth::Synth::new(preset, 1)
             .expect("synth")
