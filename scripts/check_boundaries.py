@@ -5,7 +5,8 @@
 - a stage crate (calib, parsing, project, people, refine, eval, synth) depends only on core,
   and project, people and synth also on calib;
 - io depends only on core; testkit only on core;
-- only pipeline and the root package (the `bodyseg` binary) may depend on every crate;
+- only pipeline, the root package (the `bodyseg` binary) and lab (the studies) may depend
+  on every crate; no crate depends on lab;
 - testkit is never a normal dependency, and synth is one only of pipeline and the binary:
   lower crates may use them as dev-dependencies (tests, benches) only.
 
@@ -36,13 +37,18 @@ ALLOWED = {
     "io": {"core"},
     "testkit": {"core"},
     "pipeline": None,
+    # Studies (reports, sweeps, timing tools): may use everything, nothing uses them.
+    "lab": None,
     ROOT_PACKAGE: None,
 }
+
+# Crates no other crate may depend on, in any way (not even from tests).
+LEAVES = {"lab"}
 
 # Crates that lower crates may use from tests and benches only.
 DEV_ONLY = {"testkit", "synth"}
 # Crates that may have synth as a normal dependency (they "see them all").
-SEES_ALL = {"pipeline", ROOT_PACKAGE}
+SEES_ALL = {"pipeline", "lab", ROOT_PACKAGE}
 
 
 def short(name: str) -> str:
@@ -86,6 +92,12 @@ def violations(meta: dict) -> list[str]:
             other = short(dep["name"])
             kind = dep.get("kind") or "normal"
             if other == me:
+                continue
+            if other in LEAVES:
+                found.append(
+                    f"{pkg['name']}: {kind} dependency on {dep['name']}, which nothing may "
+                    "depend on (study code)"
+                )
                 continue
             if kind == "dev":
                 # Tests and benches may also use the test-scene generators.

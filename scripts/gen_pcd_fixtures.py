@@ -19,7 +19,7 @@ Files (all small, committed):
   every 4th pixel, world frame, walls cropped) as an organised binary_compressed cloud
   (the three cameras' 128 x 106 grids stacked: WIDTH 128, HEIGHT 318, invalid pixels NaN),
   and its true person boxes. Made with
-  `cargo run --release -p bodyseg-pipeline --example pcd_scene` (run by this script).
+  `cargo run --release -p bodyseg-lab --example pcd_scene` (run by this script).
 """
 
 import json
@@ -140,7 +140,7 @@ def scene():
         boxes = OUT / "scene_handover_boxes.json"
         subprocess.run(
             [
-                "cargo", "run", "--quiet", "--release", "-p", "bodyseg-pipeline",
+                "cargo", "run", "--quiet", "--release", "-p", "bodyseg-lab",
                 "--example", "pcd_scene", "--", str(ply), str(boxes),
             ],
             cwd=ROOT,

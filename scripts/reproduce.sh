@@ -26,7 +26,7 @@ start=$(date +%s)
 echo "==> ONNX Runtime (once), release build"
 scripts/setup_onnxruntime.sh
 cargo build --release --quiet --bin bodyseg
-cargo build --release --quiet -p bodyseg-pipeline --example projection_report
+cargo build --release --quiet -p bodyseg-lab --example projection_report
 bodyseg=target/release/bodyseg
 
 # "preset seed frames" lines of the benchmark, and the subset's frame count.

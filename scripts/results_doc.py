@@ -295,7 +295,7 @@ def main():
     w("")
     w("Perfect 2D labels (the truth), so every wrong point is a depth-segmentation association error; "
       "10 frames per preset, with and without a calibration error (0.5°, 1 cm), "
-      "`cargo run --release -p bodyseg-pipeline --example projection_report 10`:")
+      "`cargo run --release -p bodyseg-lab --example projection_report 10`:")
     w("")
     w(proj)
     w("")

@@ -167,6 +167,37 @@ fn unknown_config_key() {
 }
 
 #[test]
+fn bad_set_key_or_value_names_the_key() {
+    let dir = tempdir();
+    let d = dir.path();
+    write_scene(d);
+    let before = files_in(d);
+    let out = refine(d, "in.ply", "boxes.json", &["--set", "refine.min_pts=10"]);
+    assert_fails(
+        &out,
+        d,
+        &before,
+        &["--set refine.min_pts=10", "unknown key `refine.min_pts`"],
+    );
+    let out = refine(d, "in.ply", "boxes.json", &["--set", "refine.eps_m=wide"]);
+    assert_fails(
+        &out,
+        d,
+        &before,
+        &["--set refine.eps_m=wide", "refine.eps_m: "],
+    );
+    let out = refine(d, "in.ply", "boxes.json", &["--set", "refine.eps_m=-1"]);
+    assert_fails(
+        &out,
+        d,
+        &before,
+        &["--set refine.eps_m=-1", "refine.eps_m must be"],
+    );
+    let out = refine(d, "in.ply", "boxes.json", &["--set", "refine.eps_m"]);
+    assert_fails(&out, d, &before, &["refine.eps_m", "KEY=VALUE"]);
+}
+
+#[test]
 fn report_that_is_not_json() {
     let dir = tempdir();
     let d = dir.path();

@@ -5,7 +5,7 @@
 
 use crate::common::{assert_ok, bodyseg, files_in, stderr, tempdir};
 use bodyseg_io::read_boxes;
-use bodyseg_pipeline::match_boxes;
+use bodyseg_people::match_boxes;
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> PathBuf {

@@ -151,3 +151,47 @@ fn reference_steps_leave_labels_untouched() {
         stderr(&out)
     );
 }
+
+#[test]
+fn config_files_layer_then_set_then_flags() {
+    let dir = tempdir();
+    let d = dir.path();
+    write_scene(d);
+    std::fs::write(
+        d.join("a.toml"),
+        "[refine]\neps_m = 0.04\nmin_points = 30\n",
+    )
+    .expect("a");
+    std::fs::write(d.join("b.toml"), "[refine]\neps_m = 0.045\n").expect("b");
+    let out = bodyseg(
+        d,
+        &[
+            "refine",
+            "--cloud",
+            "in.ply",
+            "--boxes",
+            "boxes.json",
+            "--config",
+            "a.toml",
+            "--config",
+            "b.toml",
+            "--set",
+            "refine.steps=M-N",
+            "--set",
+            "refine.min_points=25",
+            "--min-points",
+            "20",
+            "--out",
+            "r.ply",
+        ],
+    );
+    assert_ok(&out, "bodyseg refine --config --config --set");
+    let resolved = PipelineConfig::load(&d.join("r.config.resolved.toml")).expect("resolved");
+    assert_eq!(resolved.refine.eps_m, 0.045, "the later file wins");
+    assert_eq!(
+        resolved.refine.steps.to_string(),
+        "M-N",
+        "--set beats the files"
+    );
+    assert_eq!(resolved.refine.min_points, 20, "the flag beats --set");
+}

@@ -220,6 +220,28 @@ impl SynthArgs {
     }
 }
 
+/// `--config` and `--set`: the pipeline configuration of every command that reads one.
+#[derive(Debug, Args)]
+pub struct ConfigArgs {
+    /// Configuration file (TOML, as configs/default.toml); keys left out keep the
+    /// defaults. Repeat to layer files: a later one overrides only the keys it sets
+    #[arg(long = "config", value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+
+    /// Set one configuration key, SECTION.KEY=VALUE, after the files and before the other
+    /// flags (repeatable), e.g. --set refine.eps_m=0.03 --set project.mode=naive; VALUE is
+    /// read as TOML (0.03, true, "M-N"), else as a string
+    #[arg(long = "set", value_name = "SECTION.KEY=VALUE")]
+    pub settings: Vec<String>,
+}
+
+impl ConfigArgs {
+    /// Defaults < the files in order < the settings, validated.
+    pub fn load(&self) -> Result<PipelineConfig> {
+        PipelineConfig::resolve(&self.files, &self.settings)
+    }
+}
+
 const PARSE_LONG_ABOUT: &str = "\
 Run 2D human parsing on every camera of one frame: each colour image is mapped into the \
 network's square input (SCHP's affine pre-processing: aspect kept, centred, black padding), \
@@ -243,7 +265,7 @@ REC/<camera>/color/<FRAME>.png (or .jpg). Writes into OUT: <camera>/parsing/<FRA
 parse.config.resolved.toml. Nothing is written when a view fails.
 
 Configuration: built-in defaults (configs/default.toml, section [parsing]) < --config FILE \
-< --model, --threads.";
+(repeatable) < --set SECTION.KEY=VALUE (repeatable) < --model, --threads.";
 
 const PARSE_EXAMPLES: &str = "\
 Examples:
@@ -279,10 +301,8 @@ pub struct ParseArgs {
     #[arg(long, value_name = "N")]
     pub threads: Option<u32>,
 
-    /// Configuration file (TOML, section [parsing]); keys left out keep the defaults of
-    /// configs/default.toml
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub config: ConfigArgs,
 
     /// Output folder (created if missing): <camera>/parsing/<FRAME>.png and
     /// <camera>/parsing_preview/<FRAME>.png
@@ -291,12 +311,9 @@ pub struct ParseArgs {
 }
 
 impl ParseArgs {
-    /// The pipeline's options: defaults < --config < --model, --threads, validated.
+    /// The pipeline's options: defaults < --config < --set < --model, --threads, validated.
     pub fn options(&self) -> Result<ParseOptions> {
-        let mut config = match &self.config {
-            Some(path) => PipelineConfig::load(path)?,
-            None => PipelineConfig::default(),
-        };
+        let mut config = self.config.load()?;
         if let Some(model) = &self.model {
             config.parsing.model = model.display().to_string();
         }
@@ -337,7 +354,7 @@ pixel per point) and beside it the exact configuration used (--out frame.ply wri
 frame.config.resolved.toml). Nothing is written when the command fails.
 
 Configuration: built-in defaults (configs/default.toml, sections [backproject] and \
-[project]) < --config FILE < --mode.";
+[project]) < --config FILE (repeatable) < --set SECTION.KEY=VALUE (repeatable) < --mode.";
 
 const PROJECT_EXAMPLES: &str = "\
 Examples:
@@ -365,10 +382,8 @@ pub struct ProjectArgs {
     #[arg(long, value_enum)]
     pub mode: Option<Mode>,
 
-    /// Configuration file (TOML, sections [backproject] and [project]); keys left out keep
-    /// the defaults of configs/default.toml
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub config: ConfigArgs,
 
     /// Write ASCII PLY (default: binary little-endian)
     #[arg(long)]
@@ -400,12 +415,9 @@ impl From<Mode> for ProjectMode {
 }
 
 impl ProjectArgs {
-    /// The resolved configuration: defaults < --config < --mode, validated.
+    /// The resolved configuration: defaults < --config < --set < --mode, validated.
     pub fn config(&self) -> Result<PipelineConfig> {
-        let mut config = match &self.config {
-            Some(path) => PipelineConfig::load(path)?,
-            None => PipelineConfig::default(),
-        };
+        let mut config = self.config.load()?;
         config.apply_project_mode(self.mode.map(ProjectMode::from));
         Ok(config)
     }
@@ -445,7 +457,8 @@ view of the cloud (class colours) with the boxes drawn. Nothing is written when 
 command fails.
 
 Configuration: built-in defaults (configs/default.toml, section [boxes]; [backproject] and \
-[project] for a recording) < --config FILE < --mode.";
+[project] for a recording) < --config FILE (repeatable) < --set SECTION.KEY=VALUE \
+(repeatable) < --mode.";
 
 const BOXES_EXAMPLES: &str = "\
 Examples:
@@ -480,10 +493,8 @@ pub struct BoxesArgs {
     #[arg(long, value_enum)]
     pub mode: Option<BoxesMode>,
 
-    /// Configuration file (TOML, section [boxes]); keys left out keep the defaults of
-    /// configs/default.toml
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub config: ConfigArgs,
 
     /// Where to write the boxes (JSON); an existing file is replaced only on success
     #[arg(long, value_name = "OUT.json")]
@@ -506,12 +517,9 @@ pub enum BoxesMode {
 }
 
 impl BoxesArgs {
-    /// The resolved configuration: defaults < --config < --mode, validated.
+    /// The resolved configuration: defaults < --config < --set < --mode, validated.
     pub fn config(&self) -> Result<PipelineConfig> {
-        let mut config = match &self.config {
-            Some(path) => PipelineConfig::load(path)?,
-            None => PipelineConfig::default(),
-        };
+        let mut config = self.config.load()?;
         config.apply_boxes_mode(self.mode.map(|m| match m {
             BoxesMode::Labels => bodyseg_pipeline::BoxMode::Labels,
             BoxesMode::Geometry => bodyseg_pipeline::BoxMode::Geometry,
@@ -552,7 +560,8 @@ refined cloud (--out, PLY: the same points in the same order, only `label` and t
 colours change) and beside it the exact configuration used (--out refined.ply writes \
 refined.config.resolved.toml). Nothing is written when the command fails.
 
-Configuration: built-in defaults (configs/default.toml) < --config FILE < flags.";
+Configuration: built-in defaults (configs/default.toml) < --config FILE (repeatable) < --set \
+SECTION.KEY=VALUE (repeatable) < flags.";
 
 const REFINE_EXAMPLES: &str = "\
 Examples:
@@ -580,10 +589,8 @@ pub struct RefineArgs {
     #[arg(long, value_name = "OUT.ply")]
     pub out: PathBuf,
 
-    /// Configuration file (TOML, section [refine]); keys left out keep the defaults of
-    /// configs/default.toml
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub config: ConfigArgs,
 
     /// Steps to run: m (merge), r (remove), n (noise) joined by ',' or '-', e.g. m,r,n or
     /// M-N; or `reference` (labels untouched) [default: M-R-N]
@@ -609,12 +616,9 @@ pub struct RefineArgs {
 }
 
 impl RefineArgs {
-    /// The resolved configuration: defaults < --config < flags, validated.
+    /// The resolved configuration: defaults < --config < --set < flags, validated.
     pub fn config(&self) -> Result<PipelineConfig> {
-        let mut config = match &self.config {
-            Some(path) => PipelineConfig::load(path)?,
-            None => PipelineConfig::default(),
-        };
+        let mut config = self.config.load()?;
         config.apply_refine_overrides(&RefineOverrides {
             steps: self.steps,
             eps_m: self.eps_m,
@@ -1201,6 +1205,104 @@ mod tests {
     }
 
     #[test]
+    fn config_files_layer_set_beats_them_and_flags_beat_set() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let a = dir.path().join("a.toml");
+        let b = dir.path().join("b.toml");
+        std::fs::write(&a, "[refine]\neps_m = 0.02\nmin_points = 7\n").expect("write");
+        std::fs::write(&b, "[refine]\neps_m = 0.04\n").expect("write");
+        let (a, b) = (a.display().to_string(), b.display().to_string());
+        let refine = |extra: &[&str]| {
+            let mut all = vec![
+                "bodyseg", "refine", "--cloud", "c.ply", "--boxes", "b.json", "--out", "o.ply",
+            ];
+            all.extend_from_slice(extra);
+            let cli = Cli::try_parse_from(all).expect("valid command line");
+            let Command::Refine(r) = cli.command else {
+                panic!("parsed as refine");
+            };
+            r.config()
+        };
+        let c = refine(&["--config", &a, "--config", &b]).expect("valid");
+        assert_eq!(
+            (c.refine.eps_m, c.refine.min_points),
+            (0.04, 7),
+            "later file wins"
+        );
+        let c =
+            refine(&["--config", &a, "--config", &b, "--set", "refine.eps_m=0.06"]).expect("valid");
+        assert_eq!(c.refine.eps_m, 0.06, "--set beats the files");
+        let c = refine(&[
+            "--set",
+            "refine.eps_m=0.06",
+            "--eps-m",
+            "0.03",
+            "--set",
+            "refine.min_points=5",
+        ])
+        .expect("valid");
+        assert_eq!(
+            (c.refine.eps_m, c.refine.min_points),
+            (0.03, 5),
+            "flags beat --set"
+        );
+        let e = format!(
+            "{:#}",
+            refine(&["--set", "refine.min_pts=5"]).expect_err("unknown")
+        );
+        assert!(e.contains("unknown key `refine.min_pts`"), "{e}");
+
+        // Every command that reads the configuration takes them.
+        let run = Cli::try_parse_from([
+            "bodyseg",
+            "run",
+            "--recording",
+            "r",
+            "--out",
+            "o",
+            "--config",
+            &a,
+            "--set",
+            "project.mode=naive",
+            "--mode",
+            "dsa",
+            "--set",
+            "boxes.mode=geometry",
+        ])
+        .expect("valid command line");
+        let Command::Run(r) = run.command else {
+            panic!("parsed as run");
+        };
+        let o = r.options().expect("valid");
+        assert_eq!(
+            o.config.project.mode,
+            ProjectMode::Dsa,
+            "--mode beats --set"
+        );
+        assert_eq!(o.config.boxes.mode, bodyseg_pipeline::BoxMode::Geometry);
+        assert_eq!(o.config.refine.min_points, 7);
+        for command in [
+            &["parse", "--recording", "r", "--frame", "f", "--out", "o"][..],
+            &["project", "--recording", "r", "--frame", "f", "--out", "o"],
+            &["boxes", "--cloud", "c.ply", "--out", "o"],
+            &[
+                "convert",
+                "--input",
+                "i",
+                "--format",
+                "recording",
+                "--out",
+                "o",
+            ],
+        ] {
+            let mut all = vec!["bodyseg"];
+            all.extend_from_slice(command);
+            all.extend_from_slice(&["--config", &a, "--set", "parsing.threads=3"]);
+            assert!(Cli::try_parse_from(all).is_ok(), "{command:?}");
+        }
+    }
+
+    #[test]
     fn negative_radius_parses_and_is_rejected_naming_the_flag() {
         let cli = Cli::try_parse_from([
             "bodyseg", "refine", "--cloud", "a", "--boxes", "b", "--out", "c", "--eps-m", "-1",
@@ -1314,6 +1416,7 @@ Examples:
   bodyseg synth --preset handover --frames 20 --out rec && bodyseg run --recording rec --out run1
   bodyseg run --recording rec --out run1 --parser model --write-stages --figure 000004 --figure 000010
   bodyseg run --recording rec --out run_naive --mode naive --limit 5
+  bodyseg run --recording rec --out run_geo --config configs/benchmarks/improved.toml --set boxes.mode=geometry
   bodyseg run --recording rec --out run1 --shard 1/4   # a quarter of the frames";
 
 /// `--parser`.
@@ -1330,10 +1433,8 @@ pub enum ParserArg {
 /// Options shared by `run` and `convert`: configuration and the frame loop.
 #[derive(Debug, Args)]
 pub struct BatchArgs {
-    /// Configuration file (TOML, every section); keys left out keep the defaults of
-    /// configs/default.toml
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub config: ConfigArgs,
 
     /// Projection: naive or dsa [default: project.mode of the configuration, dsa]
     #[arg(long, value_enum)]
@@ -1368,12 +1469,9 @@ pub struct BatchArgs {
 }
 
 impl BatchArgs {
-    /// The resolved configuration: defaults < --config < flags, validated.
+    /// The resolved configuration: defaults < --config < --set < flags, validated.
     pub fn config(&self) -> Result<PipelineConfig> {
-        let mut config = match &self.config {
-            Some(path) => PipelineConfig::load(path)?,
-            None => PipelineConfig::default(),
-        };
+        let mut config = self.config.load()?;
         config.apply_project_mode(self.mode.map(ProjectMode::from));
         config.apply_refine_overrides(&RefineOverrides {
             steps: self.steps,

@@ -89,6 +89,7 @@ fn inference(c: &mut Criterion) {
                 camera: "cam",
                 frame: "000000",
                 image: Some(image),
+                recorded: None,
             })
             .collect();
         group.throughput(Throughput::Elements(views as u64));

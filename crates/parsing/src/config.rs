@@ -15,9 +15,6 @@ pub struct ParsingConfig {
     pub runtime_library: String,
     /// ONNX Runtime intra-op threads; 0 = one per core. Default 2.
     pub threads: u32,
-    /// Keep all 7 class probabilities per pixel, not only the winner's (7× the memory of
-    /// the label maps). Default false.
-    pub keep_class_probs: bool,
 }
 
 impl Default for ParsingConfig {
@@ -26,17 +23,18 @@ impl Default for ParsingConfig {
             model: String::new(),
             runtime_library: String::new(),
             threads: 2,
-            keep_class_probs: false,
         }
     }
 }
 
 impl ParsingConfig {
-    /// The [`crate::OnnxOptions`] of these values.
+    /// The [`crate::OnnxOptions`] of these values: the pipeline keeps only the winning
+    /// label's probability (all 7 class probabilities are an option of the ONNX segmenter
+    /// alone, for tests and studies).
     pub fn onnx_options(&self) -> crate::OnnxOptions {
         crate::OnnxOptions {
             threads: self.threads as usize,
-            keep_class_probs: self.keep_class_probs,
+            keep_class_probs: false,
         }
     }
 }

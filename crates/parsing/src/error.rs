@@ -87,7 +87,7 @@ pub enum ParsingError {
     Recorded {
         /// Index of the view in the frame.
         view: usize,
-        /// What went wrong (the loader's error, which names the file).
+        /// What went wrong (naming the camera and, for a file the caller read, the file).
         reason: String,
     },
 }

@@ -9,7 +9,8 @@
 //! - [`OnnxSegmenter`]: SCHP-compatible networks in ONNX, run by ONNX Runtime, which is
 //!   loaded at run time from a shared library ([`load_runtime`]); the model's sidecar JSON
 //!   is a [`ModelSpec`]. Pre- and post-processing are SCHP's ([`transform`]).
-//! - [`RecordedSegmenter`]: label images computed earlier (a recording's `parsing/`).
+//! - [`RecordedSegmenter`]: label images computed earlier (a recording's `parsing/`,
+//!   read by the caller and handed over in [`ViewInput::recorded`]).
 //! - [`blazepose`]: BlazePose landmarks + mask → the 7 classes (issue 29), pure functions;
 //!   its segmenter on person regions comes with the pipeline integration.
 //!
@@ -38,5 +39,5 @@ pub mod transform;
 pub use config::ParsingConfig;
 pub use error::ParsingError;
 pub use onnx::{OnnxOptions, OnnxSegmenter, load_runtime};
-pub use segmenter::{LabelSource, ParsedView, RecordedSegmenter, Segmenter, ViewInput};
+pub use segmenter::{ParsedView, RecordedSegmenter, Segmenter, ViewInput};
 pub use spec::{ChannelOrder, MAX_INPUT_SIZE, ModelSpec, sidecar_path};

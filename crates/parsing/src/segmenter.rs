@@ -13,6 +13,9 @@ pub struct ViewInput<'a> {
     /// The colour image; `None` when the segmenter does not need it
     /// ([`Segmenter::needs_images`] is false).
     pub image: Option<&'a RgbImage>,
+    /// Labels computed earlier for this view (a recording's `parsing/` image, read by the
+    /// caller); `None` unless the segmenter needs them ([`Segmenter::needs_recorded`]).
+    pub recorded: Option<&'a LabelImage>,
 }
 
 /// The parser's output for one view.
@@ -40,11 +43,20 @@ impl ParsedView {
 
 /// 2D human parsing: colour images of one frame (one per camera) → one label map per view
 /// (ALGORITHM.md §2), in the order given.
+///
+/// Object-safe: the pipeline holds one as `Box<dyn Segmenter + Send>` and reads what its
+/// `needs_*` methods ask for before calling [`Segmenter::segment`].
 pub trait Segmenter {
     /// Whether [`Segmenter::segment`] needs [`ViewInput::image`]; when false the caller
     /// may skip decoding the colour images.
     fn needs_images(&self) -> bool {
         true
+    }
+
+    /// Whether [`Segmenter::segment`] needs [`ViewInput::recorded`] (labels computed
+    /// earlier); when false the caller need not read them.
+    fn needs_recorded(&self) -> bool {
+        false
     }
 
     /// Labels every pixel of every view of one frame.
@@ -55,27 +67,17 @@ pub trait Segmenter {
     fn segment(&mut self, views: &[ViewInput<'_>]) -> Result<Vec<ParsedView>, ParsingError>;
 }
 
-/// Where a [`RecordedSegmenter`] gets a view's stored labels: (camera, frame) → label
-/// image, or an error message that names the file.
-pub type LabelSource = Box<dyn FnMut(&str, &str) -> Result<LabelImage, String> + Send>;
-
 /// A segmenter that returns label images computed earlier: the `parsing/` images of a
-/// recording (simulated predictions of synthetic recordings, or a parser run elsewhere).
-/// The file reading is the caller's (`source`), so this crate stays free of I/O.
-pub struct RecordedSegmenter {
-    source: LabelSource,
-}
+/// recording (simulated predictions of synthetic recordings, or a parser run elsewhere),
+/// which the caller reads and hands over in [`ViewInput::recorded`], so this crate stays
+/// free of I/O. The labels carry no probabilities.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RecordedSegmenter;
 
 impl RecordedSegmenter {
-    /// A segmenter that asks `source` for each view's labels.
-    pub fn new(source: LabelSource) -> RecordedSegmenter {
-        RecordedSegmenter { source }
-    }
-}
-
-impl std::fmt::Debug for RecordedSegmenter {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("RecordedSegmenter").finish_non_exhaustive()
+    /// The segmenter.
+    pub fn new() -> RecordedSegmenter {
+        RecordedSegmenter
     }
 }
 
@@ -84,13 +86,24 @@ impl Segmenter for RecordedSegmenter {
         false
     }
 
+    fn needs_recorded(&self) -> bool {
+        true
+    }
+
     fn segment(&mut self, views: &[ViewInput<'_>]) -> Result<Vec<ParsedView>, ParsingError> {
         views
             .iter()
             .enumerate()
             .map(|(view, input)| {
-                let labels = (self.source)(input.camera, input.frame)
-                    .map_err(|reason| ParsingError::Recorded { view, reason })?;
+                let Some(labels) = input.recorded else {
+                    return Err(ParsingError::Recorded {
+                        view,
+                        reason: format!(
+                            "camera {}: frame {}: no recorded labels given",
+                            input.camera, input.frame
+                        ),
+                    });
+                };
                 if let Some(image) = input.image
                     && (image.width, image.height) != (labels.width, labels.height)
                 {
@@ -103,7 +116,7 @@ impl Segmenter for RecordedSegmenter {
                     });
                 }
                 Ok(ParsedView {
-                    labels,
+                    labels: labels.clone(),
                     class_probs: None,
                 })
             })
@@ -117,35 +130,35 @@ mod tests {
     use bodyseg_core::{Class, Label};
 
     #[test]
-    fn recorded_segmenter_returns_what_the_source_gives_in_view_order() {
-        let mut seg = RecordedSegmenter::new(Box::new(|camera: &str, _frame: &str| match camera {
-            "cam0" => Ok(LabelImage::filled(2, 1, Label::from(Class::Head))),
-            "cam1" => Ok(LabelImage::filled(2, 1, Label::BACKGROUND)),
-            _ => Err(format!("rec/{camera}/parsing/000001.png: cannot read")),
-        }));
-        assert!(!seg.needs_images());
-        let view = |camera| ViewInput {
+    fn recorded_segmenter_returns_the_given_labels_in_view_order() {
+        let mut seg: Box<dyn Segmenter + Send> = Box::new(RecordedSegmenter::new());
+        assert!(!seg.needs_images() && seg.needs_recorded());
+        let head = LabelImage::filled(2, 1, Label::from(Class::Head));
+        let background = LabelImage::filled(2, 1, Label::BACKGROUND);
+        let view = |camera, recorded| ViewInput {
             camera,
             frame: "000001",
             image: None,
+            recorded,
         };
         let out = seg
-            .segment(&[view("cam1"), view("cam0")])
-            .expect("both exist");
-        assert_eq!(out[0].labels.get(0, 0), Some(Label::BACKGROUND));
-        assert_eq!(out[1].labels.get(1, 0), Some(Label::from(Class::Head)));
+            .segment(&[view("cam1", Some(&background)), view("cam0", Some(&head))])
+            .expect("both given");
+        assert_eq!(out[0].labels, background);
+        assert_eq!(out[1].labels, head);
+        assert!(out[1].class_probs.is_none());
         let e = seg
-            .segment(&[view("cam0"), view("cam9")])
+            .segment(&[view("cam0", Some(&head)), view("cam9", None)])
             .expect_err("cam9");
         assert_eq!(
             e.to_string(),
-            "view 1: rec/cam9/parsing/000001.png: cannot read"
+            "view 1: camera cam9: frame 000001: no recorded labels given"
         );
         let image = RgbImage::new(3, 1, vec![0; 9]).expect("3x1");
         let e = seg
             .segment(&[ViewInput {
                 image: Some(&image),
-                ..view("cam0")
+                ..view("cam0", Some(&head))
             }])
             .expect_err("size");
         assert!(

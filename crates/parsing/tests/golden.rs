@@ -175,6 +175,7 @@ fn whole_chain_matches_python_and_batches_views() {
         camera: "cam0",
         frame: "000000",
         image: Some(image),
+        recorded: None,
     };
     // Two views of different sizes in one batch: each comes back at its own size.
     let out = seg.segment(&[view(&image), view(&other)]).expect("segment");

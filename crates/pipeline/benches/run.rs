@@ -5,7 +5,8 @@
 //!
 //! Setup: a synthetic `handover` recording (2 people, 3 cameras, colour 960×540) of
 //! [`FRAMES`] frames is rendered into a temporary folder and every frame's inputs are
-//! decoded into memory ([`FrameProcessor::read`]). One iteration processes all of them
+//! decoded into memory and parsed ([`FrameProcessor::read`], [`FrameProcessor::parse`]:
+//! the recorded predictions). One iteration processes all of them
 //! ([`FrameProcessor::process`]) in parallel on a 2-thread rayon pool, as the frame loop
 //! of `bodyseg run` does. Elements = frames, so criterion's throughput is frames/s.
 //!
@@ -17,8 +18,8 @@
 #![allow(missing_docs)]
 
 use bodyseg_pipeline::{
-    FigureChoice, FrameInputs, FrameProcessor, FrameWriter, PipelineConfig, RunOptions,
-    SceneSource, SynthOptions, synth_recording,
+    FrameProcessor, FrameWriter, ParsedFrame, ParserChoice, PipelineConfig, SceneSource,
+    SynthOptions, synth_recording,
 };
 use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
@@ -47,24 +48,29 @@ fn bench(c: &mut Criterion) {
     synth_recording(&synth, &|_| {}).unwrap_or_else(|e| panic!("synth: {e:#}"));
     let out = dir.path().join("out");
     std::fs::create_dir_all(&out).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
-    let mut options = RunOptions::new(&rec, PipelineConfig::default(), &out);
-    options.figures = FigureChoice::Off;
-    let processor = FrameProcessor::open(&options).unwrap_or_else(|e| panic!("{e:#}"));
-    let frames =
-        bodyseg_pipeline::list_frames(&rec, processor.rig()).unwrap_or_else(|e| panic!("{e:#}"));
-    let with_truth: Vec<FrameInputs> = frames
+    let processor = FrameProcessor::open(&rec, &PipelineConfig::default(), ParserChoice::Auto)
+        .unwrap_or_else(|e| panic!("{e:#}"));
+    let frames = processor
+        .recording()
+        .frames()
+        .unwrap_or_else(|e| panic!("{e:#}"))
+        .complete;
+    let with_truth: Vec<ParsedFrame> = frames
         .iter()
         .map(|f| {
-            processor
+            let frame = processor
                 .read(f, &mut Vec::new())
+                .unwrap_or_else(|e| panic!("{e:#}"));
+            processor
+                .parse(frame, &mut Vec::new())
                 .unwrap_or_else(|e| panic!("{e:#}"))
         })
         .collect();
-    let without_truth: Vec<FrameInputs> = with_truth
+    let without_truth: Vec<ParsedFrame> = with_truth
         .iter()
         .cloned()
         .map(|mut f| {
-            f.truth = None;
+            f.frame.truth = None;
             f
         })
         .collect();

@@ -11,7 +11,7 @@ const MI_OPTION_PURGE_DELAY: libmimalloc_sys::mi_option_t = 15;
 /// arrays, label images, encoders). With purging, mimalloc returns them to the kernel and
 /// the next frame pays a page fault and a page clear for each page again: 16 000 page
 /// faults against 370 over the same 72 frames and ~9% more CPU time (`perf stat -e
-/// page-faults,task-clock` on `crates/pipeline/examples/cpu_per_frame.rs`, with and
+/// page-faults,task-clock` on `crates/lab/examples/cpu_per_frame.rs`, with and
 /// without `PURGE=1`). The
 /// memory stays at its high-water mark instead, which is flat over a run: one frame per
 /// worker.

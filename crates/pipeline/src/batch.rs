@@ -35,7 +35,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// Folder of the per-frame records, inside the output folder.
-pub const RECORDS_FOLDER: &str = "frames";
+pub(crate) const RECORDS_FOLDER: &str = "frames";
 
 /// The part of a batch one process does: frames whose position in the sorted list, modulo
 /// `count`, equals `index` (0-based). `0/1` is the whole batch.
@@ -297,13 +297,13 @@ impl FrameWriter {
 }
 
 /// Where the record of `frame` goes.
-pub fn record_path(out: &Path, frame: &str) -> PathBuf {
+pub(crate) fn record_path(out: &Path, frame: &str) -> PathBuf {
     out.join(RECORDS_FOLDER).join(format!("{frame}.json"))
 }
 
 /// The record of `frame` if the frame is complete under `config_hash` (see the module
 /// documentation), else `None`.
-pub fn complete_record(out: &Path, frame: &str, config_hash: &str) -> Option<FrameRecord> {
+pub(crate) fn complete_record(out: &Path, frame: &str, config_hash: &str) -> Option<FrameRecord> {
     let text = std::fs::read_to_string(record_path(out, frame)).ok()?;
     let record: FrameRecord = serde_json::from_str(&text).ok()?;
     if record.frame != frame || record.config_hash != config_hash {
@@ -321,7 +321,7 @@ pub fn complete_record(out: &Path, frame: &str, config_hash: &str) -> Option<Fra
 
 /// Hash of a text (FNV-1a, 64 bits) as 16 hex digits: stable across runs and machines,
 /// unlike std's `DefaultHasher`.
-pub fn text_hash(text: &str) -> String {
+pub(crate) fn text_hash(text: &str) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in text.bytes() {
         h ^= u64::from(b);
@@ -355,12 +355,12 @@ fn remove_stale_temporaries(out: &Path) {
 
 /// What [`run_batch`] calls per frame: the frame, a writer for its files, its stage
 /// records; returns its record.
-pub type FrameFn<'a, J> =
+pub(crate) type FrameFn<'a, J> =
     dyn Fn(BatchFrame<'_, J>, &mut FrameWriter, &mut Vec<Stage>) -> Result<FrameRecord> + Sync + 'a;
 
 /// The frame a batch hands its `process` function.
 #[derive(Debug)]
-pub struct BatchFrame<'a, J> {
+pub(crate) struct BatchFrame<'a, J> {
     /// The frame's id.
     pub id: &'a str,
     /// The caller's job description.
@@ -375,7 +375,7 @@ pub struct BatchFrame<'a, J> {
 ///
 /// # Errors
 /// Only for the batch as a whole: ids not unique. A frame's error is a [`FrameFailure`].
-pub fn run_batch<J: Sync>(
+pub(crate) fn run_batch<J: Sync>(
     jobs: &[(String, J)],
     out: &Path,
     shard: Shard,

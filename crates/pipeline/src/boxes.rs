@@ -2,14 +2,14 @@
 //! (+ a top-view preview PNG).
 
 use crate::config::PipelineConfig;
-use crate::fs::write_text;
-use crate::project::{ProjectOptions, check_frame, read_and_project};
-use crate::refine::resolved_config_path;
+use crate::frame::read_and_project;
+use crate::outputs::{read_cloud, resolved_config_path, write_text};
+use crate::recording::{Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_core::{Class, LabeledCloud, PersonBox, PersonBoxes};
 use bodyseg_people::BoxMode;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Where [`boxes_file`] takes its cloud from.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -39,7 +39,7 @@ pub struct BoxesOptions {
     /// Top-view PNG of the cloud with the boxes drawn, if wanted.
     pub preview: Option<PathBuf>,
     /// Also write the resolved configuration beside the output
-    /// ([`resolved_config_path`]).
+    /// (`out.ply` → `out.config.resolved.toml`).
     pub write_resolved_config: bool,
 }
 
@@ -50,30 +50,6 @@ pub struct BoxesSummary {
     pub boxes: PersonBoxes,
     /// Per stage (read, project, boxes, write): time and a one-line summary.
     pub stages: Vec<Stage>,
-}
-
-/// Reads a cloud by its extension: `.pcd` with [`bodyseg_io::read_pcd`], `.ply` with
-/// [`bodyseg_io::read_ply`].
-///
-/// # Errors
-/// Another extension, or the reader's error (naming the file).
-pub fn read_cloud(path: &Path) -> Result<LabeledCloud> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    match ext.as_deref() {
-        Some("pcd") => Ok(bodyseg_io::read_pcd(path)?),
-        Some("ply") => Ok(bodyseg_io::read_ply(path)?),
-        _ => bail!(
-            "{}: unknown cloud format: give a .ply or .pcd file",
-            path.display()
-        ),
-    }
-}
-
-/// The boxes file of a recording frame: `REC/boxes/<frame>.json`.
-pub fn boxes_path(recording: &Path, frame: &str) -> PathBuf {
-    recording.join("boxes").join(format!("{frame}.json"))
 }
 
 /// Finds (or, in file mode, reads) the person boxes of one cloud or recording frame
@@ -114,17 +90,9 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
             (Some(cloud), stem)
         }
         BoxesInput::Recording { recording, frame } => {
-            check_frame(frame)?;
+            check_stem(frame)?;
             let cloud = if mode != BoxMode::File || opts.preview.is_some() {
-                let project = ProjectOptions {
-                    recording: recording.clone(),
-                    frame: frame.clone(),
-                    config: cfg.clone(),
-                    out: opts.out.clone(),
-                    ascii: false,
-                    write_resolved_config: false,
-                };
-                let (_, cloud, s) = read_and_project(&project)?;
+                let (_, cloud, s) = read_and_project(recording, frame, cfg)?;
                 stages.extend(s);
                 Some(cloud)
             } else {
@@ -137,8 +105,9 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
     let (mut boxes, took) = timed(|| -> Result<PersonBoxes> {
         match (&opts.input, &cloud) {
             (BoxesInput::Recording { recording, frame }, _) if mode == BoxMode::File => {
-                let path = boxes_path(recording, frame);
-                Ok(bodyseg_io::read_boxes(&path).context("boxes file (mode file)")?)
+                Ok(Recording::open(recording)?
+                    .read_boxes(frame)
+                    .context("boxes file (mode file)")?)
             }
             (_, Some(cloud)) => Ok(bodyseg_people::find_boxes(cloud, &cfg.boxes)
                 .with_context(|| format!("frame {frame}"))?),
@@ -300,10 +269,5 @@ mod tests {
         let count = |c: [u8; 3]| rgb.chunks_exact(3).filter(|p| *p == c).count();
         assert!(count(BOX_COLOR) > 100, "box outline drawn");
         assert_eq!(count(Class::Head.color().map(|x| x.saturating_add(60))), 1);
-        assert!(read_cloud(Path::new("x.xyz")).is_err());
-        assert_eq!(
-            boxes_path(Path::new("rec"), "000003"),
-            Path::new("rec/boxes/000003.json")
-        );
     }
 }

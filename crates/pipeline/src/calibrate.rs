@@ -185,13 +185,10 @@ fn without_opencv() -> anyhow::Error {
     )
 }
 
-/// Whether this build has the `calibrate` commands (the `opencv` feature).
-pub const CALIBRATE_AVAILABLE: bool = cfg!(feature = "opencv");
-
 #[cfg(feature = "opencv")]
 mod imp {
     use super::*;
-    use crate::fs::write_text;
+    use crate::outputs::write_text;
     use crate::stage::plural;
     use anyhow::{Context, bail};
     use bodyseg_calib::{

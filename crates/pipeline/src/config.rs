@@ -1,5 +1,6 @@
 //! [`PipelineConfig`]: every stage's configuration in one TOML document.
 
+use crate::layers::{Setting, has_key, keys_of, merge_tables};
 use anyhow::{Context, Result, anyhow, bail};
 use bodyseg_calib::{BackProjectOptions, CloudFrame};
 use bodyseg_parsing::ParsingConfig;
@@ -7,20 +8,22 @@ use bodyseg_people::{BoxMode, BoxesConfig};
 use bodyseg_project::{ProjectConfig, ProjectMode};
 use bodyseg_refine::{RefineConfig, RefineError, Steps};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Most ONNX Runtime threads `parsing.threads` accepts: far beyond any machine's cores, low
 /// enough to catch a typo before ONNX Runtime tries to start them.
 pub const MAX_PARSING_THREADS: u32 = 1024;
 
 /// The whole configuration, one section per stage (`[backproject]`, `[project]`,
-/// `[boxes]`, `[refine]`, and later `[parsing]`, ...). It only nests the stages' own configurations: each stage
-/// crate documents its fields, units and defaults.
+/// `[boxes]`, `[refine]`, `[parsing]`). It only nests the stages' own configurations: each
+/// stage crate documents its fields, units and defaults (and, for a key that applies in one
+/// mode only, that mode).
 ///
-/// Precedence: built-in defaults ([`PipelineConfig::default`], equal to
-/// `configs/default.toml`) < a configuration file ([`PipelineConfig::load`]) < command-line
-/// flags ([`PipelineConfig::apply_refine_overrides`]). A file may leave out any section or
-/// key; an unknown one is an error.
+/// Precedence ([`PipelineConfig::resolve`]): built-in defaults ([`PipelineConfig::default`],
+/// equal to `configs/default.toml`) < configuration files, in order (`--config`, a later
+/// file overriding only the keys it sets) < `section.key=value` settings (`--set`) <
+/// command-line flags ([`PipelineConfig::apply_refine_overrides`], ...). A file may leave
+/// out any section or key; an unknown one is an error.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineConfig {
@@ -121,8 +124,85 @@ impl PipelineConfig {
     /// names the key, its line and its section); a value is out of range (the error names
     /// the field: `config.toml: refine.eps_m must be a finite number > 0, got -1`).
     pub fn load(path: &Path) -> Result<PipelineConfig> {
-        let text = bodyseg_io::read_text(path)?;
-        PipelineConfig::from_toml(&text, path)
+        PipelineConfig::resolve(&[path.to_path_buf()], &[])
+    }
+
+    /// The configuration of `files` (TOML, merged in order: a later file overrides only
+    /// the keys it sets) with `settings` applied after them (`section.key=value`; the
+    /// value is TOML, `0.03`, `true`, `"naive"`, or else a bare string, `naive`), over
+    /// the built-in defaults; deserialized once and validated.
+    ///
+    /// # Errors
+    /// A file cannot be read, is not TOML or has a key no section knows (the error names
+    /// the file, the line and the key); a setting is not `KEY=VALUE`, names an unknown key
+    /// or has a value of the wrong type (the error names the setting and the key); a value
+    /// is out of range (the error names the field, after the file or setting that set it:
+    /// `--set refine.eps_m=-1: refine.eps_m must be a finite number > 0, got -1`).
+    pub fn resolve(files: &[PathBuf], settings: &[String]) -> Result<PipelineConfig> {
+        let mut table = toml::Table::new();
+        let mut file_tables = Vec::with_capacity(files.len());
+        for path in files {
+            let text = bodyseg_io::read_text(path)?;
+            let file = parse_table(&text, path)?;
+            merge_tables(&mut table, file.clone());
+            file_tables.push((path, file));
+        }
+        let known = toml::Table::try_from(PipelineConfig::default())
+            .context("cannot serialize the default configuration")?;
+        let mut parsed = Vec::with_capacity(settings.len());
+        for item in settings {
+            let setting = Setting::parse(item).with_context(|| format!("--set {item}"))?;
+            if !has_key(&known, &setting.key) {
+                let section = setting.key.rsplit_once('.').map_or("", |(s, _)| s);
+                bail!(
+                    "--set {item}: unknown key `{}` (known{}: {})",
+                    setting.key,
+                    if section.is_empty() || !has_section(&known, section) {
+                        " sections".to_string()
+                    } else {
+                        format!(" in [{section}]")
+                    },
+                    keys_of(&known, section).join(", ")
+                );
+            }
+            setting
+                .apply(&mut table)
+                .with_context(|| format!("--set {item}"))?;
+            // A value of the wrong type is named with its setting here, before later ones.
+            from_table(table.clone())
+                .map_err(|e| anyhow!("--set {item}: {}: {}", setting.key, e.message().trim()))?;
+            parsed.push((item, setting));
+        }
+        let config = from_table(table)
+            .map_err(|e| anyhow!("configuration: {}", e.message().trim().replace('\n', "; ")))?;
+        config.validate().map_err(|e| {
+            // Name the last source that set the field at fault (the message starts with
+            // it), else every source.
+            let message = format!("{e:#}");
+            let field = message.split_whitespace().next().unwrap_or_default();
+            let setting = parsed.iter().rev().find(|(_, s)| s.key == field);
+            let file = file_tables
+                .iter()
+                .rev()
+                .find(|(_, t)| has_key(t, field))
+                .map(|(p, _)| p.display().to_string());
+            let source = match (setting, file) {
+                (Some((item, _)), _) => format!("--set {item}"),
+                (None, Some(file)) => file,
+                (None, None) => {
+                    let mut all: Vec<String> =
+                        files.iter().map(|p| p.display().to_string()).collect();
+                    all.extend(settings.iter().map(|s| format!("--set {s}")));
+                    if all.is_empty() {
+                        "configuration".to_string()
+                    } else {
+                        all.join(", ")
+                    }
+                }
+            };
+            anyhow!("{source}: {message}")
+        })?;
+        Ok(config)
     }
 
     /// Parses and validates configuration text; `path_for_errors` only names the file in
@@ -131,13 +211,7 @@ impl PipelineConfig {
     /// # Errors
     /// As [`PipelineConfig::load`], without the read.
     pub fn from_toml(text: &str, path_for_errors: &Path) -> Result<PipelineConfig> {
-        let config: PipelineConfig = toml::from_str(text).map_err(|e| {
-            anyhow!(
-                "{}: {}",
-                path_for_errors.display(),
-                describe_toml_error(&e, text)
-            )
-        })?;
+        let config = parse_config(text, path_for_errors)?;
         config
             .validate()
             .with_context(|| format!("{}", path_for_errors.display()))?;
@@ -215,6 +289,38 @@ impl PipelineConfig {
             env!("CARGO_PKG_VERSION")
         ))
     }
+}
+
+/// Deserializes configuration text, unvalidated; the error names the file, the line and
+/// the key.
+fn parse_config(text: &str, path: &Path) -> Result<PipelineConfig> {
+    toml::from_str(text)
+        .map_err(|e| anyhow!("{}: {}", path.display(), describe_toml_error(&e, text)))
+}
+
+/// A configuration file's table, checked key by key as [`parse_config`] does (so that an
+/// unknown key or a wrong type is named with its line before files are merged).
+fn parse_table(text: &str, path: &Path) -> Result<toml::Table> {
+    parse_config(text, path)?;
+    toml::from_str(text)
+        .map_err(|e| anyhow!("{}: {}", path.display(), describe_toml_error(&e, text)))
+}
+
+/// Deserializes a merged configuration table.
+fn from_table(table: toml::Table) -> Result<PipelineConfig, toml::de::Error> {
+    toml::Value::Table(table).try_into()
+}
+
+/// Whether the dotted `section` names a table of `known`.
+fn has_section(known: &toml::Table, section: &str) -> bool {
+    let mut node = known;
+    for part in section.split('.') {
+        match node.get(part) {
+            Some(toml::Value::Table(t)) => node = t,
+            _ => return false,
+        }
+    }
+    true
 }
 
 /// One line out of a TOML error (the crate's own `Display` spans several lines and draws
@@ -417,5 +523,140 @@ mod tests {
         };
         let text = c.resolved_toml().expect("serializes");
         assert_eq!(parse(&text).ok(), Some(c), "{text}");
+    }
+
+    /// Writes `files` (name, text) into a temporary folder; returns it and their paths.
+    fn files(files: &[(&str, &str)]) -> (tempfile::TempDir, Vec<PathBuf>) {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let paths = files
+            .iter()
+            .map(|(name, text)| {
+                let path = dir.path().join(name);
+                std::fs::write(&path, text).expect("write");
+                path
+            })
+            .collect();
+        (dir, paths)
+    }
+
+    fn sets(items: &[&str]) -> Vec<String> {
+        items.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn a_later_file_overrides_only_the_keys_it_sets() {
+        let (_dir, paths) = files(&[
+            (
+                "a.toml",
+                "[refine]\neps_m = 0.02\nmin_points = 7\n[project]\nmode = \"naive\"\n",
+            ),
+            ("b.toml", "[refine]\neps_m = 0.04\n"),
+        ]);
+        let c = PipelineConfig::resolve(&paths, &[]).expect("valid");
+        assert_eq!(c.refine.eps_m, 0.04, "b.toml wins");
+        assert_eq!(c.refine.min_points, 7, "a.toml's other keys stay");
+        assert_eq!(c.project.mode, ProjectMode::Naive);
+        let reversed: Vec<PathBuf> = paths.iter().rev().cloned().collect();
+        assert_eq!(
+            PipelineConfig::resolve(&reversed, &[])
+                .expect("valid")
+                .refine
+                .eps_m,
+            0.02
+        );
+        assert_eq!(
+            PipelineConfig::resolve(&[], &[]).ok(),
+            Some(PipelineConfig::default())
+        );
+        // A file's own errors name it, its line and the key, before any merging.
+        let (_dir, bad) = files(&[("bad.toml", "[refine]\n\nepsilon = 1\n")]);
+        let e = format!(
+            "{:#}",
+            PipelineConfig::resolve(&[paths[0].clone(), bad[0].clone()], &[]).expect_err("bad")
+        );
+        assert!(
+            e.contains("bad.toml: line 3: unknown key `refine.epsilon`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn settings_beat_the_files_and_are_checked_naming_the_key() {
+        let (_dir, paths) = files(&[("a.toml", "[refine]\neps_m = 0.02\nmin_points = 7\n")]);
+        let c = PipelineConfig::resolve(
+            &paths,
+            &sets(&[
+                "refine.eps_m=0.03",
+                "project.mode=naive",
+                "refine.steps=M-N",
+                "project.occlusion = false",
+                "backproject.depth_max_m=inf",
+                "boxes.mode=\"geometry\"",
+            ]),
+        )
+        .expect("valid");
+        assert_eq!(c.refine.eps_m, 0.03, "--set beats the file");
+        assert_eq!(c.refine.min_points, 7, "the file's other keys stay");
+        assert_eq!(c.project.mode, ProjectMode::Naive);
+        assert_eq!(c.refine.steps.to_string(), "M-N");
+        assert!(!c.project.occlusion);
+        assert!(c.backproject.depth_max_m.is_infinite());
+        assert_eq!(c.boxes.mode, BoxMode::Geometry);
+        // The later of two settings of one key wins.
+        let c = PipelineConfig::resolve(&[], &sets(&["refine.eps_m=0.03", "refine.eps_m=0.04"]))
+            .expect("valid");
+        assert_eq!(c.refine.eps_m, 0.04);
+
+        let err = |items: &[&str]| {
+            format!(
+                "{:#}",
+                PipelineConfig::resolve(&paths, &sets(items)).expect_err("invalid")
+            )
+        };
+        let e = err(&["refine.epsx=1"]);
+        assert!(
+            e.starts_with("--set refine.epsx=1: unknown key `refine.epsx` (known in [refine]: ")
+                && e.contains("eps_m"),
+            "{e}"
+        );
+        let e = err(&["refin.eps_m=1"]);
+        assert!(
+            e.contains("unknown key `refin.eps_m` (known sections: "),
+            "{e}"
+        );
+        assert!(err(&["refine=1"]).contains("unknown key `refine`"));
+        let e = err(&["refine.eps_m=abc"]);
+        assert!(
+            e.starts_with("--set refine.eps_m=abc: refine.eps_m: "),
+            "{e}"
+        );
+        let e = err(&["project.mode=sideways"]);
+        assert!(
+            e.starts_with("--set project.mode=sideways: project.mode: "),
+            "{e}"
+        );
+        assert!(err(&["refine.eps_m"]).contains("not KEY=VALUE"));
+        // A value out of range is named with the setting that gave it...
+        assert_eq!(
+            err(&["refine.eps_m=-1"]),
+            "--set refine.eps_m=-1: refine.eps_m must be a finite number > 0, got -1"
+        );
+        // ... or the file.
+        let (_dir, bad) = files(&[("neg.toml", "[refine]\neps_m = -1\n")]);
+        let e = format!(
+            "{:#}",
+            PipelineConfig::resolve(
+                &[paths[0].clone(), bad[0].clone()],
+                &sets(&["refine.min_points=3"])
+            )
+            .expect_err("invalid")
+        );
+        assert!(
+            e.ends_with("neg.toml: refine.eps_m must be a finite number > 0, got -1"),
+            "{e}"
+        );
+        // A setting can mend a file's value: only the result is validated.
+        let c = PipelineConfig::resolve(&bad, &sets(&["refine.eps_m=0.05"])).expect("mended");
+        assert_eq!(c.refine.eps_m, 0.05);
     }
 }

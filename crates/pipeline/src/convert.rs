@@ -17,7 +17,10 @@ use crate::batch::{
     text_hash,
 };
 use crate::config::PipelineConfig;
-use crate::run::{FigureChoice, FrameProcessor, ParserChoice, RunOptions, RunSummary, list_frames};
+use crate::model::ParserChoice;
+use crate::processor::FrameProcessor;
+use crate::recording::Recording;
+use crate::report::{ReportTarget, RunSummary, write_reports};
 use crate::stage::{Stage, plural, timed};
 use crate::threedpeople::{ThreeDPeopleCamera, list_3dpeople_views, read_3dpeople_view};
 use anyhow::{Context, Result, bail};
@@ -89,15 +92,15 @@ fn summary(
 ///
 /// # Errors
 /// `input` is not a folder, or holds no recording.
-pub fn list_recordings(input: &Path) -> Result<Vec<(String, PathBuf)>> {
+pub(crate) fn list_recordings(input: &Path) -> Result<Vec<(String, PathBuf)>> {
     bodyseg_io::require_folder(input, "dataset")?;
-    if input.join("rig.toml").is_file() {
+    if Recording::is_recording(input) {
         return Ok(vec![(String::new(), input.to_path_buf())]);
     }
     let mut found: Vec<(String, PathBuf)> = std::fs::read_dir(input)
         .with_context(|| format!("{}: cannot list", input.display()))?
         .flatten()
-        .filter(|e| e.path().join("rig.toml").is_file())
+        .filter(|e| Recording::is_recording(&e.path()))
         .map(|e| (e.file_name().to_string_lossy().into_owned(), e.path()))
         .filter(|(name, _)| !name.starts_with('.'))
         .collect();
@@ -142,11 +145,12 @@ fn convert_recordings(
             } else {
                 format!("{name}/")
             };
-            let run = run_options(opts, path, &opts.out.join(name));
-            let processor = FrameProcessor::open(&run)
+            let processor = FrameProcessor::open(path, &opts.config, opts.parser)
                 .with_context(|| format!("recording {}", path.display()))?
+                .with_stage_clouds(opts.write_stages)
+                .with_label_images(false)
                 .with_prefix(prefix.clone());
-            for frame in list_frames(path, processor.rig())? {
+            for frame in processor.recording().frames()?.complete {
                 jobs.push((format!("{prefix}{frame}"), (k, frame)));
             }
             processors.push(processor);
@@ -181,9 +185,7 @@ fn convert_recordings(
           stages: &mut Vec<Stage>|
          -> Result<FrameRecord> {
             let (k, frame) = f.job;
-            let p = &processors[*k];
-            let inputs = p.read(frame, stages)?;
-            p.process(&inputs, writer, stages)
+            processors[*k].run_frame(frame, writer, stages)
         },
     )?;
     let fps = outcome.frames_per_second();
@@ -229,13 +231,16 @@ fn convert_recordings(
                 .filter(|(id, _)| id.starts_with(&prefix))
                 .map(|(id, _)| id.clone())
                 .collect();
-            let run = run_options(opts, path, &opts.out.join(name));
-            let (_, w) = crate::run::write_reports(&run, &frames, &sub, &resolved, fps)?;
+            let target = ReportTarget {
+                out: &opts.out.join(name),
+                input: path,
+                shard: opts.shard,
+            };
+            let (_, w) = write_reports(target, &frames, &sub, &resolved, fps)?;
             written.extend(w);
         }
         let frames: Vec<String> = jobs.iter().map(|(id, _)| id.clone()).collect();
-        let run = run_options(opts, &opts.input, &opts.out);
-        let (report, w) = crate::run::write_reports(&run, &frames, &outcome, &resolved, fps)?;
+        let (report, w) = write_reports(opts.report_target(), &frames, &outcome, &resolved, fps)?;
         written.extend(w);
         Ok((written, report))
     })?;
@@ -244,16 +249,15 @@ fn convert_recordings(
     Ok(summary(frames, outcome, report, written, stages, took))
 }
 
-/// `bodyseg run`'s options for one recording of a conversion.
-fn run_options(opts: &ConvertOptions, recording: &Path, out: &Path) -> RunOptions {
-    let mut run = RunOptions::new(recording, opts.config.clone(), out);
-    run.parser = opts.parser;
-    run.shard = opts.shard;
-    run.write_stages = opts.write_stages;
-    run.figures = FigureChoice::Off;
-    run.label_images = false;
-    run.redo = opts.redo;
-    run
+impl ConvertOptions {
+    /// Where the reports over the whole data set go.
+    fn report_target(&self) -> ReportTarget<'_> {
+        ReportTarget {
+            out: &self.out,
+            input: &self.input,
+            shard: self.shard,
+        }
+    }
 }
 
 fn convert_3dpeople(
@@ -322,14 +326,9 @@ fn convert_3dpeople(
     let fps = outcome.frames_per_second();
     stages.extend(outcome.stage_lines());
     let frames: Vec<String> = jobs.iter().map(|(id, _)| id.clone()).collect();
-    let run = RunOptions::new(&opts.input, opts.config.clone(), &opts.out);
-    let run = RunOptions {
-        shard: opts.shard,
-        ..run
-    };
     let resolved = opts.config.resolved_toml()?;
     let ((report, written), took) =
-        timed(|| crate::run::write_reports(&run, &frames, &outcome, &resolved, fps))?;
+        timed(|| write_reports(opts.report_target(), &frames, &outcome, &resolved, fps))?;
     let frames = opts.shard.share(jobs.len());
     Ok(summary(frames, outcome, report, written, stages, took))
 }

@@ -14,7 +14,7 @@ use bodyseg_project::{ColorProjection, Hits, NO_HIT};
 /// small square around it (the colour image is denser than the depth image), the nearest
 /// point winning.
 #[derive(Clone, Debug)]
-pub struct LabelView {
+pub(crate) struct LabelView {
     projection: ColorProjection,
     splat_radius_px: usize,
 }
@@ -22,7 +22,7 @@ pub struct LabelView {
 impl LabelView {
     /// The view of `camera`; `stride` is the back-projection stride (sparser points need
     /// larger squares).
-    pub fn new(camera: &RgbdCamera, stride: u32) -> LabelView {
+    pub(crate) fn new(camera: &RgbdCamera, stride: u32) -> LabelView {
         let color_from_world = camera
             .color_from_depth
             .compose(&camera.world_from_depth.inverse());
@@ -38,7 +38,8 @@ impl LabelView {
 
     /// The labels of `cloud`'s points from camera `camera` drawn into its colour image;
     /// pixels no point reaches are unknown (255).
-    pub fn render(&self, cloud: &LabeledCloud, camera: u8) -> LabelImage {
+    #[cfg(test)]
+    pub(crate) fn render(&self, cloud: &LabeledCloud, camera: u8) -> LabelImage {
         let mut image = LabelImage::filled(0, 0, Label::UNKNOWN);
         self.render_into(cloud, camera, None, &mut Vec::new(), &mut image);
         image
@@ -55,7 +56,7 @@ impl LabelView {
     /// `colour_from_world` are the same pixels up to f32 rounding (a point within ~1e-3 px
     /// of a half-pixel boundary may take the neighbour). Without hits, or with hits of
     /// another length, every point of the camera is projected here.
-    pub fn render_into(
+    pub(crate) fn render_into(
         &self,
         cloud: &LabeledCloud,
         camera: u8,
@@ -148,7 +149,7 @@ fn label_of_key(key: u32) -> Label {
 /// A fixed orthographic viewpoint for the panels: screen axes in the world and the part
 /// of the cloud shown.
 #[derive(Clone, Debug)]
-pub struct PanelView {
+pub(crate) struct PanelView {
     right: Vec3,
     up: Vec3,
     forward: Vec3,
@@ -174,7 +175,7 @@ const TITLE_PX: u32 = 26;
 /// The viewpoint of a frame's figure: from the first camera's side (horizontally, looking
 /// at the people), slightly from above; showing the points inside the person boxes, or
 /// every body-labelled point's surroundings when there is no box.
-pub fn panel_view(cloud: &LabeledCloud, boxes: &[PersonBox], rig: &Rig) -> PanelView {
+pub(crate) fn panel_view(cloud: &LabeledCloud, boxes: &[PersonBox], rig: &Rig) -> PanelView {
     let boxes: Vec<PersonBox> = if boxes.is_empty() {
         body_box(cloud).into_iter().collect()
     } else {
@@ -299,7 +300,7 @@ fn body_box(cloud: &LabeledCloud) -> Option<PersonBox> {
 
 /// One panel of a figure.
 #[derive(Debug)]
-pub enum FigurePanel<'a> {
+pub(crate) enum FigurePanel<'a> {
     /// Points coloured by label (the class palette; background light grey, unknown dark
     /// grey), one label per cloud point.
     Labels {
@@ -349,7 +350,7 @@ type ColorOf<'a> = Box<dyn Fn(usize) -> [u8; 3] + 'a>;
 
 /// Renders the panels side by side from `view` (white background, title band on top,
 /// nearer points drawn over farther ones and shaded a little lighter).
-pub fn figure_image(
+pub(crate) fn figure_image(
     cloud: &LabeledCloud,
     view: &PanelView,
     panels: &[FigurePanel<'_>],

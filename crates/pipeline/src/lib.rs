@@ -1,23 +1,39 @@
-//! bodyseg-pipeline: the commands behind the `bodyseg` binary, as plain functions.
+//! bodyseg-pipeline: the commands behind the `bodyseg` binary, as plain functions, and the
+//! stage types that carry one frame of a recording through them.
 //!
-//! Place in the pipeline: the only crate (with the binary) that sees every stage. It
-//! loads the [`PipelineConfig`], reads the inputs with bodyseg-io, calls the stages in
-//! order and writes the outputs:
+//! Place in the pipeline: the only crate (with the binary and the study crate, lab) that
+//! sees every stage. It loads the [`PipelineConfig`], reads the inputs with bodyseg-io,
+//! calls the stages in order and writes the outputs.
+//!
+//! # Commands
+//! Each takes an options struct and returns a summary with per-stage timings ([`Stage`])
+//! for the binary to print; no command-line parsing here (that is `crates/cli`).
 //!
 //! ```text
-//! parse_file:    recording frame (rig.toml, colour images) → bodyseg_parsing::Segmenter → label PNGs + previews
-//! project_file:  recording frame (rig.toml, depth + parsing PNGs) → bodyseg_project::project_frame → labelled PLY
-//! boxes_file:    cloud PLY/PCD or recording frame → bodyseg_people::find_boxes → boxes JSON (+ preview PNG)
-//! refine_file:   cloud PLY + boxes JSON → bodyseg_refine::refine → refined PLY (+ resolved config)
-//! eval_files:    predicted PLY(s) + ground-truth PLY → bodyseg_eval::match_clouds → Report
-//! merge_reports: report JSON files → Report::merge → Report
-//! import_rig:    calibration folders (iai_kinect2) → bodyseg_calib::Rig → rig.toml
-//! describe_rig:  rig.toml → human-readable summary
-//! calibrate_*:   chessboard images → intrinsics, colour-from-depth, world poses → rig.toml (feature `opencv`)
+//! synth_recording: scene + seed → a synthetic recording with ground truth (RecordingWriter)
+//! parse_file:      recording frame (colour images) → Segmenter → label PNGs + previews
+//! project_file:    recording frame (depth + parsing PNGs) → labelled world-frame PLY
+//! boxes_file:      cloud PLY/PCD or recording frame → bodyseg_people::find_boxes → boxes JSON (+ preview)
+//! refine_file:     cloud PLY + boxes JSON → bodyseg_refine::refine → refined PLY
+//! eval_files:      predicted PLY(s) + ground-truth PLY → Report;  merge_reports: reports → Report
+//! run_recording:   a recording, every frame through every stage → clouds, boxes, label images, report
+//! convert_dataset: recordings or 3DPeople, resumable and sharded → clouds (+ reports)
+//! import_rig, read_rig, describe_rig: calibration files ⇄ rig.toml
+//! calibrate_*:     chessboard images → intrinsics, colour-from-depth, world poses (feature `opencv`)
 //! ```
 //!
-//! No command-line parsing here (that is `crates/cli`): each command takes an options
-//! struct and returns a summary with per-stage timings ([`Stage`]) for the binary to print.
+//! # Stage types
+//! `bodyseg run` streams a recording through them, one frame per worker
+//! ([`FrameProcessor`]):
+//!
+//! ```text
+//! Recording ─ Frame::read → Frame (images) ─ parse_frame (Segmenter) → ParsedFrame (label maps)
+//!   → LabeledCloud (bodyseg-project) → PersonBoxes (bodyseg-people) → RefinedCloud
+//!   (bodyseg-refine) → Report (bodyseg-eval)
+//! ```
+//!
+//! [`Recording`] is the recording layout (FORMATS.md "Recording"): its rig, its frames
+//! and the path and reader of every [`Layer`]; [`RecordingWriter`] writes one.
 //!
 //! # Conventions
 //! - Errors are [`anyhow::Error`]s whose chain (`{:#}`) reads as one line naming the file,
@@ -25,24 +41,27 @@
 //! - Every file is written atomically (bodyseg-io's `write_atomic`): a failed command
 //!   leaves no output file behind and an existing one untouched.
 //! - Configuration precedence: built-in defaults ([`PipelineConfig::default`], equal to
-//!   `configs/default.toml`) < configuration file < command-line flags.
+//!   `configs/default.toml`) < configuration files < `--set` < command-line flags.
 //! - Units are those of the stages: metres, radians; times are wall-clock.
 
 mod allocator;
 mod batch;
 mod boxes;
-mod boxes_study;
 mod calibrate;
 mod config;
 mod convert;
 mod eval;
 mod figure;
-mod frame_files;
-mod fs;
+mod frame;
+mod layers;
+mod model;
+mod outputs;
 mod parse;
+mod processor;
 mod project;
-mod projection_study;
+mod recording;
 mod refine;
+mod report;
 mod rig;
 mod run;
 mod stage;
@@ -51,51 +70,36 @@ mod threedpeople;
 
 pub use allocator::keep_freed_memory;
 pub use batch::{
-    BatchFrame, BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameWriter, InputFile,
-    OutputFile, Shard, complete_record, record_path, run_batch,
+    BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameWriter, InputFile, OutputFile,
+    Shard,
 };
 pub use bodyseg_calib::Board;
-pub use bodyseg_people::{BoxMode, BoxesConfig};
+pub use bodyseg_people::BoxMode;
 pub use bodyseg_project::ProjectMode;
-pub use boxes::{
-    BoxesInput, BoxesOptions, BoxesSummary, boxes_file, boxes_path, read_cloud, top_view,
-};
-pub use boxes_study::{
-    BoxStats, FrameMatch, MATCH_IOU, box_stats, describe_box, match_boxes, study_frame,
-};
+pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, top_view};
 pub use calibrate::{
-    CALIBRATE_AVAILABLE, CalibrateSummary, IntrinsicsCalibOptions, StereoCalibOptions, ViewReport,
-    WorldCalibOptions, calibrate_intrinsics, calibrate_stereo, calibrate_world,
+    CalibrateSummary, IntrinsicsCalibOptions, StereoCalibOptions, ViewReport, WorldCalibOptions,
+    calibrate_intrinsics, calibrate_stereo, calibrate_world,
 };
 pub use config::{BackProjectConfig, PipelineConfig, RefineOverrides};
-pub use convert::{
-    ConvertFormat, ConvertOptions, ConvertSummary, convert_dataset, list_recordings,
-};
+pub use convert::{ConvertFormat, ConvertOptions, ConvertSummary, convert_dataset};
 pub use eval::{
     DEFAULT_PREDICTION_NAME, EvalOptions, EvalSummary, NamedPrediction, ReportFormat, eval_files,
     merge_reports, render_report,
 };
-pub use figure::{FigurePanel, LabelView, PanelView, figure_image, panel_view};
-pub use fs::write_text;
-pub use parse::{
-    BUNDLED_MODEL, LOCAL_RUNTIME_LIBRARY, ParseOptions, ParseSource, ParseSummary,
-    RUNTIME_LIBRARY_ENV, color_path, load_segmenter, palette_preview, parse_file, resolve_model,
-    resolve_runtime_library,
-};
-pub use project::{ProjectOptions, ProjectSummary, depth_path, parsing_path, project_file};
-pub use projection_study::{ProjectionStats, camera_images, parsing_images, projection_stats};
-pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
+pub use frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
+pub use model::ParserChoice;
+pub use outputs::write_text;
+pub use parse::{ParseOptions, ParseSource, ParseSummary, parse_file};
+pub use processor::FrameProcessor;
+pub use project::{ProjectOptions, ProjectSummary, project_file};
+pub use recording::{FrameList, Layer, Recording, RecordingWriter, Sensor};
+pub use refine::{RefineOptions, RefineSummary, refine_file};
+pub use report::RunSummary;
 pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
-pub use run::{
-    ABLATION, FigureChoice, FrameInputs, FrameProcessor, ParserChoice, RunOptions, RunSummary,
-    list_frames, run_recording,
-};
+pub use run::{FigureChoice, RunOptions, run_recording};
 pub use stage::Stage;
-pub use synth::{
-    SceneSource, SynthOptions, SynthSummary, load_scene, synth_chessboard, synth_recording,
-    write_frame,
-};
+pub use synth::{SceneSource, SynthOptions, SynthSummary, synth_recording};
 pub use threedpeople::{
-    MAX_PALETTE_TOLERANCE, THREEDPEOPLE_PALETTE, ThreeDPeopleCamera, ThreeDPeopleView,
-    list_3dpeople_views, read_3dpeople_view,
+    ThreeDPeopleCamera, ThreeDPeopleView, list_3dpeople_views, read_3dpeople_view,
 };

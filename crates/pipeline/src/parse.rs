@@ -2,26 +2,15 @@
 //! label images (class ids) and palette previews, per camera.
 
 use crate::config::PipelineConfig;
-use crate::frame_files::read_color;
-use crate::fs::write_text;
-use crate::project::check_frame;
+use crate::frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
+use crate::model::{load_segmenter, resolve_model};
+use crate::outputs::write_text;
+use crate::recording::{Layer, Layout, Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
 use bodyseg_core::{Class, LabelImage, RgbImage};
-use bodyseg_parsing::{
-    ModelSpec, OnnxSegmenter, ParsedView, RecordedSegmenter, Segmenter, ViewInput, sidecar_path,
-};
-use std::path::{Path, PathBuf};
-
-/// The bundled model, relative to the project root (its sidecar: the same with `.json`).
-pub const BUNDLED_MODEL: &str = "models/bodyseg_parser_small.onnx";
-
-/// Where `scripts/setup_onnxruntime.sh` puts the ONNX Runtime library, relative to the
-/// project root.
-pub const LOCAL_RUNTIME_LIBRARY: &str = ".deps/onnxruntime/libonnxruntime.so";
-
-/// Environment variable naming the ONNX Runtime library (ort's convention).
-pub const RUNTIME_LIBRARY_ENV: &str = "ORT_DYLIB_PATH";
+use bodyseg_parsing::{RecordedSegmenter, Segmenter};
+use std::path::PathBuf;
 
 /// Which segmenter [`parse_file`] runs.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -67,91 +56,8 @@ pub struct ParseSummary {
     pub stages: Vec<Stage>,
 }
 
-/// The colour image of `camera` for `frame`: `REC/<camera>/color/<frame>.png`, `.jpg` or
-/// `.jpeg`, the first that exists (`.png` when none does, for the error message).
-pub fn color_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
-    let folder = recording.join(camera).join("color");
-    let candidates: Vec<PathBuf> = ["png", "jpg", "jpeg"]
-        .iter()
-        .map(|ext| folder.join(format!("{frame}.{ext}")))
-        .collect();
-    bodyseg_io::first_existing_file(&candidates)
-        .unwrap_or_else(|| folder.join(format!("{frame}.png")))
-}
-
-/// Candidate locations of a project-relative file: beside the executable and its parent
-/// folders (a `target/release/bodyseg` of a checkout), the current folder, and the
-/// checkout this binary was built from.
-fn project_candidates(relative: &str) -> Vec<PathBuf> {
-    let mut roots: Vec<PathBuf> = Vec::new();
-    if let Ok(exe) = std::env::current_exe() {
-        roots.extend(exe.ancestors().skip(1).take(4).map(Path::to_path_buf));
-    }
-    if let Ok(cwd) = std::env::current_dir() {
-        roots.push(cwd);
-    }
-    roots.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."));
-    roots.into_iter().map(|r| r.join(relative)).collect()
-}
-
-/// The ONNX Runtime library: `parsing.runtime_library`, else `ORT_DYLIB_PATH`, else the
-/// project-local copy of `scripts/setup_onnxruntime.sh`.
-///
-/// # Errors
-/// None of them is set or exists; the message says how to get the library.
-pub fn resolve_runtime_library(config: &PipelineConfig) -> Result<PathBuf> {
-    if !config.parsing.runtime_library.is_empty() {
-        return Ok(PathBuf::from(&config.parsing.runtime_library));
-    }
-    if let Some(path) = std::env::var_os(RUNTIME_LIBRARY_ENV).filter(|p| !p.is_empty()) {
-        return Ok(PathBuf::from(path));
-    }
-    bodyseg_io::first_existing_file(&project_candidates(LOCAL_RUNTIME_LIBRARY)).with_context(|| {
-        format!(
-            "ONNX Runtime library not found: run scripts/setup_onnxruntime.sh (it writes \
-                 {LOCAL_RUNTIME_LIBRARY}), or set {RUNTIME_LIBRARY_ENV} or \
-                 parsing.runtime_library to a libonnxruntime.so"
-        )
-    })
-}
-
-/// The model file: `parsing.model`, else the bundled model.
-///
-/// # Errors
-/// The bundled model is not found (neither beside the executable, in the current folder,
-/// nor in the checkout the binary was built from).
-pub fn resolve_model(config: &PipelineConfig) -> Result<PathBuf> {
-    if !config.parsing.model.is_empty() {
-        return Ok(PathBuf::from(&config.parsing.model));
-    }
-    bodyseg_io::first_existing_file(&project_candidates(BUNDLED_MODEL))
-        .with_context(|| format!("bundled model {BUNDLED_MODEL} not found: pass --model FILE.onnx"))
-}
-
-/// Loads an ONNX model and its sidecar (`model.json`) into an [`OnnxSegmenter`].
-///
-/// # Errors
-/// The model or sidecar cannot be read, the sidecar is invalid, the runtime library is
-/// missing, or the model does not follow the contract; each names the file.
-pub fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
-    let sidecar = sidecar_path(model);
-    let text = bodyseg_io::read_text(&sidecar)
-        .context("model sidecar (the model's .json: input_size, channel_order, mean, std, ...)")?;
-    let spec = ModelSpec::from_json(&text, &sidecar)?;
-    let library = resolve_runtime_library(config)?;
-    let bytes = bodyseg_io::read_bytes(model).context("parsing model")?;
-    let segmenter = OnnxSegmenter::new(
-        &library,
-        &bytes,
-        model,
-        spec,
-        &config.parsing.onnx_options(),
-    )?;
-    Ok(segmenter)
-}
-
 /// A palette preview: body pixels in their class colour, background as the dimmed image.
-pub fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> {
+pub(crate) fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> {
     let mut out = Vec::with_capacity(labels.num_pixels() * 3);
     for (i, label) in labels.labels.iter().enumerate() {
         match label.class().filter(|c| *c != Class::Background) {
@@ -174,19 +80,20 @@ pub fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> {
 /// the ONNX Runtime library is missing or invalid; writing fails. Each names the file.
 /// Nothing is written unless every view was parsed.
 pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
-    check_frame(&opts.frame)?;
+    check_stem(&opts.frame)?;
     let cfg = &opts.config;
-    let rig_path = opts.recording.join("rig.toml");
-    let ((cameras, images), read) = timed(|| -> Result<_> {
-        let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
-        let mut images = Vec::with_capacity(rig.cameras.len());
-        for camera in &rig.cameras {
-            let (image, _) = read_color(&opts.recording, camera, &opts.frame)?;
-            images.push(image);
-        }
-        let names: Vec<String> = rig.cameras.iter().map(|c| c.name.clone()).collect();
-        Ok((names, images))
+    // The colour images for the previews; the recorded predictions for --recorded.
+    let needs = FrameNeeds {
+        colour: true,
+        parsing: opts.source == ParseSource::Recorded,
+        ..FrameNeeds::default()
+    };
+    let ((rec, frame), read) = timed(|| -> Result<_> {
+        let rec = Recording::open(&opts.recording)?;
+        let frame = Frame::read(&rec, &opts.frame, needs)?;
+        Ok((rec, frame))
     })?;
+    let cameras: Vec<String> = rec.cameras().map(str::to_string).collect();
     let mut stages = vec![Stage::new(
         "read",
         read,
@@ -201,34 +108,24 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
         ParseSource::Model => Some(resolve_model(cfg)?),
         ParseSource::Recorded => None,
     };
-    let (parsed, took) = timed(|| -> Result<Vec<ParsedView>> {
+    let (parsed, took) = timed(|| -> Result<ParsedFrame> {
         let mut segmenter: Box<dyn Segmenter> = match &model {
             Some(path) => Box::new(load_segmenter(cfg, path)?),
-            None => {
-                let recording = opts.recording.clone();
-                Box::new(RecordedSegmenter::new(Box::new(move |camera, frame| {
-                    let path = crate::project::parsing_path(&recording, camera, frame);
-                    bodyseg_io::read_label_png(&path).map_err(|e| e.to_string())
-                })))
-            }
+            None => Box::new(RecordedSegmenter::new()),
         };
-        let views: Vec<ViewInput<'_>> = cameras
-            .iter()
-            .zip(&images)
-            .map(|(camera, image)| ViewInput {
-                camera,
-                frame: &opts.frame,
-                image: Some(image),
-            })
-            .collect();
-        segmenter
-            .segment(&views)
+        parse_frame(frame, rec.rig(), segmenter.as_mut())
             .with_context(|| format!("{}: frame {}", opts.recording.display(), opts.frame))
     })?;
+    let images = parsed
+        .frame
+        .colour
+        .as_deref()
+        .context("the colour images were read")?;
     let body_pixels: Vec<usize> = parsed
+        .labels
         .iter()
-        .map(|p| {
-            p.labels
+        .map(|labels| {
+            labels
                 .labels
                 .iter()
                 .filter(|l| l.class().is_some_and(|c| c != Class::Background))
@@ -251,28 +148,26 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
         took,
         format!(
             "{} ({what}), {} body pixels",
-            plural(parsed.len(), "view", "views"),
+            plural(parsed.labels.len(), "view", "views"),
             body_pixels.iter().sum::<usize>()
         ),
     ));
 
     let (written, took) = timed(|| -> Result<Vec<PathBuf>> {
         let mut written = Vec::new();
-        for ((camera, image), view) in cameras.iter().zip(&images).zip(&parsed) {
-            let folder = opts.out.join(camera);
-            let labels_path = folder.join("parsing").join(format!("{}.png", opts.frame));
-            let preview_path = folder
-                .join("parsing_preview")
-                .join(format!("{}.png", opts.frame));
+        let out = Layout::new(&opts.out);
+        for ((camera, image), labels) in cameras.iter().zip(images).zip(&parsed.labels) {
+            let labels_path = out.image_path(camera, Layer::Parsing, &opts.frame)?;
+            let preview_path = out.parsing_preview_path(camera, &opts.frame)?;
             for p in [&labels_path, &preview_path] {
                 if let Some(parent) = p.parent() {
                     bodyseg_io::create_folder(parent).context("output folder (--out)")?;
                 }
             }
-            bodyseg_io::write_label_png(&labels_path, &view.labels)
+            bodyseg_io::write_label_png(&labels_path, labels)
                 .with_context(|| format!("camera {camera}: label image"))?;
-            let (w, h) = (view.labels.width, view.labels.height);
-            bodyseg_io::write_rgb_png(&preview_path, w, h, &palette_preview(image, &view.labels))
+            let (w, h) = (labels.width, labels.height);
+            bodyseg_io::write_rgb_png(&preview_path, w, h, &palette_preview(image, labels))
                 .with_context(|| format!("camera {camera}: preview"))?;
             written.push(labels_path);
             written.push(preview_path);
@@ -317,21 +212,6 @@ mod tests {
         assert_eq!(
             palette_preview(&image, &labels),
             vec![30, 20, 10, 128, 0, 0]
-        );
-    }
-
-    #[test]
-    fn explicit_paths_win() {
-        let mut cfg = PipelineConfig::default();
-        cfg.parsing.runtime_library = "/x/libonnxruntime.so".into();
-        cfg.parsing.model = "m.onnx".into();
-        assert_eq!(
-            resolve_runtime_library(&cfg).expect("configured"),
-            Path::new("/x/libonnxruntime.so")
-        );
-        assert_eq!(
-            resolve_model(&cfg).expect("configured"),
-            Path::new("m.onnx")
         );
     }
 }

@@ -2,16 +2,12 @@
 //! labelled world-frame PLY.
 
 use crate::config::PipelineConfig;
-use crate::frame_files::{read_color, read_depth, read_parsing};
-use crate::fs::write_text;
-use crate::refine::resolved_config_path;
-use crate::stage::{Stage, plural, timed};
-use anyhow::{Context, Result, bail};
-use bodyseg_calib::Rig;
-use bodyseg_core::{LabelImage, LabeledCloud, RgbImage};
-use bodyseg_io::{DepthImage, PlyFormat, PlyWriteOptions};
-use bodyseg_project::{CameraImages, FrameProjector, ProjectMode};
-use std::path::{Path, PathBuf};
+use crate::frame::read_and_project;
+use crate::outputs::{ply_options, resolved_config_path, write_text};
+use crate::stage::{Stage, timed};
+use anyhow::{Context, Result};
+use bodyseg_project::ProjectMode;
+use std::path::PathBuf;
 
 /// What [`project_file`] reads, writes and how.
 #[derive(Clone, Debug)]
@@ -30,7 +26,7 @@ pub struct ProjectOptions {
     /// Write ASCII PLY instead of binary little-endian.
     pub ascii: bool,
     /// Also write the resolved configuration beside the output
-    /// ([`resolved_config_path`]).
+    /// (`out.ply` → `out.config.resolved.toml`).
     pub write_resolved_config: bool,
 }
 
@@ -51,122 +47,6 @@ pub struct ProjectSummary {
     pub stages: Vec<Stage>,
 }
 
-/// The depth image of `camera` for `frame`: `REC/<camera>/depth/<frame>.png`.
-pub fn depth_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
-    recording
-        .join(camera)
-        .join("depth")
-        .join(format!("{frame}.png"))
-}
-
-/// The predicted label image of `camera` for `frame`: `REC/<camera>/parsing/<frame>.png`.
-pub fn parsing_path(recording: &Path, camera: &str, frame: &str) -> PathBuf {
-    recording
-        .join(camera)
-        .join("parsing")
-        .join(format!("{frame}.png"))
-}
-
-/// One camera's images, read and checked against the rig.
-struct CameraFiles {
-    depth: DepthImage,
-    labels: LabelImage,
-    /// Read only when the points' colours are wanted (geometry-mode boxes).
-    colour: Option<RgbImage>,
-}
-
-/// Reads and checks one camera's depth and parsing PNGs.
-fn read_camera(rig: &Rig, index: usize, opts: &ProjectOptions) -> Result<CameraFiles> {
-    let camera = &rig.cameras[index];
-    let name = &camera.name;
-    bodyseg_io::require_folder(&opts.recording.join(name), "camera")
-        .with_context(|| format!("camera {name} of rig.toml"))?;
-    let (depth, _) = read_depth(&opts.recording, camera, &opts.frame)?;
-    let (labels, _) = read_parsing(&opts.recording, camera, &opts.frame)?;
-    let colour = if opts.config.boxes.uses_colours() {
-        Some(read_color(&opts.recording, camera, &opts.frame)?.0)
-    } else {
-        None
-    };
-    Ok(CameraFiles {
-        depth,
-        labels,
-        colour,
-    })
-}
-
-/// Checks that a frame stem names a file, not a path.
-pub(crate) fn check_frame(frame: &str) -> Result<()> {
-    if frame.is_empty() || frame == "." || frame == ".." || frame.contains(['/', '\\']) {
-        bail!("frame {frame:?}: give the file stem of a frame (e.g. 000012), not a path");
-    }
-    Ok(())
-}
-
-/// The read and project stages of [`project_file`] (also `bodyseg boxes --recording`):
-/// the rig, the labelled cloud and the two stages' records.
-pub(crate) fn read_and_project(opts: &ProjectOptions) -> Result<(Rig, LabeledCloud, Vec<Stage>)> {
-    check_frame(&opts.frame)?;
-    let cfg = &opts.config;
-    let rig_path = opts.recording.join("rig.toml");
-    let ((rig, cameras), read) = timed(|| -> Result<_> {
-        let rig = bodyseg_calib::read_rig_toml(&rig_path)?;
-        let cameras = (0..rig.cameras.len())
-            .map(|i| read_camera(&rig, i, opts))
-            .collect::<Result<Vec<_>>>()?;
-        Ok((rig, cameras))
-    })?;
-    let mut stages = vec![Stage::new(
-        "read",
-        read,
-        format!(
-            "{}, frame {}",
-            plural(rig.cameras.len(), "camera", "cameras"),
-            opts.frame
-        ),
-    )];
-    tracing::info!(recording = %opts.recording.display(), frame = %opts.frame, "read frame");
-
-    let (cloud, took) = timed(|| {
-        let images: Vec<CameraImages<'_>> = cameras
-            .iter()
-            .map(|c| CameraImages {
-                depth_raw: &c.depth.depth_mm,
-                labels: &c.labels,
-            })
-            .collect();
-        let colour: Option<Vec<&RgbImage>> = cameras.iter().map(|c| c.colour.as_ref()).collect();
-        let context = || format!("{}: frame {}", opts.recording.display(), opts.frame);
-        let projector = FrameProjector::new(&rig).with_context(context)?;
-        let backproject = cfg.backproject.options();
-        match colour {
-            // Geometry-mode boxes split people from what is nobody's by colour too.
-            Some(colour) => {
-                projector.project_frame_coloured(&images, &colour, &backproject, &cfg.project)
-            }
-            None => projector.project_frame(&images, &backproject, &cfg.project),
-        }
-        .with_context(context)
-    })?;
-    let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
-    let mode = cfg.project.mode;
-    let mode_name = match mode {
-        ProjectMode::Naive => "naive",
-        ProjectMode::Dsa => "dsa",
-    };
-    stages.push(Stage::new(
-        "project",
-        took,
-        format!(
-            "{}, {} unknown (mode {mode_name})",
-            plural(cloud.len(), "point", "points"),
-            unknown
-        ),
-    ));
-
-    Ok((rig, cloud, stages))
-}
-
 /// Projects the labels of one frame of a recording onto its depth points
 /// ([`bodyseg_project::project_frame`]) and writes the labelled world-frame cloud (PLY,
 /// FORMATS.md): cameras in rig order, pixels row-major, every back-projected point kept
@@ -180,7 +60,7 @@ pub(crate) fn read_and_project(opts: &ProjectOptions) -> Result<(Rig, LabeledClo
 /// written unless every earlier step succeeded.
 pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
     let cfg = &opts.config;
-    let (rig, cloud, mut stages) = read_and_project(opts)?;
+    let (rig, cloud, mut stages) = read_and_project(&opts.recording, &opts.frame, cfg)?;
     let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
     let mut points_per_camera = vec![0; rig.cameras.len()];
     for o in &cloud.origins {
@@ -189,14 +69,7 @@ pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
         }
     }
     let mode = cfg.project.mode;
-    let ply = PlyWriteOptions {
-        format: if opts.ascii {
-            PlyFormat::Ascii
-        } else {
-            PlyFormat::BinaryLittleEndian
-        },
-        ..Default::default()
-    };
+    let ply = ply_options(opts.ascii);
     let resolved_config = opts
         .write_resolved_config
         .then(|| resolved_config_path(&opts.out));
@@ -221,30 +94,4 @@ pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
         resolved_config,
         stages,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn frame_paths_follow_the_recording_layout() {
-        assert_eq!(
-            depth_path(Path::new("rec"), "cam0", "000012"),
-            Path::new("rec/cam0/depth/000012.png")
-        );
-        assert_eq!(
-            parsing_path(Path::new("rec"), "cam0", "000012"),
-            Path::new("rec/cam0/parsing/000012.png")
-        );
-    }
-
-    #[test]
-    fn frame_must_be_a_stem() {
-        assert!(check_frame("000012").is_ok());
-        for bad in ["", "..", "a/b", "..\\x"] {
-            let e = check_frame(bad).expect_err("a path").to_string();
-            assert!(e.contains("file stem"), "{e}");
-        }
-    }
 }

@@ -1,11 +1,10 @@
 //! `bodyseg refine`: labelled PLY + person boxes JSON → refined labelled PLY.
 
 use crate::config::PipelineConfig;
-use crate::fs::write_text;
+use crate::outputs::{ply_options, resolved_config_path, write_text};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
-use bodyseg_io::{PlyFormat, PlyWriteOptions};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// What [`refine_file`] reads, writes and how.
 #[derive(Clone, Debug)]
@@ -21,7 +20,7 @@ pub struct RefineOptions {
     /// Write ASCII PLY instead of binary little-endian.
     pub ascii: bool,
     /// Also write the resolved configuration beside the output
-    /// ([`resolved_config_path`]).
+    /// (`out.ply` → `out.config.resolved.toml`).
     pub write_resolved_config: bool,
 }
 
@@ -38,16 +37,6 @@ pub struct RefineSummary {
     pub resolved_config: Option<PathBuf>,
     /// Per stage (read, refine, write): time and a one-line summary.
     pub stages: Vec<Stage>,
-}
-
-/// Where the resolved configuration of an output goes: `refined.ply` →
-/// `refined.config.resolved.toml`, in the same folder.
-pub fn resolved_config_path(out: &Path) -> PathBuf {
-    let stem = out
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    out.with_file_name(format!("{stem}.config.resolved.toml"))
 }
 
 /// Reads a labelled cloud and its person boxes, refines the labels
@@ -103,14 +92,7 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
         ),
     ));
 
-    let ply = PlyWriteOptions {
-        format: if opts.ascii {
-            PlyFormat::Ascii
-        } else {
-            PlyFormat::BinaryLittleEndian
-        },
-        ..Default::default()
-    };
+    let ply = ply_options(opts.ascii);
     let resolved_config = opts
         .write_resolved_config
         .then(|| resolved_config_path(&opts.out));
@@ -134,21 +116,4 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
         resolved_config,
         stages,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn resolved_config_sits_beside_the_output() {
-        assert_eq!(
-            resolved_config_path(Path::new("out/refined.ply")),
-            Path::new("out/refined.config.resolved.toml")
-        );
-        assert_eq!(
-            resolved_config_path(Path::new("a")),
-            Path::new("a.config.resolved.toml")
-        );
-    }
 }

@@ -1,7 +1,7 @@
 //! `bodyseg rig import` and `bodyseg rig show`: calibration files → `rig.toml`, and a
 //! human-readable summary of a rig.
 
-use crate::fs::write_text;
+use crate::outputs::write_text;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, anyhow, bail};
 use bodyseg_calib::{RgbdCamera, Rig};

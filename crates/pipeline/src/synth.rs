@@ -4,14 +4,13 @@
 //! place when every frame is written, so a crash or an error never leaves a half-written
 //! recording under the requested name.
 
-use crate::fs::write_text;
+use crate::layers::Setting;
+use crate::outputs::write_text;
+use crate::recording::{Layer, RecordingWriter};
 use crate::stage::{Stage, plural};
 use anyhow::{Context, Result};
 use bodyseg_calib::write_rig_toml;
-use bodyseg_io::{
-    DepthImage, discard_folder, publish_folder, staging_folder, write_boxes, write_depth_png,
-    write_gray8_png, write_rgb_png,
-};
+use bodyseg_io::{discard_folder, publish_folder, staging_folder, write_gray8_png, write_rgb_png};
 use bodyseg_synth::{
     ChessboardConfig, SceneConfig, Synth, SynthFrame, chessboard_set, preset, preview,
 };
@@ -19,6 +18,13 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
+
+/// `preview/<stem>.png` of a synthetic recording: colour | depth | truth | prediction per
+/// camera (no layer of a recording: for people to look at).
+const PREVIEW_FOLDER: &str = "preview";
+
+/// The IR (depth sensor) views of a chessboard calibration set, beside `color/`.
+const IR_FOLDER: &str = "ir";
 
 /// Where the scene configuration comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,7 +53,7 @@ pub struct SynthOptions {
     /// Write `preview/<stem>.png` per frame.
     pub previews: bool,
     /// Instead of people, write chessboard calibration views for the scene's rig
-    /// ([`synth_chessboard`]).
+    /// (see `bodyseg synth --chessboard`).
     pub chessboard: Option<ChessboardConfig>,
 }
 
@@ -64,63 +70,51 @@ pub struct SynthSummary {
     pub stages: Vec<Stage>,
 }
 
-/// The scene configuration of `source` with `overrides` applied, validated.
-pub fn load_scene(source: &SceneSource, overrides: &[String]) -> Result<SceneConfig> {
-    match source {
+/// The scene configuration of `source` with `overrides` (`KEY=VALUE`, dotted keys) applied,
+/// validated.
+pub(crate) fn load_scene(source: &SceneSource, overrides: &[String]) -> Result<SceneConfig> {
+    let (text, name) = match source {
         SceneSource::Preset(name) => {
             let base = preset(name)?;
             if overrides.is_empty() {
                 return Ok(base);
             }
-            Ok(
-                SceneConfig::from_toml_with_overrides(&base.to_toml(), overrides)
-                    .with_context(|| format!("preset `{name}`"))?,
-            )
+            (base.to_toml(), format!("preset `{name}`"))
         }
-        SceneSource::File(path) => {
-            let text = bodyseg_io::read_text(path)?;
-            Ok(SceneConfig::from_toml_with_overrides(&text, overrides)
-                .with_context(|| path.display().to_string())?)
-        }
+        SceneSource::File(path) => (bodyseg_io::read_text(path)?, path.display().to_string()),
+    };
+    let mut table: toml::Table = toml::from_str(&text)
+        .map_err(|e| anyhow::anyhow!("{name}: scene config: {}", e.message().trim()))?;
+    for item in overrides {
+        Setting::parse(item)
+            .and_then(|s| s.apply(&mut table))
+            .with_context(|| format!("--set {item}"))?;
     }
+    SceneConfig::from_table(table).with_context(|| name.clone())
 }
 
-/// Writes every file of one frame into the recording folder `rec`.
-pub fn write_frame(
-    rec: &Path,
+/// Writes every file of one frame of `synth` into a recording being written: per camera
+/// its six layers, the true boxes, and with `with_preview` `preview/<stem>.png`.
+pub(crate) fn write_frame(
+    rec: &RecordingWriter,
     synth: &Synth,
     frame: &SynthFrame,
     with_preview: bool,
 ) -> Result<()> {
     let stem = frame.stem();
-    let rig = synth.true_rig();
-    for (camera, images) in rig.cameras.iter().zip(&frame.cameras) {
-        let dir = rec.join(&camera.name);
-        let (cw, ch) = (camera.color.width, camera.color.height);
-        let (dw, dh) = (camera.depth.width, camera.depth.height);
-        let file = |kind: &str| dir.join(kind).join(format!("{stem}.png"));
-        write_rgb_png(&file("color"), cw, ch, &images.color)?;
-        write_depth_png(
-            &file("depth"),
-            &DepthImage {
-                width: dw,
-                height: dh,
-                depth_mm: images.depth_mm.clone(),
-            },
-        )?;
-        write_gray8_png(&file("parsing"), cw, ch, &images.parsing)?;
-        write_gray8_png(&file("labels"), cw, ch, &images.labels)?;
-        write_gray8_png(&file("depth_labels"), dw, dh, &images.depth_labels)?;
-        write_gray8_png(&file("depth_person"), dw, dh, &images.depth_person)?;
+    for (index, images) in frame.cameras.iter().enumerate() {
+        rec.write_colour(index, &stem, &images.color)?;
+        rec.write_depth(index, &stem, &images.depth_mm)?;
+        rec.write_ids(index, Layer::Parsing, &stem, &images.parsing)?;
+        rec.write_ids(index, Layer::Labels, &stem, &images.labels)?;
+        rec.write_ids(index, Layer::DepthLabels, &stem, &images.depth_labels)?;
+        rec.write_ids(index, Layer::DepthPerson, &stem, &images.depth_person)?;
     }
-    write_boxes(
-        &rec.join("boxes").join(format!("{stem}.json")),
-        &frame.boxes,
-    )?;
+    rec.write_boxes(&stem, &frame.boxes)?;
     if with_preview {
-        let image = preview(frame, rig);
+        let image = preview(frame, synth.true_rig());
         write_rgb_png(
-            &rec.join("preview").join(format!("{stem}.png")),
+            &rec.root().join(PREVIEW_FOLDER).join(format!("{stem}.png")),
             image.width,
             image.height,
             &image.data,
@@ -160,7 +154,7 @@ pub fn synth_recording(
     let staging = staging_folder(&options.out)?;
     let result = (|| -> Result<()> {
         let render_start = Instant::now();
-        write_rig_toml(synth.written_rig(), &staging.join("rig.toml"))?;
+        let rec = RecordingWriter::create(&staging, synth.written_rig(), &Layer::ALL)?;
         if synth.written_rig() != synth.true_rig() {
             write_rig_toml(synth.true_rig(), &staging.join("rig_true.toml"))?;
         }
@@ -173,31 +167,15 @@ pub fn synth_recording(
                 scene.to_toml()
             ),
         )?;
-        let mut folders = vec![staging.join("boxes")];
         if options.previews {
-            folders.push(staging.join("preview"));
-        }
-        for camera in &synth.true_rig().cameras {
-            for kind in [
-                "color",
-                "depth",
-                "parsing",
-                "labels",
-                "depth_labels",
-                "depth_person",
-            ] {
-                folders.push(staging.join(&camera.name).join(kind));
-            }
-        }
-        for folder in &folders {
-            bodyseg_io::create_folder(folder)?;
+            bodyseg_io::create_folder(&staging.join(PREVIEW_FOLDER))?;
         }
         let done = AtomicUsize::new(0);
         (0..options.frames)
             .into_par_iter()
             .try_for_each(|i| -> Result<()> {
                 let frame = synth.frame(i);
-                write_frame(&staging, &synth, &frame, options.previews)
+                write_frame(&rec, &synth, &frame, options.previews)
                     .with_context(|| format!("frame {}", frame.stem()))?;
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1);
                 Ok(())
@@ -236,7 +214,10 @@ pub fn synth_recording(
 /// OUT/floor/<cam>/color.png    the floor board seen by every camera at once
 /// OUT/floor/<cam>/ir.png
 /// ```
-pub fn synth_chessboard(options: &SynthOptions, board: &ChessboardConfig) -> Result<SynthSummary> {
+pub(crate) fn synth_chessboard(
+    options: &SynthOptions,
+    board: &ChessboardConfig,
+) -> Result<SynthSummary> {
     let start = Instant::now();
     let scene = load_scene(&options.scene, &options.overrides)?;
     let set = chessboard_set(&scene.rig, board, options.seed)?;
@@ -275,7 +256,7 @@ pub fn synth_chessboard(options: &SynthOptions, board: &ChessboardConfig) -> Res
         )?;
         for (c, camera) in set.rig.cameras.iter().enumerate() {
             let dir = staging.join(&camera.name);
-            for kind in ["color", "ir"] {
+            for kind in [Layer::Color.folder(), IR_FOLDER] {
                 bodyseg_io::create_folder(&dir.join(kind))?;
             }
             let floor = staging.join("floor").join(&camera.name);
@@ -286,13 +267,13 @@ pub fn synth_chessboard(options: &SynthOptions, board: &ChessboardConfig) -> Res
             for (k, view) in set.views.iter().filter(|v| v.camera == c).enumerate() {
                 let stem = format!("{k:06}");
                 write_rgb_png(
-                    &dir.join("color").join(format!("{stem}.png")),
+                    &dir.join(Layer::Color.folder()).join(format!("{stem}.png")),
                     cw,
                     ch,
                     &view.images.color,
                 )?;
                 write_gray8_png(
-                    &dir.join("ir").join(format!("{stem}.png")),
+                    &dir.join(IR_FOLDER).join(format!("{stem}.png")),
                     dw,
                     dh,
                     &view.images.ir,

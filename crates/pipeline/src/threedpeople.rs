@@ -56,7 +56,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// 3DPeople's `segmentation_body` palette: part name, RGB colour, bodyseg class.
-pub const THREEDPEOPLE_PALETTE: [(&str, [u8; 3], Class); 15] = [
+pub(crate) const THREEDPEOPLE_PALETTE: [(&str, [u8; 3], Class); 15] = [
     ("bg", [153, 153, 153], Class::Background),
     ("Head", [128, 64, 0], Class::Head),
     ("RUpArm", [128, 0, 128], Class::UpperArms),
@@ -76,7 +76,7 @@ pub const THREEDPEOPLE_PALETTE: [(&str, [u8; 3], Class); 15] = [
 
 /// Largest usable [`ThreeDPeopleCamera::palette_tolerance`]: two palette colours differ
 /// by at least 64 in some channel, so a tolerance below 32 never matches two of them.
-pub const MAX_PALETTE_TOLERANCE: u8 = 31;
+pub(crate) const MAX_PALETTE_TOLERANCE: u8 = 31;
 
 /// One view (subject, sequence, camera, frame) of a 3DPeople dataset.
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -127,7 +127,8 @@ pub struct ThreeDPeopleCamera {
     pub depth_is_ray_distance: bool,
     /// Per-channel difference up to which a segmentation colour takes a palette colour's
     /// class (anti-aliased part edges); other colours are unknown. At most
-    /// [`MAX_PALETTE_TOLERANCE`]. Default 16.
+    /// 31 (two palette colours differ by at least 64 in some channel, so a tolerance below
+    /// 32 never matches two of them). Default 16.
     pub palette_tolerance: u8,
 }
 

@@ -308,14 +308,15 @@ pub struct RefineConfig {
     pub contact_inside_fraction: f32,
     /// How N relabels noise: `nearest` (default, the paper), `weighted` or `probability`.
     pub noise: NoiseMode,
-    /// Weighted noise: the number of nearest clustered points that vote. Default 16.
+    /// `noise = "weighted"` or `"probability"` only: the number of nearest clustered
+    /// points that vote. Default 16.
     pub noise_k: usize,
 
-    /// Weighted noise: weight of the point's own label, in voters lying on the point (a
-    /// voter at distance d weighs `1 / (1 + (d / eps_m)²)`); 0 = ignore it and give a point
-    /// with no voter the nearest clustered point's label, as the paper. Unknown never
-    /// votes. With `noise = "probability"` it is scaled by the parser's probability of the
-    /// point's label. Default 1.0.
+    /// `noise = "weighted"` or `"probability"` only: weight of the point's own label, in
+    /// voters lying on the point (a voter at distance d weighs `1 / (1 + (d / eps_m)²)`);
+    /// 0 = ignore it and give a point with no voter the nearest clustered point's label, as
+    /// the paper. Unknown never votes. With `noise = "probability"` it is scaled by the
+    /// parser's probability of the point's label. Default 1.0.
     pub noise_self_weight: f32,
     /// `noise = "probability"`: a label is doubtful when its parser probability is below
     /// this fraction of the median probability of that label over the person's points

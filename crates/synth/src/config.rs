@@ -372,43 +372,9 @@ impl SceneConfig {
         Ok(config)
     }
 
-    /// Parses a scene TOML, applies `key=value` overrides (dotted keys such as
-    /// `rig.cameras=4` or `dsa.color_time_offset_s=0.03`; values in TOML syntax, bare
-    /// words taken as strings) and validates the result.
-    pub fn from_toml_with_overrides(
-        text: &str,
-        overrides: &[String],
-    ) -> Result<SceneConfig, SynthError> {
-        let mut table: toml::Table =
-            toml::from_str(text).map_err(|e| SynthError::Parse(e.message().to_string()))?;
-        for item in overrides {
-            let Some((key, value)) = item.split_once('=') else {
-                return Err(SynthError::Parse(format!(
-                    "override `{item}` is not KEY=VALUE (e.g. rig.cameras=4)"
-                )));
-            };
-            let key = key.trim();
-            let value = value.trim();
-            let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
-                .ok()
-                .and_then(|mut t| t.remove("v"))
-                .unwrap_or_else(|| toml::Value::String(value.to_string()));
-            let parts: Vec<&str> = key.split('.').collect();
-            let mut node = &mut table;
-            for part in &parts[..parts.len() - 1] {
-                let entry = node
-                    .entry(part.to_string())
-                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-                let toml::Value::Table(next) = entry else {
-                    return Err(SynthError::Invalid {
-                        field: key.to_string(),
-                        reason: format!("`{part}` is not a table"),
-                    });
-                };
-                node = next;
-            }
-            node.insert(parts[parts.len() - 1].to_string(), parsed);
-        }
+    /// A scene from a TOML table (a file's, with the caller's settings applied: bodyseg
+    /// pipeline's `synth --set`), validated.
+    pub fn from_table(table: toml::Table) -> Result<SceneConfig, SynthError> {
         let config: SceneConfig = toml::Value::Table(table)
             .try_into()
             .map_err(|e: toml::de::Error| SynthError::Parse(e.message().to_string()))?;
@@ -626,24 +592,19 @@ mod tests {
     }
 
     #[test]
-    fn overrides_set_dotted_keys_and_round_trip() {
+    fn tables_are_read_as_text_is_and_round_trip() {
         let text = PRESETS[0].1;
-        let c = SceneConfig::from_toml_with_overrides(
-            text,
-            &[
-                "rig.cameras=4".into(),
-                "dsa.color_time_offset_s = 0.03".into(),
-                "name=x".into(),
-            ],
-        )
-        .expect("overrides");
-        assert_eq!(c.rig.cameras, 4);
-        assert_eq!(c.dsa.color_time_offset_s, 0.03);
-        assert_eq!(c.name, "x");
-        let e = SceneConfig::from_toml_with_overrides(text, &["rig.camras=4".into()])
-            .expect_err("typo");
-        assert!(e.to_string().contains("camras"), "{e}");
-        assert!(SceneConfig::from_toml_with_overrides(text, &["rig.cameras".into()]).is_err());
+        let mut table: toml::Table = toml::from_str(text).expect("preset TOML");
+        let c = SceneConfig::from_table(table.clone()).expect("preset");
+        assert_eq!(c, SceneConfig::from_toml(text).expect("preset"));
         assert_eq!(SceneConfig::from_toml(&c.to_toml()).expect("round trip"), c);
+        let rig = table
+            .entry("rig")
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        if let toml::Value::Table(rig) = rig {
+            rig.insert("camras".into(), toml::Value::Integer(4));
+        }
+        let e = SceneConfig::from_table(table).expect_err("typo");
+        assert!(e.to_string().contains("camras"), "{e}");
     }
 }

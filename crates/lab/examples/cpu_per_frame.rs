@@ -2,7 +2,7 @@
 //! configurations scored), next to the wall time: CPU time stays meaningful on a loaded
 //! machine where criterion's wall-clock figures do not.
 //!
-//! `cargo run --release -p bodyseg-pipeline --example cpu_per_frame [ROUNDS] [eval]`
+//! `cargo run --release -p bodyseg-lab --example cpu_per_frame [ROUNDS] [eval]`
 //!
 //! The bench's setup (8 synthetic `handover` frames decoded in memory, a 2-thread pool,
 //! mimalloc keeping freed memory, a fresh output folder per pass); ROUNDS (default 6)
@@ -12,8 +12,8 @@
 
 use anyhow::{Context, Result};
 use bodyseg_pipeline::{
-    FigureChoice, FrameInputs, FrameProcessor, FrameWriter, PipelineConfig, RunOptions,
-    SceneSource, SynthOptions, synth_recording,
+    FrameProcessor, FrameWriter, ParsedFrame, ParserChoice, PipelineConfig, SceneSource,
+    SynthOptions, synth_recording,
 };
 use rayon::prelude::*;
 use std::time::Instant;
@@ -63,20 +63,19 @@ fn main() -> Result<()> {
     };
     synth_recording(&synth, &|_| {})?;
     let out = dir.path().join("out");
-    let mut options = RunOptions::new(&rec, PipelineConfig::default(), &out);
-    options.figures = FigureChoice::Off;
-    let processor = FrameProcessor::open(&options)?;
-    let frames = bodyseg_pipeline::list_frames(&rec, processor.rig())?;
+    let processor = FrameProcessor::open(&rec, &PipelineConfig::default(), ParserChoice::Auto)?;
+    let frames = processor.recording().frames()?.complete;
     let inputs = frames
         .iter()
         .map(|f| {
-            let mut inputs = processor.read(f, &mut Vec::new())?;
+            let frame = processor.read(f, &mut Vec::new())?;
+            let mut parsed = processor.parse(frame, &mut Vec::new())?;
             if !eval {
-                inputs.truth = None;
+                parsed.frame.truth = None;
             }
-            Ok(inputs)
+            Ok(parsed)
         })
-        .collect::<Result<Vec<FrameInputs>>>()?;
+        .collect::<Result<Vec<ParsedFrame>>>()?;
     let two = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     // Each pass writes into a fresh folder, as `bodyseg run` does (no file replaced);
     // the folders are removed after the timing.

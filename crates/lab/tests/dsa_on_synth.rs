@@ -3,7 +3,7 @@
 //! the exact per-depth-pixel truth, and more than naive projection does; with a
 //! calibration error it still makes fewer mistakes than naive.
 
-use bodyseg_pipeline::{camera_images, parsing_images, projection_stats};
+use bodyseg_lab::{camera_images, parsing_images, projection_stats};
 use bodyseg_project::ProjectConfig;
 use bodyseg_synth::{ParsingErrorsConfig, Synth, preset};
 

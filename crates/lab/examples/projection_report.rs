@@ -3,9 +3,9 @@
 //! pixel. The parser is perfect here (predictions = 2D truth), so every wrong point is a
 //! depth-segmentation association error.
 //!
-//! `cargo run --release -p bodyseg-pipeline --example projection_report [FRAMES]`
+//! `cargo run --release -p bodyseg-lab --example projection_report [FRAMES]`
 
-use bodyseg_pipeline::projection_stats;
+use bodyseg_lab::projection_stats;
 use bodyseg_project::ProjectConfig;
 use bodyseg_synth::{ParsingErrorsConfig, Synth, preset};
 

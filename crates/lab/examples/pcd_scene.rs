@@ -4,7 +4,7 @@
 //! outside the people's workspace (|x|, |y| > 1.8 m: walls) dropped, as ASCII PLY with
 //! each point's camera and pixel; and the frame's true boxes as JSON.
 //!
-//! `cargo run --release -p bodyseg-pipeline --example pcd_scene -- OUT.ply OUT_BOXES.json`
+//! `cargo run --release -p bodyseg-lab --example pcd_scene -- OUT.ply OUT_BOXES.json`
 
 use anyhow::Context;
 use bodyseg_calib::{BackProjectOptions, CloudFrame};

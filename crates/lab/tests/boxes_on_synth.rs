@@ -3,11 +3,11 @@
 //! extra box — per preset and per mode (labels with the simulated parser's predicted
 //! labels, DSA projection; geometry, labels unused). The quick test scores 4 frames per
 //! preset (all must be good); the `#[ignore]`d one the report's 50 (2 seeds × 25 frames,
-//! 4 apart; `cargo test --release -p bodyseg-pipeline --test boxes_on_synth -- --ignored`).
+//! 4 apart; `cargo test --release -p bodyseg-lab --test boxes_on_synth -- --ignored`).
 //! Frames are spread by `BODYSEG_BOXES_SEED` (default 100) for the quick test.
 
+use bodyseg_lab::{BoxStats, box_stats, match_boxes, study_frame};
 use bodyseg_people::{BoxMode, BoxesConfig, find_boxes};
-use bodyseg_pipeline::{BoxStats, box_stats, match_boxes, study_frame};
 use bodyseg_project::FrameProjector;
 use bodyseg_synth::{Synth, preset};
 

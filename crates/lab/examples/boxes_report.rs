@@ -4,12 +4,12 @@
 //! against the true boxes: the fraction of frames where every person is matched by
 //! exactly one box with 3D IoU ≥ 0.5 (exact oriented-box IoU) and no box is extra.
 //!
-//! `cargo run --release -p bodyseg-pipeline --example boxes_report [FRAMES] [SEEDS]
+//! `cargo run --release -p bodyseg-lab --example boxes_report [FRAMES] [SEEDS]
 //! [FIRST_SEED]` (default 25 frames × 2 seeds from seed 100 = 50 frames per preset, frames
 //! 4 apart: 0.27 s at 15 fps; seeds FIRST_SEED, FIRST_SEED + 1, ...).
 
+use bodyseg_lab::box_stats;
 use bodyseg_people::{BoxMode, BoxesConfig};
-use bodyseg_pipeline::box_stats;
 use bodyseg_synth::{Synth, preset};
 
 /// A row's mode: geometry without colours is the same split on positions only.
@@ -41,7 +41,7 @@ fn main() -> anyhow::Result<()> {
     println!("| preset | mode | frames | good frames | people | matched | boxes | mean best IoU |");
     println!("|---|---|---:|---:|---:|---:|---:|---:|");
     for name in ["single", "handover", "robot_cell"] {
-        let mut totals = vec![bodyseg_pipeline::BoxStats::default(); configs.len()];
+        let mut totals = vec![bodyseg_lab::BoxStats::default(); configs.len()];
         for seed in first_seed..first_seed + seeds {
             let synth = Synth::new(preset(name)?, seed)?;
             for (t, s) in totals

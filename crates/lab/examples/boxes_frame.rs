@@ -1,11 +1,11 @@
 //! Describes the boxes of single synthetic frames (issue 6's failures, one at a time): the
 //! true boxes, each mode's found boxes and their IoU with the truth.
 //!
-//! `cargo run --release -p bodyseg-pipeline --example boxes_frame PRESET SEED FRAME...`
+//! `cargo run --release -p bodyseg-lab --example boxes_frame PRESET SEED FRAME...`
 //! (`RUST_LOG=bodyseg_people=trace` for the finder's reasons).
 
+use bodyseg_lab::{describe_box as describe, match_boxes, study_frame};
 use bodyseg_people::{BoxMode, BoxesConfig, box_iou, find_boxes};
-use bodyseg_pipeline::{describe_box as describe, match_boxes, study_frame};
 use bodyseg_project::FrameProjector;
 use bodyseg_synth::{Synth, preset};
 

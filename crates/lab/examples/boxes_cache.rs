@@ -2,7 +2,7 @@
 //! into a cache folder, then the finder is scored on them as often as it is changed (the
 //! render and projection are ≈ 10× the finder's time).
 //!
-//! `cargo run --release -p bodyseg-pipeline --example boxes_cache write DIR PRESET FIRST_SEED
+//! `cargo run --release -p bodyseg-lab --example boxes_cache write DIR PRESET FIRST_SEED
 //! SEEDS [FRAMES]` renders seeds FIRST_SEED.. (FRAMES frames 4 apart, default 25) into DIR
 //! (≈ 5.6 MB a `robot_cell` frame); `... boxes_cache score DIR PRESET FIRST_SEED SEEDS
 //! [MODE]` scores MODE (`geometry`, default, or `labels`) on them as `boxes_report` does
@@ -15,8 +15,8 @@
 
 use anyhow::{Context, Result, bail};
 use bodyseg_core::{Label, LabeledCloud, PersonBoxes, PointOrigin};
+use bodyseg_lab::{BoxStats, describe_box as describe, match_boxes, study_frame};
 use bodyseg_people::{BoxMode, BoxesConfig, find_boxes};
-use bodyseg_pipeline::{BoxStats, describe_box as describe, match_boxes, study_frame};
 use bodyseg_project::FrameProjector;
 use bodyseg_synth::{Synth, preset};
 use rayon::prelude::*;
