@@ -11,7 +11,7 @@
 //! refine_file:   cloud PLY + boxes JSON → bodyseg_refine::refine → refined PLY (+ resolved config)
 //! eval_files:    predicted PLY(s) + ground-truth PLY → bodyseg_eval::match_clouds → Report
 //! merge_reports: report JSON files → Report::merge → Report
-//! import_rig:    calibration folders (iai_kinect2) → bodyseg_calib::Rig → rig.toml
+//! import_rig:    calibration files (iai_kinect2, Azure Kinect, ROS, OpenCV; OpenPTrack poses) → bodyseg_calib::Rig → rig.toml
 //! describe_rig:  rig.toml → human-readable summary
 //! calibrate_*:   chessboard images → intrinsics, colour-from-depth, world poses → rig.toml (feature `opencv`)
 //! ```
@@ -54,7 +54,7 @@ pub use batch::{
     BatchFrame, BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameWriter, InputFile,
     OutputFile, Shard, complete_record, record_path, run_batch,
 };
-pub use bodyseg_calib::Board;
+pub use bodyseg_calib::{AzureColorResolution, AzureDepthMode, AzureKinectMode, Board};
 pub use bodyseg_people::{BoxMode, BoxesConfig};
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{
@@ -85,7 +85,9 @@ pub use parse::{
 pub use project::{ProjectOptions, ProjectSummary, depth_path, parsing_path, project_file};
 pub use projection_study::{ProjectionStats, camera_images, parsing_images, projection_stats};
 pub use refine::{RefineOptions, RefineSummary, refine_file, resolved_config_path};
-pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
+pub use rig::{
+    RigFormat, RigImportOptions, RigImportSummary, RigInput, describe_rig, import_rig, read_rig,
+};
 pub use run::{
     ABLATION, FigureChoice, FrameInputs, FrameProcessor, ParserChoice, RunOptions, RunSummary,
     list_frames, run_recording,
