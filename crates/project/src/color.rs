@@ -308,8 +308,9 @@ impl ColorProjection {
 }
 
 impl ColorProjection {
-    /// Pixel coordinates (u, v) and colour-frame z (metres) of a depth-frame point; NaN
-    /// coordinates where a rational model's denominator is ≤ 0 (no image there).
+    /// Pixel coordinates (u, v) and colour-frame z (metres) of a depth-frame point;
+    /// non-finite coordinates where a rational model's denominator is ≤ 0 (no image
+    /// there).
     #[inline(always)]
     fn uv_z<const RATIONAL: bool>(&self, p: [f32; 3]) -> [f32; 3] {
         let (r, t) = (&self.rotation, &self.translation_m);
@@ -324,8 +325,9 @@ impl ColorProjection {
         let mut radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
         if RATIONAL {
             let den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6));
-            // A select, not a branch: the loop still vectorises.
-            radial = if den > 0.0 { radial / den } else { f32::NAN };
+            // Where the denominator is ≤ 0 the division by 0 gives ±∞ (or NaN) and the
+            // point no hit; no branch or select, so the loop still vectorises.
+            radial /= den.max(0.0);
         }
         let xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn);
         let yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn;
@@ -528,6 +530,21 @@ mod tests {
         assert!(inside > 10_000, "{inside}");
         assert!(worst < F32_TOLERANCE_PX, "{worst:e} px");
         assert!(other_pixel * 10_000 <= inside, "{other_pixel} of {inside}");
+    }
+
+    #[test]
+    fn rational_pole_gives_no_hit() {
+        // Denominator 1 - r² (k4 = -1): ≤ 0 from r = 1 on (45° off the colour axis).
+        let mut cam = kinect();
+        cam.color_from_depth = Pose::identity();
+        cam.color.distortion = Distortion::Rational([0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0]);
+        let proj = ColorProjection::new(&cam);
+        assert!(proj.nearest_pixel([0.1, 0.1, 2.0]).is_some());
+        // r = 1 exactly (division by 0), and r = 10, which the unguarded model would map
+        // into the image (radial factor 1/(1 - 100): about 100 px from the centre).
+        for p in [[2.0f32, 0.0, 2.0], [0.0, 20.0, 2.0], [20.0, 0.0, 2.0]] {
+            assert!(proj.nearest_pixel(p).is_none(), "{p:?}");
+        }
     }
 
     fn proj_contains(u: f32, v: f32) -> bool {
