@@ -27,7 +27,7 @@ pub fn read_iai_kinect2(dir: &Path) -> Result<RgbdCamera, CalibError> {
 ///
 /// - `calib_color.yaml`, `calib_ir.yaml`: `cameraMatrix` (3×3) and
 ///   `distortionCoefficients` (1×5, k1 k2 p1 p2 k3; any 1×N or N×1 that OpenCV reads:
-///   4, 5 or 8 values, see [`Distortion::from_opencv`]). The image size is taken from
+///   4, 5 or 8 values, see [`crate::Distortion::from_opencv`]). The image size is taken from
 ///   `image_width`/`image_height` when present, else the Kinect v2 sizes
 ///   ([`KINECT2_COLOR_SIZE`], [`KINECT2_DEPTH_SIZE`]).
 /// - `calib_pose.yaml`: `rotation` (3×3) and `translation` (3×1, metres) map the IR frame

@@ -21,6 +21,8 @@
 //!   `distortion_model` is `plumb_bob`, as in ROS);
 //! - OpenPTrack `camera_poses.yaml` ⇄ `(name, world_from_sensor)`:
 //!   [`read_openptrack_poses`], [`write_openptrack_poses`];
+//! - OpenCV FileStorage YAML of one sensor → [`Intrinsics`], in pure Rust:
+//!   [`read_opencv_yaml_intrinsics`];
 //! - one sensor's intrinsics TOML (the fields of a rig.toml `[camera.depth]` table at the
 //!   top level) ⇄ [`Intrinsics`]: [`read_intrinsics_toml`], [`write_intrinsics_toml`];
 //! - with the `opencv` feature, OpenCV FileStorage YAML/XML through OpenCV ⇄

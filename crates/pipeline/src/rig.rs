@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 /// Calibration formats `bodyseg rig import` reads.
 ///
-/// A new reader in bodyseg-calib becomes a variant here, an arm in [`read_camera`] and a
+/// A new reader in bodyseg-calib becomes a variant here, an arm in `read_camera` and a
 /// value of the binary's `--from`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
