@@ -3,11 +3,12 @@
 
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
-    Board, ConvertFormat, ConvertOptions, DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice,
-    IntrinsicsCalibOptions, NamedPrediction, ParseOptions, ParseSource, ParserChoice,
-    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
-    RigFormat, RigImportOptions, RunOptions, SceneSource, StereoCalibOptions, SynthOptions,
-    ThreeDPeopleCamera, WorldCalibOptions,
+    AzureColorResolution, AzureDepthMode, AzureKinectMode, Board, ConvertFormat, ConvertOptions,
+    DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice, IntrinsicsCalibOptions, NamedPrediction,
+    ParseOptions, ParseSource, ParserChoice, PipelineConfig, ProjectMode, ProjectOptions,
+    RefineOptions, RefineOverrides, ReportFormat, RigFormat, RigImportOptions, RigInput,
+    RunOptions, SceneSource, StereoCalibOptions, SynthOptions, ThreeDPeopleCamera,
+    WorldCalibOptions,
 };
 use bodyseg_refine::Steps;
 use bodyseg_synth::ChessboardConfig;
@@ -765,7 +766,8 @@ fn split_named(value: &str) -> (Option<String>, PathBuf) {
 /// `bodyseg rig ...`.
 #[derive(Debug, Subcommand)]
 pub enum RigCommand {
-    /// Assemble a rig.toml from one calibration folder per camera (iai_kinect2)
+    /// Assemble a rig.toml from other tools' calibration files, one camera per input
+    /// (iai_kinect2, Azure Kinect, ROS camera_info, OpenCV; world poses from OpenPTrack)
     #[command(long_about = RIG_IMPORT_LONG_ABOUT, after_help = RIG_IMPORT_EXAMPLES)]
     Import(RigImportArgs),
     /// Print a short summary of a rig.toml: sensor sizes and intrinsics, baseline, depth
@@ -775,51 +777,100 @@ pub enum RigCommand {
 }
 
 const RIG_IMPORT_LONG_ABOUT: &str = "\
-Assemble a rig.toml (shared/FORMATS.md) from calibration files: one folder per camera, \
-cameras in the order given (the rig order: camera index i of a point is the i-th folder).
+Assemble a rig.toml (shared/FORMATS.md) from calibration files of other tools: one INPUT \
+per camera, cameras in the order given (the rig order: camera index i of a point is the \
+i-th INPUT). --from gives the format: once for every INPUT, or once per INPUT in the same \
+order. What each format reads:
 
---from iai_kinect2: each folder is a kinect2_calibration output (calib_color.yaml, \
-calib_ir.yaml, calib_pose.yaml, calib_depth.yaml). calib_pose maps the IR (depth) sensor into \
-the colour sensor (metres) and becomes color_from_depth; depthShift (millimetres) becomes \
-depth_shift_mm; depth_scale is 1000 (millimetres); image sizes are the Kinect v2 ones \
-(512x424 depth, 1920x1080 colour) unless the files give image_width/image_height.
+--from iai_kinect2: INPUT is a kinect2_calibration folder (calib_color.yaml, calib_ir.yaml, \
+calib_pose.yaml, calib_depth.yaml). calib_pose maps the IR (depth) sensor into the colour \
+sensor (metres) and becomes color_from_depth; depthShift (millimetres) becomes \
+depth_shift_mm; a folder without calib_depth.yaml gets depth shift 0, as kinect2_bridge \
+does (a note says so); depth_scale is 1000; image sizes are the Kinect v2 ones (512x424 \
+depth, 1920x1080 colour) unless the files give image_width/image_height.
 
-World poses: iai_kinect2 files hold no world pose, so every camera's world_from_depth is the \
-identity. Set the real poses with `bodyseg calibrate world` or by editing the [camera.\
-world_from_depth] tables of the written file; a note says so unless \
+--from azure_kinect: INPUT is the device's factory calibration JSON (k4arecorder's \
+calibration.json, k4a_device_get_raw_calibration), mapped as the Azure Kinect SDK maps \
+it: both sensors with their rational distortion (k1..k6, p1, p2) and the colour sensor's \
+pose. The intrinsics are for the full images the calibration is stored for (depth \
+1024x1024, colour 4096x3072) unless --depth-mode and --color-resolution name the mode \
+of the recording (e.g. NFOV_UNBINNED: 640x576, 1080P: 1920x1080). depth_scale 1000, no \
+shift.
+
+--from ros: INPUT is DEPTH.yaml,COLOR.yaml: the ROS camera_info files of the depth and \
+the colour sensor (plumb_bob or rational_polynomial; a file without distortion_model is \
+plumb_bob, as in ROS). camera_info holds no pose between the sensors: color_from_depth \
+is the identity (a note says so). A single file (no comma) is a depth stream registered \
+to that sensor (depth_registered): both sensors get its intrinsics.
+
+--from opencv: as ros, with OpenCV FileStorage YAML files of one sensor each \
+(camera_matrix or cameraMatrix, distortion_coefficients or distortionCoefficients with \
+4, 5 or 8 values, image_width, image_height), e.g. from cv::FileStorage or `bodyseg \
+calibrate intrinsics`. XML files need bodyseg built with --features opencv.
+
+World poses: none of these formats holds one. --poses reads OpenPTrack's \
+camera_poses.yaml (opt_calibration's output): each camera's pose is that of the sensor \
+of the same name (name the cameras after OpenPTrack's sensors with --name). OpenPTrack \
+calibrates the colour sensors, so world_from_depth = pose · color_from_depth. Without \
+--poses every world_from_depth is the identity; set the real poses with `bodyseg \
+calibrate world` or by editing the written file; a note says so unless \
 --world-from-depth-identity is given.
 
-Camera names are the folder names, or --name (once per folder, same order); they must be \
-distinct. Writes --out atomically: nothing is written when a folder cannot be read.";
+Camera names are the folder names (iai_kinect2) or file stems, or --name (once per INPUT, \
+same order); they must be distinct. Notes (defaults taken) are printed as `note:` lines. \
+Writes --out atomically: nothing is written when an input cannot be read; errors name \
+the file and the key.";
 
 const RIG_IMPORT_EXAMPLES: &str = "\
 Examples:
   # Three Kinect v2 cameras, named after their serial-number folders:
   bodyseg rig import --from iai_kinect2 calib/011054343347 calib/021401644747 \\
       calib/196605135147 --out rig.toml
-  # The same, with chosen names (one --name per folder, in order):
+  # The same, named after OpenPTrack's sensors and placed with its camera_poses.yaml:
   bodyseg rig import --from iai_kinect2 calib/011054343347 calib/021401644747 \\
-      calib/196605135147 --name left --name front --name right --out rig.toml
+      calib/196605135147 --name kinect01 --name kinect02 --name kinect03 \\
+      --poses opt_calibration/conf/camera_poses.yaml --out rig.toml
+  # An Azure Kinect recorded in NFOV unbinned depth and 1080p colour:
+  bodyseg rig import --from azure_kinect calibration.json --depth-mode NFOV_UNBINNED \\
+      --color-resolution 1080P --out rig.toml
+  # A Kinect v2 and a ROS camera (depth and colour camera_info), two formats:
+  bodyseg rig import --from iai_kinect2 --from ros calib/011054343347 \\
+      ros/depth.yaml,ros/rgb.yaml --name left --name right --out rig.toml
   # Check what was imported:
   bodyseg rig show rig.toml";
 
 /// `bodyseg rig import`.
 #[derive(Debug, Args)]
 pub struct RigImportArgs {
-    /// Format of the calibration folders
-    #[arg(long, value_enum, value_name = "FORMAT")]
-    pub from: ImportFormat,
+    /// Format of the inputs: once for all, or once per INPUT in the same order
+    #[arg(long, value_enum, value_name = "FORMAT", required = true)]
+    pub from: Vec<ImportFormat>,
 
-    /// Calibration folders, one per camera, in rig order
-    #[arg(value_name = "DIR", required = true, num_args = 1..)]
-    pub dirs: Vec<PathBuf>,
+    /// One camera each: a folder (iai_kinect2), a JSON file (azure_kinect), or
+    /// DEPTH,COLOR files (ros, opencv; one file: depth registered to that sensor)
+    #[arg(value_name = "INPUT", required = true, num_args = 1..)]
+    pub inputs: Vec<String>,
 
-    /// Camera name: once per folder, in the same order [default: the folder names]
+    /// Camera name: once per INPUT, in the same order [default: folder names, file stems]
     #[arg(long = "name", value_name = "NAME")]
     pub names: Vec<String>,
 
-    /// Accept identity world poses (world_from_depth) for formats that have none, without
-    /// the note saying so; the rig is the same either way
+    /// OpenPTrack camera_poses.yaml: each camera's world pose, by camera name
+    #[arg(long, value_name = "camera_poses.yaml")]
+    pub poses: Option<PathBuf>,
+
+    /// Azure Kinect depth mode of the recording (intrinsics for its images)
+    /// [default: the stored 1024x1024 image]
+    #[arg(long, value_name = "MODE", value_parser = parse_depth_mode)]
+    pub depth_mode: Option<AzureDepthMode>,
+
+    /// Azure Kinect colour resolution of the recording: 720P, 1080P, 1440P, 1536P, 2160P
+    /// or 3072P [default: the stored image, 3072P on a retail device]
+    #[arg(long, value_name = "RESOLUTION", value_parser = parse_color_resolution)]
+    pub color_resolution: Option<AzureColorResolution>,
+
+    /// Accept identity world poses (world_from_depth) without --poses, without the note
+    /// saying so; the rig is the same either way
     #[arg(long)]
     pub world_from_depth_identity: bool,
 
@@ -828,35 +879,96 @@ pub struct RigImportArgs {
     pub out: PathBuf,
 }
 
-/// `--from`: the calibration formats `rig import` reads. More are being added to
-/// bodyseg-calib (ROS camera_info, OpenPTrack, Azure Kinect): each becomes a variant here
-/// and in [`RigFormat`].
+fn parse_depth_mode(s: &str) -> Result<AzureDepthMode, String> {
+    AzureDepthMode::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = AzureDepthMode::ALL.iter().map(|m| m.name()).collect();
+        format!("{s:?} is not a depth mode: {}", names.join(", "))
+    })
+}
+
+fn parse_color_resolution(s: &str) -> Result<AzureColorResolution, String> {
+    AzureColorResolution::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = AzureColorResolution::ALL.iter().map(|m| m.name()).collect();
+        format!("{s:?} is not a colour resolution: {}", names.join(", "))
+    })
+}
+
+/// `--from`: the calibration formats `rig import` reads, as in [`RigFormat`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ImportFormat {
     /// iai_kinect2 folders: calib_color.yaml, calib_ir.yaml, calib_pose.yaml,
-    /// calib_depth.yaml (no world pose)
+    /// calib_depth.yaml
     #[value(name = "iai_kinect2")]
     IaiKinect2,
+    /// Azure Kinect factory calibration JSON
+    #[value(name = "azure_kinect")]
+    AzureKinect,
+    /// ROS camera_info YAML, DEPTH,COLOR
+    #[value(name = "ros")]
+    Ros,
+    /// OpenCV FileStorage intrinsics, DEPTH,COLOR
+    #[value(name = "opencv")]
+    OpenCv,
 }
 
 impl From<ImportFormat> for RigFormat {
     fn from(f: ImportFormat) -> RigFormat {
         match f {
             ImportFormat::IaiKinect2 => RigFormat::IaiKinect2,
+            ImportFormat::AzureKinect => RigFormat::AzureKinect,
+            ImportFormat::Ros => RigFormat::Ros,
+            ImportFormat::OpenCv => RigFormat::OpenCv,
         }
     }
 }
 
 impl RigImportArgs {
-    /// The pipeline's options for `import_rig`.
-    pub fn options(&self) -> RigImportOptions {
-        RigImportOptions {
-            format: self.from.into(),
-            inputs: self.dirs.clone(),
+    /// The pipeline's options for `import_rig`: each INPUT with its format (`DEPTH,COLOR`
+    /// split for one-sensor formats).
+    pub fn options(&self) -> Result<RigImportOptions> {
+        let formats: Vec<RigFormat> = match self.from.as_slice() {
+            [one] => vec![(*one).into(); self.inputs.len()],
+            many if many.len() == self.inputs.len() => many.iter().map(|&f| f.into()).collect(),
+            many => bail!(
+                "{} --from for {} INPUTs: give one --from for all, or one per INPUT in the \
+                 same order",
+                many.len(),
+                self.inputs.len()
+            ),
+        };
+        let inputs = self
+            .inputs
+            .iter()
+            .zip(formats)
+            .map(|(input, format)| {
+                let (path, color) = match input.split_once(',') {
+                    Some((depth, color)) if format.is_one_sensor() => {
+                        (PathBuf::from(depth), Some(PathBuf::from(color)))
+                    }
+                    _ => (PathBuf::from(input), None),
+                };
+                RigInput {
+                    format,
+                    path,
+                    color,
+                }
+            })
+            .collect::<Vec<_>>();
+        let has_azure = inputs.iter().any(|i| i.format == RigFormat::AzureKinect);
+        if !has_azure && (self.depth_mode.is_some() || self.color_resolution.is_some()) {
+            bail!("--depth-mode and --color-resolution apply to --from azure_kinect only");
+        }
+        Ok(RigImportOptions {
+            inputs,
             names: self.names.clone(),
+            poses: self.poses.clone(),
+            azure_mode: AzureKinectMode {
+                depth: self.depth_mode,
+                color: self.color_resolution,
+            },
             world_from_depth_identity: self.world_from_depth_identity,
             out: self.out.clone(),
-        }
+        })
     }
 }
 
@@ -1339,9 +1451,11 @@ mod tests {
         let Command::Rig(RigCommand::Import(r)) = cli.command else {
             panic!("parsed as rig import");
         };
-        let o = r.options();
-        assert_eq!(o.format, RigFormat::IaiKinect2);
-        assert_eq!(o.inputs, [PathBuf::from("a"), PathBuf::from("b")]);
+        let o = r.options().expect("valid options");
+        let formats: Vec<RigFormat> = o.inputs.iter().map(|i| i.format).collect();
+        assert_eq!(formats, [RigFormat::IaiKinect2; 2]);
+        let paths: Vec<&PathBuf> = o.inputs.iter().map(|i| &i.path).collect();
+        assert_eq!(paths, [&PathBuf::from("a"), &PathBuf::from("b")]);
         assert_eq!(o.names, ["left", "right"]);
         assert!(!o.world_from_depth_identity);
         // A folder is required, and so is a known format.
@@ -1361,6 +1475,84 @@ mod tests {
             Cli::try_parse_from(["bodyseg", "rig", "import", "--from", "x", "a", "--out", "r"])
                 .is_err()
         );
+    }
+
+    #[test]
+    fn rig_import_pairs_formats_with_inputs() {
+        let parse = |args: &[&str]| {
+            let mut all = vec!["bodyseg", "rig", "import", "--out", "rig.toml"];
+            all.extend_from_slice(args);
+            let cli = Cli::try_parse_from(all).expect("valid command line");
+            let Command::Rig(RigCommand::Import(r)) = cli.command else {
+                panic!("parsed as rig import");
+            };
+            r.options()
+        };
+        let o = parse(&[
+            "--from",
+            "iai_kinect2",
+            "--from",
+            "ros",
+            "--from",
+            "azure_kinect",
+            "k/0113",
+            "d.yaml,c.yaml",
+            "k4a.json",
+            "--poses",
+            "camera_poses.yaml",
+            "--depth-mode",
+            "nfov_unbinned",
+            "--color-resolution",
+            "1080P",
+        ])
+        .expect("valid");
+        assert_eq!(
+            o.inputs,
+            [
+                RigInput {
+                    format: RigFormat::IaiKinect2,
+                    path: "k/0113".into(),
+                    color: None
+                },
+                RigInput {
+                    format: RigFormat::Ros,
+                    path: "d.yaml".into(),
+                    color: Some("c.yaml".into())
+                },
+                RigInput {
+                    format: RigFormat::AzureKinect,
+                    path: "k4a.json".into(),
+                    color: None
+                },
+            ]
+        );
+        assert_eq!(o.poses, Some(PathBuf::from("camera_poses.yaml")));
+        assert_eq!(o.azure_mode.depth, Some(AzureDepthMode::NfovUnbinned));
+        assert_eq!(o.azure_mode.color, Some(AzureColorResolution::R1080p));
+        // One-sensor formats take a single file too; a comma only splits for them.
+        let o = parse(&["--from", "opencv", "rgbd.yaml"]).expect("valid");
+        assert_eq!(o.inputs[0].color, None);
+        let o = parse(&["--from", "iai_kinect2", "a,b"]).expect("valid");
+        assert_eq!(o.inputs[0].path, PathBuf::from("a,b"));
+        let e = parse(&["--from", "ros", "--from", "ros", "a", "b", "c"]).expect_err("2 for 3");
+        assert!(e.to_string().starts_with("2 --from for 3 INPUTs"), "{e}");
+        let e = parse(&["--from", "ros", "a", "--depth-mode", "WFOV_UNBINNED"])
+            .expect_err("Azure option without Azure input");
+        assert!(e.to_string().contains("azure_kinect only"), "{e}");
+        let cli = Cli::try_parse_from([
+            "bodyseg",
+            "rig",
+            "import",
+            "--from",
+            "azure_kinect",
+            "a.json",
+            "--depth-mode",
+            "NFOV",
+            "--out",
+            "r",
+        ]);
+        let err = cli.expect_err("unknown mode").to_string();
+        assert!(err.contains("NFOV_UNBINNED"), "{err}");
     }
 
     #[test]

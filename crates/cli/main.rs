@@ -236,7 +236,7 @@ fn eval(args: &EvalArgs) -> Result<Vec<Stage>> {
 fn rig(cmd: &RigCommand) -> Result<Vec<Stage>> {
     match cmd {
         RigCommand::Import(args) => {
-            let summary = import_rig(&args.options())?;
+            let summary = import_rig(&args.options()?)?;
             for note in &summary.notes {
                 eprintln!("note: {note}");
             }

@@ -1,5 +1,5 @@
 //! Azure Kinect factory calibration JSON (`k4arecorder`'s attachment, `k4a_device_get_raw_calibration`):
-//! reader and writer.
+//! reader and writer, mapped exactly as the Azure Kinect Sensor SDK maps it.
 //!
 //! ```json
 //! {"CalibrationInformation": {"Cameras": [
@@ -11,22 +11,36 @@
 //!   {"Location": "CALIBRATION_CameraLocationPV0", ...}]}}
 //! ```
 //!
+//! Sources (Azure-Kinect-Sensor-SDK, `src/calibration/calibration.c`,
+//! `src/transformation/mode_specific_calibration.c`, `intrinsic_transformation.c`,
+//! `include/k4a/k4atypes.h` for `k4a_calibration_intrinsic_parameters_t`):
 //! - Cameras are found by `Location`: `..._CameraLocationD0` is the depth sensor,
-//!   `..._CameraLocationPV0` the colour sensor; others (IMU-less extras) are ignored.
-//! - `ModelParameters` are normalised by the sensor size (`SensorWidth`, `SensorHeight`,
-//!   the full native resolution: 1024×1024 depth, 4096×3072 colour). The intrinsics are
-//!   returned at that resolution; a capture mode that bins or crops (NFOV 640×576, colour
-//!   1920×1080) needs its own scaling, which this reader does not do.
-//! - The Azure Kinect SDK's pixel convention puts pixel *corners* at integers (centre of
-//!   the first pixel at 0.5), OpenCV's and bodyseg's put pixel *centres* at integers (see
-//!   the crate conventions). So, as the SDK does when it converts to OpenCV:
-//!   `fx = fx_n · W`, `fy = fy_n · H`, `cx = cx_n · W − 0.5`, `cy = cy_n · H − 0.5`.
-//!   The writer inverts this.
-//! - k4, k5, k6 are the denominator of OpenCV's rational model; bodyseg's 5-coefficient
-//!   Brown-Conrady (k1 k2 p1 p2 k3) drops them. So does the centre of distortion
-//!   (codx, cody), which k4a's Brown-Conrady model requires to be 0. When any of them is
-//!   non-zero the reader still succeeds and says so in
-//!   [`AzureKinectCalibration::warnings`]. Note the stored order: p2 before p1.
+//!   `..._CameraLocationPV0` the colour sensor; others are ignored. A UTF-8 byte order
+//!   mark before the JSON is ignored.
+//! - `ModelParameters` hold `cx cy fx fy k1 k2 k3 k4 k5 k6 codx cody p2 p1` (and the
+//!   metric radius, when 15), the first four normalised by the image size with pixel
+//!   *corners* at integers. The SDK's `CALIBRATION_LensDistortionModelBrownConrady`
+//!   projects with `d = (1 + k1 r² + k2 r⁴ + k3 r⁶) / (1 + k4 r² + k5 r⁴ + k6 r⁶)`,
+//!   `x_d = x d + (r² + 2x²) p2 + 2 x y p1`, `y_d = y d + (r² + 2y²) p1 + 2 x y p2`
+//!   around the centre of distortion (codx, cody): that is OpenCV's rational model, so
+//!   the reader returns [`Distortion::Rational`]`([k1, k2, p1, p2, k3, k4, k5, k6])`.
+//!   codx and cody are 0 in every factory file (the SDK's own OpenCV export writes 0,
+//!   "always zero for BrownConrady"); a file where they are not is refused, since the
+//!   model cannot hold them. `CALIBRATION_LensDistortionModelRational6KT` (the SDK:
+//!   "deprecated, only supported early internal devices") has other tangential terms
+//!   (`x y p1` without the factor 2) and a centre of distortion: refused too.
+//! - Pixel units, as the SDK's `transformation_get_mode_specific_camera_calibration`:
+//!   for an image `W × H` binned from the sensor and cropped at `(ox, oy)`,
+//!   `fx = fx_n · Wb`, `cx = cx_n · Wb − ox − 0.5` (the 0.5 moves integers from pixel
+//!   corners to pixel centres, OpenCV's and bodyseg's convention), likewise y. Without a
+//!   capture mode ([`AzureKinectMode`] fields `None`) the intrinsics are those of the
+//!   full stored image (`SensorWidth × SensorHeight`, no binning or crop); with one, the
+//!   SDK's table of that mode is used, so the intrinsics fit the images a recording in
+//!   that mode holds (NFOV unbinned depth is 640×576, 1080p colour 1920×1080). A colour
+//!   calibration stored for a 16:9 image (older devices) is first brought to the 4:3
+//!   sensor as the SDK does.
+//! - The metric radius (the SDK does not project points farther from the axis) is not
+//!   kept: bodyseg's models have no such limit.
 //! - `Rt` maps the depth frame (the device's reference) into each camera: the colour
 //!   camera's `Rt` is `color_from_depth` (translation in metres); the depth camera's is the
 //!   identity in factory files, and is honoured if it is not
@@ -37,8 +51,10 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
-use crate::files::{read_text, write_atomic};
-use crate::{CalibError, DEFAULT_DEPTH_SCALE, Intrinsics, Pose, RgbdCamera};
+use crate::files::{read_text, without_bom, write_atomic};
+use crate::{
+    CalibError, DEFAULT_DEPTH_SCALE, Distortion, ImportedCamera, Intrinsics, Pose, RgbdCamera,
+};
 
 /// `Location` of the depth camera.
 pub const AZURE_DEPTH_LOCATION: &str = "CALIBRATION_CameraLocationD0";
@@ -46,26 +62,168 @@ pub const AZURE_DEPTH_LOCATION: &str = "CALIBRATION_CameraLocationD0";
 pub const AZURE_COLOR_LOCATION: &str = "CALIBRATION_CameraLocationPV0";
 /// `ModelType` of the lens model this reader understands.
 const BROWN_CONRADY: &str = "CALIBRATION_LensDistortionModelBrownConrady";
-/// Number of `ModelParameters` of the Brown-Conrady model.
+/// `ModelType` of the deprecated model of early devices, refused.
+const RATIONAL_6KT: &str = "CALIBRATION_LensDistortionModelRational6KT";
+/// Number of `ModelParameters` the model needs (a 15th, the metric radius, is ignored).
 const MODEL_PARAMETER_COUNT: usize = 14;
 
-/// A camera read from an Azure Kinect calibration, with what the conversion dropped.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AzureKinectCalibration {
-    /// The camera (intrinsics at the sensors' native resolution).
-    pub camera: RgbdCamera,
-    /// One line per non-zero coefficient that bodyseg's model drops (k4..k6, codx, cody),
-    /// naming the key, the value and the file. Real devices store non-zero k4..k6, so
-    /// callers should log these.
-    pub warnings: Vec<String>,
+/// Depth camera mode (`k4a_depth_mode_t`): which image of the depth sensor the
+/// intrinsics describe.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AzureDepthMode {
+    /// `NFOV_2X2BINNED`: 320×288.
+    Nfov2x2Binned,
+    /// `NFOV_UNBINNED`: 640×576.
+    NfovUnbinned,
+    /// `WFOV_2X2BINNED`: 512×512.
+    Wfov2x2Binned,
+    /// `WFOV_UNBINNED`: 1024×1024.
+    WfovUnbinned,
+    /// `PASSIVE_IR`: 1024×1024.
+    PassiveIr,
 }
 
-/// Reads an Azure Kinect calibration JSON into a camera called `name`.
+/// Colour camera resolution (`k4a_color_resolution_t`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AzureColorResolution {
+    /// `720P`: 1280×720.
+    R720p,
+    /// `1080P`: 1920×1080.
+    R1080p,
+    /// `1440P`: 2560×1440.
+    R1440p,
+    /// `1536P`: 2048×1536.
+    R1536p,
+    /// `2160P`: 3840×2160.
+    R2160p,
+    /// `3072P`: 4096×3072.
+    R3072p,
+}
+
+/// The SDK's `k4a_camera_calibration_mode_info_t`: the image the sensor is binned to, the
+/// crop offset in it and the output size, pixels.
+#[derive(Debug, Clone, Copy)]
+struct ModeInfo {
+    binned: [u32; 2],
+    crop: [i32; 2],
+    output: [u32; 2],
+}
+
+const fn mode(binned: [u32; 2], crop: [i32; 2], output: [u32; 2]) -> ModeInfo {
+    ModeInfo {
+        binned,
+        crop,
+        output,
+    }
+}
+
+impl AzureDepthMode {
+    /// Every mode, in the SDK's order.
+    pub const ALL: [AzureDepthMode; 5] = [
+        AzureDepthMode::Nfov2x2Binned,
+        AzureDepthMode::NfovUnbinned,
+        AzureDepthMode::Wfov2x2Binned,
+        AzureDepthMode::WfovUnbinned,
+        AzureDepthMode::PassiveIr,
+    ];
+
+    /// The SDK's name without `K4A_DEPTH_MODE_` (`NFOV_UNBINNED`).
+    pub fn name(self) -> &'static str {
+        match self {
+            AzureDepthMode::Nfov2x2Binned => "NFOV_2X2BINNED",
+            AzureDepthMode::NfovUnbinned => "NFOV_UNBINNED",
+            AzureDepthMode::Wfov2x2Binned => "WFOV_2X2BINNED",
+            AzureDepthMode::WfovUnbinned => "WFOV_UNBINNED",
+            AzureDepthMode::PassiveIr => "PASSIVE_IR",
+        }
+    }
+
+    /// The mode of a name as [`AzureDepthMode::name`] gives it, case-insensitive.
+    pub fn from_name(name: &str) -> Option<Self> {
+        named(&Self::ALL, Self::name, name)
+    }
+
+    /// `transformation_get_mode_specific_depth_camera_calibration`'s table.
+    fn info(self) -> ModeInfo {
+        match self {
+            AzureDepthMode::Nfov2x2Binned => mode([512, 512], [96, 90], [320, 288]),
+            AzureDepthMode::NfovUnbinned => mode([1024, 1024], [192, 180], [640, 576]),
+            AzureDepthMode::Wfov2x2Binned => mode([512, 512], [0, 0], [512, 512]),
+            AzureDepthMode::WfovUnbinned | AzureDepthMode::PassiveIr => {
+                mode([1024, 1024], [0, 0], [1024, 1024])
+            }
+        }
+    }
+}
+
+impl AzureColorResolution {
+    /// Every resolution, in the SDK's order.
+    pub const ALL: [AzureColorResolution; 6] = [
+        AzureColorResolution::R720p,
+        AzureColorResolution::R1080p,
+        AzureColorResolution::R1440p,
+        AzureColorResolution::R1536p,
+        AzureColorResolution::R2160p,
+        AzureColorResolution::R3072p,
+    ];
+
+    /// The SDK's name without `K4A_COLOR_RESOLUTION_` (`1080P`).
+    pub fn name(self) -> &'static str {
+        match self {
+            AzureColorResolution::R720p => "720P",
+            AzureColorResolution::R1080p => "1080P",
+            AzureColorResolution::R1440p => "1440P",
+            AzureColorResolution::R1536p => "1536P",
+            AzureColorResolution::R2160p => "2160P",
+            AzureColorResolution::R3072p => "3072P",
+        }
+    }
+
+    /// The resolution of a name as [`AzureColorResolution::name`] gives it,
+    /// case-insensitive.
+    pub fn from_name(name: &str) -> Option<Self> {
+        named(&Self::ALL, Self::name, name)
+    }
+
+    /// `transformation_get_mode_specific_color_camera_calibration`'s table (for a 4:3
+    /// calibration).
+    fn info(self) -> ModeInfo {
+        match self {
+            AzureColorResolution::R720p => mode([1280, 960], [0, 120], [1280, 720]),
+            AzureColorResolution::R1080p => mode([1920, 1440], [0, 180], [1920, 1080]),
+            AzureColorResolution::R1440p => mode([2560, 1920], [0, 240], [2560, 1440]),
+            AzureColorResolution::R1536p => mode([2048, 1536], [0, 0], [2048, 1536]),
+            AzureColorResolution::R2160p => mode([3840, 2880], [0, 360], [3840, 2160]),
+            AzureColorResolution::R3072p => mode([4096, 3072], [0, 0], [4096, 3072]),
+        }
+    }
+}
+
+/// The value of `all` whose `name` is `wanted`, case-insensitive.
+fn named<T: Copy>(all: &[T], name: fn(T) -> &'static str, wanted: &str) -> Option<T> {
+    all.iter()
+        .copied()
+        .find(|&m| name(m).eq_ignore_ascii_case(wanted))
+}
+
+/// The capture mode whose images the intrinsics are for; `None`: the full image the
+/// calibration is stored for (`SensorWidth × SensorHeight`, no binning, no crop).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct AzureKinectMode {
+    /// Depth mode of the recording, or `None`.
+    pub depth: Option<AzureDepthMode>,
+    /// Colour resolution of the recording, or `None`.
+    pub color: Option<AzureColorResolution>,
+}
+
+/// Reads an Azure Kinect calibration JSON into a camera called `name`, with intrinsics
+/// for the images of `mode` (see the module documentation).
 pub fn read_azure_kinect_json(
     path: &Path,
     name: &str,
-) -> Result<AzureKinectCalibration, CalibError> {
-    parse_azure_kinect_json(&read_text(path)?, name, path)
+    mode: AzureKinectMode,
+) -> Result<ImportedCamera, CalibError> {
+    parse_azure_kinect_json(&read_text(path)?, name, path, mode)
 }
 
 struct Doc<'p> {
@@ -120,24 +278,113 @@ impl Doc<'_> {
     }
 }
 
+/// Which sensor a camera entry is, for the pixel conversion.
+#[derive(Clone, Copy)]
+enum Sensor {
+    Depth(Option<AzureDepthMode>),
+    Color(Option<AzureColorResolution>),
+}
+
+/// The normalised pinhole `[cx, cy, fx, fy]` (corner-at-integer) in pixels of the
+/// mode's image, and its size, as the SDK converts them.
+fn to_pixels(
+    doc: &Doc,
+    key: &str,
+    sensor: Sensor,
+    stored: [u32; 2],
+    n: [f64; 4],
+) -> Result<([f64; 4], [u32; 2]), CalibError> {
+    let [w, h] = stored;
+    let info = match sensor {
+        Sensor::Depth(None) | Sensor::Color(None) => mode(stored, [0, 0], stored),
+        Sensor::Depth(Some(m)) => {
+            if stored != [1024, 1024] {
+                return Err(doc.bad(
+                    &format!("{key}.SensorWidth"),
+                    format!(
+                        "depth mode {} needs the 1024x1024 depth calibration of a real \
+                         device, the file says {w}x{h}",
+                        m.name()
+                    ),
+                ));
+            }
+            m.info()
+        }
+        Sensor::Color(Some(r)) => r.info(),
+    };
+    let mut n = n;
+    if let Sensor::Color(Some(r)) = sensor {
+        // A calibration stored for a 16:9 image is brought to the 4:3 sensor, still
+        // normalised, as the SDK does (its mode {4096x2304 binned, crop (0, -384),
+        // 4096x3072 out}); integer arithmetic as the SDK's.
+        if w * 9 / 16 == h {
+            let legacy = mode([4096, 2304], [0, -384], [4096, 3072]);
+            let [bw, bh] = legacy.binned.map(f64::from);
+            let [ow, oh] = legacy.output.map(f64::from);
+            let [ox, oy] = legacy.crop.map(f64::from);
+            n = [
+                (n[0] * bw - ox) / ow,
+                (n[1] * bh - oy) / oh,
+                n[2] * bw / ow,
+                n[3] * bh / oh,
+            ];
+        } else if w * 3 / 4 != h {
+            return Err(doc.bad(
+                &format!("{key}.SensorWidth"),
+                format!(
+                    "colour resolution {} needs a 4:3 or 16:9 colour calibration, the file \
+                     says {w}x{h}",
+                    r.name()
+                ),
+            ));
+        }
+    }
+    let [bw, bh] = info.binned.map(f64::from);
+    let [ox, oy] = info.crop.map(f64::from);
+    Ok((
+        [
+            n[0] * bw - ox - 0.5,
+            n[1] * bh - oy - 0.5,
+            n[2] * bw,
+            n[3] * bh,
+        ],
+        info.output,
+    ))
+}
+
 /// One camera entry: intrinsics and its `Rt` (camera_from_depth-reference).
 fn read_camera(
     doc: &Doc,
     cam: &Value,
     key: &str,
-    warnings: &mut Vec<String>,
+    sensor: Sensor,
 ) -> Result<(Intrinsics, Pose), CalibError> {
     let width = doc.size(cam, key, "SensorWidth")?;
     let height = doc.size(cam, key, "SensorHeight")?;
     let intr_key = format!("{key}.Intrinsics");
     let intr = doc.get(cam, key, "Intrinsics")?;
-    if let Some(model) = intr.get("ModelType")
-        && model.as_str() != Some(BROWN_CONRADY)
-    {
-        return Err(doc.bad(
-            &format!("{intr_key}.ModelType"),
-            format!("{model} is not supported: bodyseg reads only {BROWN_CONRADY:?}"),
-        ));
+    let model_key = format!("{intr_key}.ModelType");
+    match doc.get(intr, &intr_key, "ModelType")?.as_str() {
+        Some(BROWN_CONRADY) => {}
+        Some(RATIONAL_6KT) => {
+            return Err(doc.bad(
+                &model_key,
+                format!(
+                    "{RATIONAL_6KT:?} is the SDK's deprecated model of early internal devices \
+                     (tangential terms without OpenCV's factor 2, a centre of distortion): \
+                     bodyseg reads only {BROWN_CONRADY:?}, the model of every retail device"
+                ),
+            ));
+        }
+        _ => {
+            return Err(doc.bad(
+                &model_key,
+                format!(
+                    "{} is not supported: bodyseg reads only {BROWN_CONRADY:?}",
+                    intr["ModelType"]
+                ),
+            ));
+        }
     }
     let params_key = format!("{intr_key}.ModelParameters");
     let p = doc.numbers(
@@ -145,30 +392,33 @@ fn read_camera(
         &params_key,
         MODEL_PARAMETER_COUNT,
     )?;
-    let (w, h) = (f64::from(width), f64::from(height));
+    for (i, label) in [(10, "codx"), (11, "cody")] {
+        if p[i] != 0.0 {
+            return Err(doc.bad(
+                &params_key,
+                format!(
+                    "[{i}] ({label}, centre of distortion) = {} is not 0: OpenCV's rational \
+                     model, which bodyseg uses, has its centre of distortion on the axis",
+                    p[i]
+                ),
+            ));
+        }
+    }
+    let ([cx, cy, fx, fy], [w, h]) =
+        to_pixels(doc, key, sensor, [width, height], [p[0], p[1], p[2], p[3]])?;
     let intrinsics = Intrinsics {
-        width,
-        height,
-        fx: p[2] * w,
-        fy: p[3] * h,
-        // Corner-at-integer (k4a) → centre-at-integer (OpenCV, bodyseg): see module doc.
-        cx: p[0] * w - 0.5,
-        cy: p[1] * h - 0.5,
-        // Stored as k1 k2 k3 k4 k5 k6 codx cody p2 p1; ours is k1 k2 p1 p2 k3.
-        distortion: [p[4], p[5], p[13], p[12], p[6]],
+        width: w,
+        height: h,
+        fx,
+        fy,
+        cx,
+        cy,
+        // Stored k1 k2 k3 k4 k5 k6 codx cody p2 p1; OpenCV's k1 k2 p1 p2 k3 k4 k5 k6.
+        distortion: Distortion::Rational([p[4], p[5], p[13], p[12], p[6], p[7], p[8], p[9]]),
     };
     intrinsics
         .validate()
         .map_err(|e| doc.bad(&params_key, e.to_string()))?;
-    for (i, label) in [(7, "k4"), (8, "k5"), (9, "k6"), (10, "codx"), (11, "cody")] {
-        if p[i] != 0.0 {
-            warnings.push(format!(
-                "{params_key}: {label} = {} dropped (bodyseg's model is 5-coefficient Brown-Conrady): {}",
-                p[i],
-                doc.path.display()
-            ));
-        }
-    }
     let rt_key = format!("{key}.Rt");
     let rt = doc.get(cam, key, "Rt")?;
     let r_key = format!("{rt_key}.Rotation");
@@ -183,16 +433,17 @@ fn read_camera(
     Ok((intrinsics, pose))
 }
 
-/// Parses the text of an Azure Kinect calibration JSON into a camera called `name`;
-/// `path` is used in error messages, which name the key
-/// (`CalibrationInformation.Cameras[1].Intrinsics.ModelParameters`).
+/// Parses the text of an Azure Kinect calibration JSON into a camera called `name`, with
+/// intrinsics for the images of `mode`; `path` is used in error messages, which name the
+/// key (`CalibrationInformation.Cameras[1].Intrinsics.ModelParameters`).
 pub fn parse_azure_kinect_json(
     text: &str,
     name: &str,
     path: &Path,
-) -> Result<AzureKinectCalibration, CalibError> {
+    mode: AzureKinectMode,
+) -> Result<ImportedCamera, CalibError> {
     let doc = Doc { path };
-    let root: Value = serde_json::from_str(text).map_err(|e| CalibError::Syntax {
+    let root: Value = serde_json::from_str(without_bom(text)).map_err(|e| CalibError::Syntax {
         line: e.line(),
         reason: e.to_string(),
         path: path.to_path_buf(),
@@ -211,19 +462,26 @@ pub fn parse_azure_kinect_json(
                 path: path.to_path_buf(),
             })
     };
-    let mut warnings = Vec::new();
     let (di, depth_cam) = find(AZURE_DEPTH_LOCATION)?;
     let (ci, color_cam) = find(AZURE_COLOR_LOCATION)?;
-    let (depth, depth_from_ref) =
-        read_camera(&doc, depth_cam, &format!("{cams_key}[{di}]"), &mut warnings)?;
-    let (color, color_from_ref) =
-        read_camera(&doc, color_cam, &format!("{cams_key}[{ci}]"), &mut warnings)?;
+    let (depth, depth_from_ref) = read_camera(
+        &doc,
+        depth_cam,
+        &format!("{cams_key}[{di}]"),
+        Sensor::Depth(mode.depth),
+    )?;
+    let (color, color_from_ref) = read_camera(
+        &doc,
+        color_cam,
+        &format!("{cams_key}[{ci}]"),
+        Sensor::Color(mode.color),
+    )?;
     let color_from_depth = if depth_from_ref == Pose::identity() {
         color_from_ref
     } else {
         color_from_ref.compose(&depth_from_ref.inverse())
     };
-    Ok(AzureKinectCalibration {
+    Ok(ImportedCamera {
         camera: RgbdCamera {
             name: name.to_string(),
             depth,
@@ -233,20 +491,20 @@ pub fn parse_azure_kinect_json(
             depth_scale: DEFAULT_DEPTH_SCALE,
             depth_shift_mm: 0.0,
         },
-        warnings,
+        notes: Vec::new(),
     })
 }
 
 fn camera_json(intr: &Intrinsics, location: &str, purpose: &str, rt: &Pose) -> Value {
     let (w, h) = (f64::from(intr.width), f64::from(intr.height));
-    let d = intr.distortion;
+    let [k1, k2, p1, p2, k3, k4, k5, k6] = intr.distortion.rational_coefficients();
     let r = rt.rotation();
     json!({
         "Intrinsics": {
             "ModelParameterCount": MODEL_PARAMETER_COUNT,
             "ModelParameters": [
                 (intr.cx + 0.5) / w, (intr.cy + 0.5) / h, intr.fx / w, intr.fy / h,
-                d[0], d[1], d[4], 0.0, 0.0, 0.0, 0.0, 0.0, d[3], d[2],
+                k1, k2, k3, k4, k5, k6, 0.0, 0.0, p2, p1,
             ],
             "ModelType": BROWN_CONRADY,
         },
@@ -261,7 +519,10 @@ fn camera_json(intr: &Intrinsics, location: &str, purpose: &str, rt: &Pose) -> V
     })
 }
 
-/// The text of an Azure Kinect calibration JSON for a camera (k4..k6, codx, cody = 0).
+/// The text of an Azure Kinect calibration JSON for a camera: `SensorWidth ×
+/// SensorHeight` is each sensor's image size (a device's own file holds 1024×1024 and
+/// 4096×3072), the distortion its rational coefficients (k4..k6 = 0 for Brown-Conrady),
+/// codx = cody = 0.
 ///
 /// The format holds neither `world_from_depth` (dropped) nor a depth scale or shift:
 /// `depth_scale` must be 1000 and `depth_shift_mm` 0, else the error names the field.

@@ -239,8 +239,10 @@ fn camera_matrix(i: &Intrinsics) -> Result<Mat, CalibError> {
         .map_err(cv_err("camera matrix"))
 }
 
+/// The distortion as OpenCV's `1×N` vector: 5 values (Brown-Conrady) or 8 (rational),
+/// which OpenCV's functions tell apart by the length.
 fn distortion_mat(i: &Intrinsics) -> Result<Mat, CalibError> {
-    Mat::from_slice_2d(&[i.distortion]).map_err(cv_err("distortion"))
+    Mat::from_slice_2d(&[i.distortion.coefficients()]).map_err(cv_err("distortion"))
 }
 
 /// Reads `n` doubles of a continuous `CV_64F` matrix (any shape).
@@ -264,7 +266,15 @@ fn intrinsics_from(
 ) -> Result<Intrinsics, CalibError> {
     let k = mat_values(k, 9, what)?;
     let d = mat_values(dist, 5, what)?;
-    let intrinsics = Intrinsics::from_camera_matrix(width, height, &k, &d);
+    let intrinsics = Intrinsics::from_camera_matrix(width, height, &k, &d).ok_or_else(|| {
+        CalibError::OpenCv {
+            operation: what.to_string(),
+            cause: format!(
+                "returned {} distortion coefficients, expected 5 or 8",
+                d.len()
+            ),
+        }
+    })?;
     intrinsics.validate()?;
     Ok(intrinsics)
 }
@@ -571,7 +581,8 @@ fn storage_format(path: &Path) -> Result<i32, CalibError> {
 
 /// Reads a sensor's intrinsics from an OpenCV FileStorage file (YAML or XML) through
 /// OpenCV: `cameraMatrix` or `camera_matrix` (3×3), `distortionCoefficients` or
-/// `distortion_coefficients` (5 values, k1 k2 p1 p2 k3; 4 are read with k3 = 0), and the
+/// `distortion_coefficients` (5 values, k1 k2 p1 p2 k3; 4 are read with k3 = 0; 8 are
+/// the rational model k1 k2 p1 p2 k3 k4 k5 k6), and the
 /// image size from `image_width` and `image_height`, or `default_size` when the file has
 /// none (iai_kinect2's files).
 pub fn read_opencv_intrinsics(
@@ -635,7 +646,7 @@ pub fn read_opencv_intrinsics(
     let k = matrix(&["cameraMatrix", "camera_matrix"], &[9])?;
     let d = matrix(
         &["distortionCoefficients", "distortion_coefficients"],
-        &[4, 5],
+        &[4, 5, 8],
     )?;
     let dim = |key: &str| -> Result<Option<u32>, CalibError> {
         match node(&[key])? {
@@ -658,7 +669,8 @@ pub fn read_opencv_intrinsics(
             });
         }
     };
-    let intrinsics = Intrinsics::from_camera_matrix(width, height, &k, &d);
+    let intrinsics = Intrinsics::from_camera_matrix(width, height, &k, &d)
+        .ok_or_else(|| bad("distortionCoefficients", format!("{} values", d.len())))?;
     intrinsics.validate().map_err(|e| match e {
         CalibError::Invalid { field, reason } => bad(&field, reason),
         other => other,

@@ -130,3 +130,14 @@ impl Rig {
             .find(|(_, c)| c.name == name)
     }
 }
+
+/// A camera read from another tool's calibration files, with what the reader assumed
+/// or left out (one line each, naming the file and the key), for the caller to show.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedCamera {
+    /// The camera.
+    pub camera: RgbdCamera,
+    /// Notes: defaults taken for what the files do not hold (an iai_kinect2 folder
+    /// without `calib_depth.yaml` → depth shift 0), values the model cannot hold.
+    pub notes: Vec<String>,
+}

@@ -1,6 +1,6 @@
 //! The crate's one error type.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Why a camera model, a rig or a calibration file is not usable.
 ///
@@ -96,6 +96,30 @@ pub enum CalibError {
 }
 
 impl CalibError {
+    /// An [`Intrinsics::validate`](crate::Intrinsics::validate) error of intrinsics read
+    /// from `path`, as an error naming the file and the key its field came from:
+    /// `distortion_key` for the distortion, `matrix_key` for the pinhole values.
+    pub(crate) fn intrinsics_in_file(
+        self,
+        matrix_key: &str,
+        distortion_key: &str,
+        path: &Path,
+    ) -> CalibError {
+        match self {
+            CalibError::Invalid { field, reason } => CalibError::BadValue {
+                key: if field == "distortion" {
+                    distortion_key
+                } else {
+                    matrix_key
+                }
+                .to_string(),
+                reason: format!("{field} {reason}"),
+                path: path.to_path_buf(),
+            },
+            other => other,
+        }
+    }
+
     /// Shorthand for [`CalibError::Invalid`].
     pub(crate) fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Self {
         CalibError::Invalid {

@@ -23,12 +23,26 @@ pub(crate) fn write_atomic(path: &Path, text: &str) -> Result<(), CalibError> {
     })
 }
 
-/// Reads a whole text file, the error naming it.
+/// Reads a whole text file, the error naming it. A leading UTF-8 byte order mark is
+/// dropped (Windows tools write one: the Azure Kinect SDK's own test calibration has it).
 pub(crate) fn read_text(path: &Path) -> Result<String, CalibError> {
-    std::fs::read_to_string(path).map_err(|cause| CalibError::Read {
+    let mut text = std::fs::read_to_string(path).map_err(|cause| CalibError::Read {
         cause,
         path: path.to_path_buf(),
-    })
+    })?;
+    if text.starts_with(BOM) {
+        text.drain(..BOM.len_utf8());
+    }
+    Ok(text)
+}
+
+/// The UTF-8 byte order mark, U+FEFF.
+const BOM: char = '\u{feff}';
+
+/// `text` without a leading byte order mark: every parser of text calls it, so text read
+/// by the caller (not through [`read_text`]) may carry one too.
+pub(crate) fn without_bom(text: &str) -> &str {
+    text.strip_prefix(BOM).unwrap_or(text)
 }
 
 fn temporary_path(path: &Path) -> PathBuf {

@@ -5,26 +5,41 @@ use std::path::Path;
 
 use crate::files::write_atomic;
 use crate::opencv_yaml::{FileStorage, format_matrix, format_number};
-use crate::{CalibError, DEFAULT_DEPTH_SCALE, Intrinsics, Pose, RgbdCamera};
+use crate::{CalibError, DEFAULT_DEPTH_SCALE, ImportedCamera, Intrinsics, Pose, RgbdCamera};
 
 /// Kinect v2 colour image size, pixels (iai_kinect2 does not store it).
 pub const KINECT2_COLOR_SIZE: [u32; 2] = [1920, 1080];
 /// Kinect v2 depth (IR) image size, pixels.
 pub const KINECT2_DEPTH_SIZE: [u32; 2] = [512, 424];
 
-/// Reads an iai_kinect2 calibration folder into a camera named after the folder.
+/// Reads an iai_kinect2 calibration folder into a camera named after the folder, the
+/// notes of [`import_iai_kinect2`] logged at `info` level (`tracing`).
+pub fn read_iai_kinect2(dir: &Path) -> Result<RgbdCamera, CalibError> {
+    let imported = import_iai_kinect2(dir)?;
+    for note in &imported.notes {
+        tracing::info!("{note}");
+    }
+    Ok(imported.camera)
+}
+
+/// Reads an iai_kinect2 calibration folder into a camera named after the folder, with
+/// what `kinect2_bridge` would assume for a missing file.
 ///
 /// - `calib_color.yaml`, `calib_ir.yaml`: `cameraMatrix` (3×3) and
-///   `distortionCoefficients` (1×5, k1 k2 p1 p2 k3). The image size is taken from
+///   `distortionCoefficients` (1×5, k1 k2 p1 p2 k3; any 1×N or N×1 that OpenCV reads:
+///   4, 5 or 8 values, see [`crate::Distortion::from_opencv`]). The image size is taken from
 ///   `image_width`/`image_height` when present, else the Kinect v2 sizes
 ///   ([`KINECT2_COLOR_SIZE`], [`KINECT2_DEPTH_SIZE`]).
 /// - `calib_pose.yaml`: `rotation` (3×3) and `translation` (3×1, metres) map the IR frame
-///   into the colour frame, `X_c = R·X_ir + T`: this is `color_from_depth`.
+///   into the colour frame, `X_c = R·X_ir + T`: this is `color_from_depth`
+///   (`kinect2_bridge` publishes it as the TF from the colour to the IR optical frame).
 /// - `calib_depth.yaml`: `depthShift`, millimetres, added to raw depth → `depth_shift_mm`.
+///   Folders without it exist (the upstream repository's `299150235147`);
+///   `kinect2_bridge` then uses a shift of 0, and so does this reader, with a note.
 ///
 /// `world_from_depth` is the identity (the folder knows nothing of the world) and
 /// `depth_scale` is 1000 (Kinect v2 depth is in millimetres).
-pub fn read_iai_kinect2(dir: &Path) -> Result<RgbdCamera, CalibError> {
+pub fn import_iai_kinect2(dir: &Path) -> Result<ImportedCamera, CalibError> {
     if !dir.is_dir() {
         return Err(CalibError::Read {
             cause: std::io::Error::new(
@@ -47,21 +62,33 @@ pub fn read_iai_kinect2(dir: &Path) -> Result<RgbdCamera, CalibError> {
     )
     .map_err(|e| in_file(e, "rotation", &pose_path))?;
 
+    let mut notes = Vec::new();
     let depth_path = dir.join("calib_depth.yaml");
-    let depth_shift_mm = FileStorage::read(&depth_path)?.number("depthShift")?;
+    let depth_shift_mm = if depth_path.exists() {
+        FileStorage::read(&depth_path)?.number("depthShift")?
+    } else {
+        notes.push(format!(
+            "no calib_depth.yaml: depth shift 0 mm (what kinect2_bridge uses then): {}",
+            dir.display()
+        ));
+        0.0
+    };
 
     let name = dir.file_name().map_or_else(
         || "kinect2".to_string(),
         |n| n.to_string_lossy().into_owned(),
     );
-    Ok(RgbdCamera {
-        name,
-        depth,
-        color,
-        color_from_depth,
-        world_from_depth: Pose::identity(),
-        depth_scale: DEFAULT_DEPTH_SCALE,
-        depth_shift_mm,
+    Ok(ImportedCamera {
+        camera: RgbdCamera {
+            name,
+            depth,
+            color,
+            color_from_depth,
+            world_from_depth: Pose::identity(),
+            depth_scale: DEFAULT_DEPTH_SCALE,
+            depth_shift_mm,
+        },
+        notes,
     })
 }
 
@@ -70,7 +97,8 @@ pub fn read_iai_kinect2(dir: &Path) -> Result<RgbdCamera, CalibError> {
 /// that [`read_iai_kinect2`] — and iai_kinect2 itself — read them back. The folder is
 /// created if needed; each file is written through a temporary and a rename.
 ///
-/// - `calib_color.yaml`, `calib_ir.yaml`: `cameraMatrix`, `distortionCoefficients`,
+/// - `calib_color.yaml`, `calib_ir.yaml`: `cameraMatrix`, `distortionCoefficients` (5
+///   values, or 8 for a rational model),
 ///   `rotation` (identity) and `projection` (`[K | 0; 0 0 0 1]`), like the tool; plus
 ///   `image_width`/`image_height` only when the size is not the Kinect v2 one (the tool
 ///   never writes them, the reader accepts them).
@@ -157,7 +185,8 @@ fn intrinsics_text(i: &Intrinsics, default_size: [u32; 2]) -> String {
         3,
         &[i.fx, 0.0, i.cx, 0.0, i.fy, i.cy, 0.0, 0.0, 1.0],
     );
-    out += &format_matrix("distortionCoefficients", 1, 5, &i.distortion);
+    let d = i.distortion.coefficients();
+    out += &format_matrix("distortionCoefficients", 1, d.len(), d);
     out += &format_matrix(
         "rotation",
         3,
@@ -188,43 +217,5 @@ fn in_file(e: CalibError, key: &str, path: &Path) -> CalibError {
 }
 
 fn read_intrinsics(path: &Path, default_size: [u32; 2]) -> Result<Intrinsics, CalibError> {
-    let fs = FileStorage::read(path)?;
-    let k = fs.matrix("cameraMatrix", 3, 3)?;
-    let d = fs.matrix("distortionCoefficients", 1, 5)?;
-    let size = |key: &str, default: u32| -> Result<u32, CalibError> {
-        if !fs.has(key) {
-            return Ok(default);
-        }
-        let v = fs.number(key)?;
-        if v.fract() != 0.0 || !(1.0..=f64::from(u32::MAX)).contains(&v) {
-            return Err(CalibError::BadValue {
-                key: key.to_string(),
-                reason: format!("must be a positive pixel count, got {v}"),
-                path: path.to_path_buf(),
-            });
-        }
-        Ok(v as u32)
-    };
-    let intrinsics = Intrinsics {
-        width: size("image_width", default_size[0])?,
-        height: size("image_height", default_size[1])?,
-        fx: k[0],
-        fy: k[4],
-        cx: k[2],
-        cy: k[5],
-        distortion: [d[0], d[1], d[2], d[3], d[4]],
-    };
-    intrinsics.validate().map_err(|e| match e {
-        CalibError::Invalid { field, reason } => CalibError::BadValue {
-            key: if field == "distortion" {
-                "distortionCoefficients".to_string()
-            } else {
-                "cameraMatrix".to_string()
-            },
-            reason: format!("{field} {reason}"),
-            path: path.to_path_buf(),
-        },
-        other => other,
-    })?;
-    Ok(intrinsics)
+    crate::opencv_yaml::read_opencv_yaml_intrinsics(path, Some(default_size))
 }

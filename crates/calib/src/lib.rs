@@ -13,17 +13,25 @@
 //! Each format has a reader and a writer (writers go through a temporary file and a rename;
 //! reader errors name the file and the key):
 //! - `rig.toml` ⇄ [`Rig`]: [`read_rig_toml`], [`write_rig_toml`];
-//! - iai_kinect2 folders ⇄ [`RgbdCamera`]: [`read_iai_kinect2`], [`write_iai_kinect2`];
+//! - iai_kinect2 folders ⇄ [`RgbdCamera`]: [`read_iai_kinect2`] (or [`import_iai_kinect2`],
+//!   which returns its notes: a folder without `calib_depth.yaml` has depth shift 0),
+//!   [`write_iai_kinect2`];
 //! - ROS `camera_info` YAML ⇄ [`Intrinsics`]: [`read_ros_camera_info`],
-//!   [`write_ros_camera_info`] (`plumb_bob` only);
+//!   [`write_ros_camera_info`] (`plumb_bob` and `rational_polynomial`; a file without
+//!   `distortion_model` is `plumb_bob`, as in ROS);
 //! - OpenPTrack `camera_poses.yaml` ⇄ `(name, world_from_sensor)`:
 //!   [`read_openptrack_poses`], [`write_openptrack_poses`];
+//! - OpenCV FileStorage YAML of one sensor → [`Intrinsics`], in pure Rust:
+//!   [`read_opencv_yaml_intrinsics`];
 //! - one sensor's intrinsics TOML (the fields of a rig.toml `[camera.depth]` table at the
 //!   top level) ⇄ [`Intrinsics`]: [`read_intrinsics_toml`], [`write_intrinsics_toml`];
 //! - with the `opencv` feature, OpenCV FileStorage YAML/XML through OpenCV ⇄
 //!   [`Intrinsics`]: `read_opencv_intrinsics`, `write_opencv_intrinsics`;
 //! - Azure Kinect factory calibration JSON ⇄ [`RgbdCamera`]: [`read_azure_kinect_json`]
-//!   (with warnings for the dropped rational coefficients), [`write_azure_kinect_json`].
+//!   (the SDK's mapping, rational model, intrinsics for a capture mode's images:
+//!   [`AzureKinectMode`]), [`write_azure_kinect_json`].
+//!
+//! Text files may start with a UTF-8 byte order mark; every reader ignores it.
 //!
 //! # Calibration (feature `opencv`)
 //! Chessboard calibration through OpenCV (`bodyseg calibrate`): [`Board`] and the canonical
@@ -41,17 +49,20 @@
 //!   focal lengths and principal points in pixels; distortion coefficients unitless.
 //! - Transforms are named `a_from_b` and map points of frame b into frame a:
 //!   `p_color = color_from_depth · p_depth`, `p_world = world_from_depth · p_depth`.
-//! - Distortion: Brown-Conrady with OpenCV's coefficient order `[k1, k2, p1, p2, k3]`
-//!   (`cv::projectPoints`), applied to normalised coordinates (x/z, y/z).
+//! - Distortion ([`Distortion`]): OpenCV's models in OpenCV's coefficient order
+//!   (`cv::projectPoints`), applied to normalised coordinates (x/z, y/z): Brown-Conrady
+//!   `[k1, k2, p1, p2, k3]` or the rational model `[k1, k2, p1, p2, k3, k4, k5, k6]`.
 //! - World frame: right-handed, z up (ALGORITHM.md §0).
 //! - Depth: raw `u16`, 0 = no measurement; metres = `raw / depth_scale + depth_shift_mm / 1000`.
 //!
 //! # Example
 //! ```
-//! use bodyseg_calib::{BackProjectOptions, CloudFrame, Intrinsics, RgbdCamera, back_project};
+//! use bodyseg_calib::{
+//!     BackProjectOptions, CloudFrame, Distortion, Intrinsics, RgbdCamera, back_project,
+//! };
 //!
 //! let depth = Intrinsics {
-//!     width: 4, height: 3, fx: 2.0, fy: 2.0, cx: 1.5, cy: 1.0, distortion: [0.0; 5],
+//!     width: 4, height: 3, fx: 2.0, fy: 2.0, cx: 1.5, cy: 1.0, distortion: Distortion::NONE,
 //! };
 //! let camera = RgbdCamera::new("cam0", depth, depth);
 //! let image = [0, 1000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 2000_u16];
@@ -71,6 +82,7 @@ mod board;
 #[cfg(feature = "opencv")]
 mod calibrate;
 mod camera;
+mod distortion;
 mod error;
 mod files;
 mod iai_kinect2;
@@ -84,8 +96,8 @@ mod ros_camera_info;
 mod yaml;
 
 pub use azure_kinect::{
-    AZURE_COLOR_LOCATION, AZURE_DEPTH_LOCATION, AzureKinectCalibration,
-    azure_kinect_json_to_string, parse_azure_kinect_json, read_azure_kinect_json,
+    AZURE_COLOR_LOCATION, AZURE_DEPTH_LOCATION, AzureColorResolution, AzureDepthMode,
+    AzureKinectMode, azure_kinect_json_to_string, parse_azure_kinect_json, read_azure_kinect_json,
     write_azure_kinect_json,
 };
 pub use back_project::{
@@ -99,12 +111,14 @@ pub use calibrate::{
     calibrate_stereo, find_board_corners, read_opencv_intrinsics, reprojection_rms_px,
     write_opencv_intrinsics,
 };
-pub use camera::{DEFAULT_DEPTH_SCALE, RgbdCamera, Rig};
+pub use camera::{DEFAULT_DEPTH_SCALE, ImportedCamera, RgbdCamera, Rig};
+pub use distortion::Distortion;
 pub use error::CalibError;
 pub use iai_kinect2::{
-    KINECT2_COLOR_SIZE, KINECT2_DEPTH_SIZE, read_iai_kinect2, write_iai_kinect2,
+    KINECT2_COLOR_SIZE, KINECT2_DEPTH_SIZE, import_iai_kinect2, read_iai_kinect2, write_iai_kinect2,
 };
 pub use intrinsics::Intrinsics;
+pub use opencv_yaml::read_opencv_yaml_intrinsics;
 pub use openptrack::{
     openptrack_poses_to_string, parse_openptrack_poses, read_openptrack_poses,
     write_openptrack_poses,
@@ -116,6 +130,6 @@ pub use rig_toml::{
     read_rig_toml, rig_to_toml_string, write_intrinsics_toml, write_rig_toml,
 };
 pub use ros_camera_info::{
-    ROS_PLUMB_BOB, RosCameraInfo, parse_ros_camera_info, read_ros_camera_info,
-    ros_camera_info_to_string, write_ros_camera_info,
+    ROS_PLUMB_BOB, ROS_RATIONAL_POLYNOMIAL, RosCameraInfo, parse_ros_camera_info,
+    read_ros_camera_info, ros_camera_info_to_string, write_ros_camera_info,
 };

@@ -10,7 +10,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use crate::CalibError;
+use crate::{CalibError, Distortion, Intrinsics};
 
 /// One top-level entry.
 #[derive(Debug, Clone, PartialEq)]
@@ -57,15 +57,13 @@ fn strip_comment(line: &str) -> &str {
 impl FileStorage {
     /// Reads and parses a file.
     pub(crate) fn read(path: &Path) -> Result<Self, CalibError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| CalibError::Read {
-            cause,
-            path: path.to_path_buf(),
-        })?;
-        Self::parse(&text, path)
+        Self::parse(&crate::files::read_text(path)?, path)
     }
 
-    /// Parses the text of a file; `path` is used in error messages only.
+    /// Parses the text of a file (a leading byte order mark is ignored); `path` is used
+    /// in error messages only.
     pub(crate) fn parse(text: &str, path: &Path) -> Result<Self, CalibError> {
+        let text = crate::files::without_bom(text);
         let lines: Vec<&str> = text.lines().map(strip_comment).collect();
         let first = lines.iter().position(|l| !l.trim().is_empty());
         match first.map(|i| lines[i].trim()) {
@@ -151,6 +149,34 @@ impl FileStorage {
         }
     }
 
+    /// A vector: a matrix with one row or one column (or empty), of any length; its
+    /// values in order, all finite.
+    pub(crate) fn vector(&self, key: &str) -> Result<Vec<f64>, CalibError> {
+        let (rows, cols) = self.shape(key)?;
+        if rows > 1 && cols > 1 {
+            return Err(self.bad(
+                key,
+                format!("must be a 1xN or Nx1 vector, the file says {rows}x{cols}"),
+            ));
+        }
+        self.matrix(key, rows, cols)
+    }
+
+    /// `rows × cols` of a matrix entry.
+    fn shape(&self, key: &str) -> Result<(usize, usize), CalibError> {
+        let Some((_, entry)) = self.entries.get(key) else {
+            return Err(self.missing(key));
+        };
+        let Entry::Matrix { rows, cols, .. } = entry else {
+            return Err(self.bad(key, "must be an !!opencv-matrix"));
+        };
+        let dim = |name: &str, s: &str| {
+            s.parse::<usize>()
+                .map_err(|_| self.bad(key, format!("{name} {s:?} is not a count")))
+        };
+        Ok((dim("rows", rows)?, dim("cols", cols)?))
+    }
+
     /// A matrix that must be `rows × cols`; its values row-major, all finite.
     pub(crate) fn matrix(
         &self,
@@ -199,6 +225,75 @@ impl FileStorage {
             })
             .collect()
     }
+}
+
+/// Reads one sensor's intrinsics from an OpenCV FileStorage YAML file (`%YAML:1.0`), in
+/// pure Rust: `cameraMatrix` or `camera_matrix` (3×3, no skew), `distortionCoefficients`
+/// or `distortion_coefficients` (a 1×N or N×1 vector read as OpenCV reads it: 4, 5 or 8
+/// values, see [`Distortion::from_opencv`]), and the image size from `image_width` and
+/// `image_height`, or `default_size` when the file has neither (iai_kinect2's files).
+/// Errors name the file and the key. XML files need OpenCV itself (feature `opencv`:
+/// `read_opencv_intrinsics`).
+pub fn read_opencv_yaml_intrinsics(
+    path: &Path,
+    default_size: Option<[u32; 2]>,
+) -> Result<Intrinsics, CalibError> {
+    let fs = FileStorage::read(path)?;
+    let either = |a: &'static str, b: &'static str| -> Result<&'static str, CalibError> {
+        match (fs.has(a), fs.has(b)) {
+            (true, _) => Ok(a),
+            (false, true) => Ok(b),
+            (false, false) => Err(CalibError::MissingKey {
+                key: format!("{a} or {b}"),
+                path: path.to_path_buf(),
+            }),
+        }
+    };
+    let k_key = either("cameraMatrix", "camera_matrix")?;
+    let k = fs.matrix(k_key, 3, 3)?;
+    if k[1] != 0.0 || [k[3], k[6], k[7], k[8]] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(fs.bad(
+            k_key,
+            format!("must be [fx 0 cx; 0 fy cy; 0 0 1] (bodyseg's pinhole has no skew), got {k:?}"),
+        ));
+    }
+    let d_key = either("distortionCoefficients", "distortion_coefficients")?;
+    let d = fs.vector(d_key)?;
+    let distortion = Distortion::from_opencv(&d)
+        .ok_or_else(|| fs.bad(d_key, Distortion::unsupported_count(d.len())))?;
+    let size = |key: &str| -> Result<Option<u32>, CalibError> {
+        if !fs.has(key) {
+            return Ok(None);
+        }
+        let v = fs.number(key)?;
+        if v.fract() != 0.0 || !(1.0..=f64::from(u32::MAX)).contains(&v) {
+            return Err(fs.bad(key, format!("must be a positive pixel count, got {v}")));
+        }
+        Ok(Some(v as u32))
+    };
+    // With a default each key falls back on its own (iai_kinect2 writes neither);
+    // without one both are needed.
+    let dim = |key: &str, i: usize| -> Result<u32, CalibError> {
+        match (size(key)?, default_size) {
+            (Some(v), _) => Ok(v),
+            (None, Some(default)) => Ok(default[i]),
+            (None, None) => Err(fs.missing(key)),
+        }
+    };
+    let (width, height) = (dim("image_width", 0)?, dim("image_height", 1)?);
+    let intrinsics = Intrinsics {
+        width,
+        height,
+        fx: k[0],
+        fy: k[4],
+        cx: k[2],
+        cy: k[5],
+        distortion,
+    };
+    intrinsics
+        .validate()
+        .map_err(|e| e.intrinsics_in_file(k_key, d_key, path))?;
+    Ok(intrinsics)
 }
 
 /// Parses a finite number as FileStorage prints it (`1.`, `-5.2e-02`, `.5`).

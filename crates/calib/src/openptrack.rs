@@ -7,7 +7,13 @@
 //!   rotation: {x: 0.0, y: 0.0, z: 0.0, w: 1.0}    # unit quaternion (Hamilton)
 //! ```
 //!
-//! Each entry is `world_from_sensor`: `p_world = R(q) · p_sensor + t`. The reader accepts
+//! Each entry is `world_from_sensor`: `p_world = R(q) · p_sensor + t` (the file's
+//! `inverse_poses:` section holds the inverses; the reader does not need them). The
+//! sensor frame is the one `opt_calibration` calibrated, a colour camera's optical frame:
+//! for a Kinect v2, OpenPTrack's TF chain `/<sensor>` → `<sensor>_link` →
+//! `<sensor>_rgb_frame` → `<sensor>_rgb_optical_frame` (`detection_initializer.py`, its
+//! iai_kinect2 fork's `kinect2_frames.launch`) composes to the identity, so a depth
+//! sensor's pose is `world_from_sensor · color_from_depth`. The reader accepts
 //! the sensors either as top-level keys (the layout above, which the writer produces) or
 //! nested under a top-level `poses:` mapping, as `opt_calibration` writes them next to a
 //! `calibration_id`; other top-level scalars (`calibration_id`) are ignored. Sensors come

@@ -202,7 +202,7 @@ mod tests {
             fy: fx,
             cx: 320.0,
             cy: 240.0,
-            distortion: [0.05, -0.1, 0.001, -0.001, 0.02],
+            distortion: crate::Distortion::BrownConrady([0.05, -0.1, 0.001, -0.001, 0.02]),
         }
     }
 

@@ -2,16 +2,18 @@
 //!
 //! The reader walks the TOML tree by hand so that every error names the camera and the
 //! field (`camera cam0: depth.fx must be a number, got string: rig.toml`). Unknown keys are
-//! ignored (readers are tolerant); integers are accepted where a float is expected. The
-//! writer always writes rotations as 3×3 matrices, with floats printed to round-trip
-//! exactly.
+//! ignored (readers are tolerant); integers are accepted where a float is expected;
+//! `distortion` holds 5 values (Brown-Conrady) or 8 (the rational model), any other count
+//! is an error naming the camera and the table. The writer writes the 5 or 8 values the
+//! camera's model has, always writes rotations as 3×3 matrices, with floats printed to
+//! round-trip exactly. A leading byte order mark is ignored.
 
 use std::path::Path;
 
 use serde::Serialize;
 use toml::{Table, Value};
 
-use crate::{CalibError, DEFAULT_DEPTH_SCALE, Intrinsics, Pose, RgbdCamera, Rig};
+use crate::{CalibError, DEFAULT_DEPTH_SCALE, Distortion, Intrinsics, Pose, RgbdCamera, Rig};
 
 /// Reads and validates one sensor's intrinsics TOML (see [`parse_intrinsics_toml`]).
 pub fn read_intrinsics_toml(path: &Path) -> Result<Intrinsics, CalibError> {
@@ -69,6 +71,8 @@ pub fn write_intrinsics_toml(
 }
 
 fn parse_table(text: &str, path: &Path) -> Result<Table, CalibError> {
+    // Spans below count bytes of the text without the byte order mark.
+    let text = crate::files::without_bom(text);
     text.parse()
         .map_err(|e: toml::de::Error| CalibError::Syntax {
             line: e.span().map_or(0, |span| {
@@ -203,6 +207,28 @@ impl Ctx<'_> {
         Ok(out)
     }
 
+    /// `distortion`: 5 numbers (Brown-Conrady) or 8 (rational), OpenCV's order.
+    fn distortion(&self, v: &Value) -> Result<Distortion, CalibError> {
+        const KEY: &str = "distortion";
+        const WANT: &str =
+            "5 numbers (k1 k2 p1 p2 k3) or 8 (rational model: k1 k2 p1 p2 k3 k4 k5 k6)";
+        let Value::Array(items) = v else {
+            return Err(self.err(
+                KEY,
+                format!("must be an array of {WANT}, got {}", v.type_str()),
+            ));
+        };
+        let values = items
+            .iter()
+            .map(|item| self.number(KEY, item))
+            .collect::<Result<Vec<f64>, _>>()?;
+        match values.len() {
+            5 | 8 => Distortion::from_opencv(&values)
+                .ok_or_else(|| self.err(KEY, format!("must have {WANT}"))),
+            n => Err(self.err(KEY, format!("must have {WANT}, got {n} values"))),
+        }
+    }
+
     fn table<'t>(&self, t: &'t Table, key: &str) -> Result<&'t Table, CalibError> {
         match self.get(t, key)? {
             Value::Table(inner) => Ok(inner),
@@ -273,7 +299,7 @@ fn read_intrinsics(
         table,
         path,
     };
-    let distortion = c.array::<5>("distortion", c.get(t, "distortion")?)?;
+    let distortion = c.distortion(c.get(t, "distortion")?)?;
     Ok(Intrinsics {
         width: c.u32(t, "width")?,
         height: c.u32(t, "height")?,
@@ -348,7 +374,8 @@ struct IntrinsicsOut {
     fy: f64,
     cx: f64,
     cy: f64,
-    distortion: [f64; 5],
+    /// 5 or 8 values, as the model needs.
+    distortion: Vec<f64>,
 }
 
 impl From<&Intrinsics> for IntrinsicsOut {
@@ -360,7 +387,7 @@ impl From<&Intrinsics> for IntrinsicsOut {
             fy: i.fy,
             cx: i.cx,
             cy: i.cy,
-            distortion: i.distortion,
+            distortion: i.distortion.coefficients().to_vec(),
         }
     }
 }

@@ -12,13 +12,21 @@
 //! projection_matrix: {rows: 3, cols: 4, data: [...]}
 //! ```
 //!
-//! ROS' `plumb_bob` is OpenCV's 5-coefficient Brown-Conrady model in OpenCV's order, and
-//! ROS pixel coordinates follow OpenCV (integer = pixel centre), so values map 1:1 onto
-//! [`Intrinsics`]. Only `plumb_bob` is accepted: any other `distortion_model`
-//! (`rational_polynomial`, `equidistant`, ...) is an error, since silently dropping
-//! coefficients would misplace pixels. `rectification_matrix` and `projection_matrix`
-//! describe stereo rectification, which bodyseg does not use: the reader ignores them and
-//! the writer writes the identity and `[K | 0]` (what a monocular calibration holds).
+//! ROS pixel coordinates follow OpenCV (integer = pixel centre) and ROS hands `D` to
+//! OpenCV as it is, so values map 1:1 onto [`Intrinsics`]:
+//! - `distortion_model` `plumb_bob` or `rational_polynomial`; a file without the key is
+//!   read as `plumb_bob`, as `camera_calibration_parsers` does for old files (with a
+//!   note). Other models (`equidistant`, ...) are an error naming the key.
+//! - `distortion_coefficients` is read the way OpenCV reads `D`, by its length (see
+//!   [`Distortion::from_opencv`]): 0, 4 or 5 values are Brown-Conrady, 8 the rational
+//!   model; other lengths are an error. A length that disagrees with the model's name
+//!   (e.g. a `rational_polynomial` with 5 values, which phone tools write) is read as
+//!   OpenCV would, with a note.
+//! - `binning_x`/`binning_y` above 1 (the driver publishes binned images with scaled
+//!   intrinsics) are refused; `roi` is ignored.
+//! - `rectification_matrix` and `projection_matrix` describe stereo rectification,
+//!   which bodyseg does not use: the reader ignores them and the writer writes the
+//!   identity and `[K | 0]` (what a monocular calibration holds).
 
 use std::path::Path;
 
@@ -26,10 +34,12 @@ use yaml_rust2::Yaml;
 
 use crate::files::{float_text, read_text, write_atomic};
 use crate::yaml::{Doc, load, type_name};
-use crate::{CalibError, Intrinsics};
+use crate::{CalibError, Distortion, Intrinsics};
 
-/// The only `distortion_model` bodyseg reads and writes.
+/// ROS' name of the Brown-Conrady model (k1 k2 p1 p2 k3).
 pub const ROS_PLUMB_BOB: &str = "plumb_bob";
+/// ROS' name of the rational model (k1 k2 p1 p2 k3 k4 k5 k6).
+pub const ROS_RATIONAL_POLYNOMIAL: &str = "rational_polynomial";
 
 /// The content of a ROS `camera_info` file that bodyseg uses.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,6 +48,9 @@ pub struct RosCameraInfo {
     pub camera_name: String,
     /// Image size, pinhole and distortion of the camera, pixels.
     pub intrinsics: Intrinsics,
+    /// What the reader assumed, one line each naming the key and the file (a missing
+    /// `distortion_model`, a coefficient count that disagrees with the model's name).
+    pub notes: Vec<String>,
 }
 
 /// Reads and validates a ROS `camera_info` YAML file.
@@ -49,11 +62,13 @@ pub fn read_ros_camera_info(path: &Path) -> Result<RosCameraInfo, CalibError> {
 ///
 /// Errors name the file and the key: a missing key, a matrix of the wrong shape, a
 /// non-zero skew (`camera_matrix.data[1]`), a last row other than `0 0 1`, a
-/// `distortion_model` other than `plumb_bob`, or intrinsics that fail
+/// `distortion_model` other than `plumb_bob` or `rational_polynomial`, a coefficient
+/// count OpenCV's pinhole models do not have, binning, or intrinsics that fail
 /// [`Intrinsics::validate`] (NaN, focal length ≤ 0).
 pub fn parse_ros_camera_info(text: &str, path: &Path) -> Result<RosCameraInfo, CalibError> {
     let doc = Doc { path };
     let root = load(text, path)?;
+    let mut notes = Vec::new();
     let width = doc.count(doc.get(&root, "", "image_width")?, "image_width")?;
     let height = doc.count(doc.get(&root, "", "image_height")?, "image_height")?;
     let camera_name = match &root["camera_name"] {
@@ -67,6 +82,24 @@ pub fn parse_ros_camera_info(text: &str, path: &Path) -> Result<RosCameraInfo, C
             ));
         }
     };
+    for key in ["binning_x", "binning_y"] {
+        match &root[key] {
+            Yaml::Integer(0 | 1) | Yaml::BadValue | Yaml::Null => {}
+            other => {
+                return Err(doc.bad(
+                    key,
+                    format!(
+                        "binning is not supported (give the calibration of the images as \
+                         published, binning 0 or 1), got {}",
+                        match other {
+                            Yaml::Integer(i) => i.to_string(),
+                            _ => type_name(other).to_string(),
+                        }
+                    ),
+                ));
+            }
+        }
+    }
     let k = doc.matrix(doc.get(&root, "", "camera_matrix")?, "camera_matrix", 3, 3)?;
     if k[1] != 0.0 {
         return Err(doc.bad(
@@ -86,8 +119,15 @@ pub fn parse_ros_camera_info(text: &str, path: &Path) -> Result<RosCameraInfo, C
             ),
         ));
     }
-    let model = match doc.get(&root, "", "distortion_model")? {
+    let model = match &root["distortion_model"] {
         Yaml::String(s) => s.as_str(),
+        Yaml::BadValue => {
+            notes.push(format!(
+                "distortion_model: missing, read as {ROS_PLUMB_BOB} (as ROS does): {}",
+                path.display()
+            ));
+            ROS_PLUMB_BOB
+        }
         other => {
             return Err(doc.bad(
                 "distortion_model",
@@ -95,40 +135,59 @@ pub fn parse_ros_camera_info(text: &str, path: &Path) -> Result<RosCameraInfo, C
             ));
         }
     };
-    if model != ROS_PLUMB_BOB {
+    if model != ROS_PLUMB_BOB && model != ROS_RATIONAL_POLYNOMIAL {
         return Err(doc.bad(
             "distortion_model",
             format!(
-                "{model:?} is not supported: bodyseg reads only {ROS_PLUMB_BOB:?} \
-                 (k1 k2 p1 p2 k3); recalibrate with plumb_bob or convert the file"
+                "{model:?} is not supported: bodyseg reads {ROS_PLUMB_BOB:?} (k1 k2 p1 p2 k3) \
+                 and {ROS_RATIONAL_POLYNOMIAL:?} (k1 k2 p1 p2 k3 k4 k5 k6)"
             ),
         ));
     }
-    let d = doc.matrix(
+    let d = doc.vector(
         doc.get(&root, "", "distortion_coefficients")?,
         "distortion_coefficients",
-        1,
-        5,
     )?;
-    let intrinsics = Intrinsics::from_camera_matrix(width, height, &k, &d);
-    intrinsics.validate().map_err(|e| match e {
-        CalibError::Invalid { field, reason } => doc.bad(
-            if field == "distortion" {
-                "distortion_coefficients"
-            } else {
-                "camera_matrix"
-            },
-            format!("{field} {reason}"),
-        ),
-        other => other,
+    let distortion = Distortion::from_opencv(&d).ok_or_else(|| {
+        doc.bad(
+            "distortion_coefficients",
+            Distortion::unsupported_count(d.len()),
+        )
     })?;
+    if distortion.is_rational() != (model == ROS_RATIONAL_POLYNOMIAL) {
+        notes.push(format!(
+            "distortion_coefficients: {} values under distortion_model {model}, read as \
+             OpenCV reads them ({}): {}",
+            d.len(),
+            if distortion.is_rational() {
+                "rational"
+            } else {
+                "Brown-Conrady"
+            },
+            path.display()
+        ));
+    }
+    let intrinsics = Intrinsics {
+        width,
+        height,
+        fx: k[0],
+        fy: k[4],
+        cx: k[2],
+        cy: k[5],
+        distortion,
+    };
+    intrinsics
+        .validate()
+        .map_err(|e| e.intrinsics_in_file("camera_matrix", "distortion_coefficients", path))?;
     Ok(RosCameraInfo {
         camera_name,
         intrinsics,
+        notes,
     })
 }
 
-/// The text of a ROS `camera_info` YAML file for these intrinsics. Floats are written
+/// The text of a ROS `camera_info` YAML file for these intrinsics (`plumb_bob` with 5
+/// coefficients or `rational_polynomial` with 8, as the model is). Floats are written
 /// with the shortest text that reads back to the same `f64`, so a round trip is exact.
 pub fn ros_camera_info_to_string(
     camera_name: &str,
@@ -162,8 +221,12 @@ pub fn ros_camera_info_to_string(
         3,
         &[i.fx, 0.0, i.cx, 0.0, i.fy, i.cy, 0.0, 0.0, 1.0],
     );
-    out += &format!("distortion_model: {ROS_PLUMB_BOB}\n");
-    out += &matrix("distortion_coefficients", 1, 5, &i.distortion);
+    let (model, d) = match &i.distortion {
+        Distortion::BrownConrady(d) => (ROS_PLUMB_BOB, &d[..]),
+        Distortion::Rational(d) => (ROS_RATIONAL_POLYNOMIAL, &d[..]),
+    };
+    out += &format!("distortion_model: {model}\n");
+    out += &matrix("distortion_coefficients", 1, d.len() as u32, d);
     out += &matrix(
         "rectification_matrix",
         3,
@@ -202,7 +265,7 @@ mod tests {
             fy: 524.5,
             cx: 319.5,
             cy: 239.25,
-            distortion: [0.1, -0.25, 1e-7, -3.5e-4, 0.0],
+            distortion: Distortion::BrownConrady([0.1, -0.25, 1e-7, -3.5e-4, 0.0]),
         }
     }
 
@@ -215,14 +278,33 @@ mod tests {
     }
 
     #[test]
+    fn rational_round_trip_is_exact() {
+        let want = Intrinsics {
+            distortion: Distortion::Rational([
+                0.5, -0.02, 2e-5, -7e-5, -0.003, 0.89, 0.086, -0.014,
+            ]),
+            ..intrinsics()
+        };
+        let text = ros_camera_info_to_string("k4a", &want).expect("valid");
+        assert!(
+            text.contains("distortion_model: rational_polynomial\n"),
+            "{text}"
+        );
+        assert!(text.contains("cols: 8\n"), "{text}");
+        let info = parse_ros_camera_info(&text, Path::new("c.yaml")).expect("reads back");
+        assert_eq!(info.intrinsics, want);
+        assert!(info.notes.is_empty(), "{:?}", info.notes);
+    }
+
+    #[test]
     fn other_models_and_skew_are_rejected() {
         let text = ros_camera_info_to_string("c", &intrinsics()).expect("valid");
-        let rational = text.replace("plumb_bob", "rational_polynomial");
-        let msg = parse_ros_camera_info(&rational, Path::new("c.yaml"))
-            .expect_err("rational")
+        let fisheye = text.replace("plumb_bob", "equidistant");
+        let msg = parse_ros_camera_info(&fisheye, Path::new("c.yaml"))
+            .expect_err("fisheye")
             .to_string();
         assert!(
-            msg.starts_with("distortion_model: \"rational_polynomial\" is not supported")
+            msg.starts_with("distortion_model: \"equidistant\" is not supported")
                 && msg.ends_with("c.yaml"),
             "{msg}"
         );
@@ -235,5 +317,40 @@ mod tests {
             .expect_err("skew")
             .to_string();
         assert!(msg.starts_with("camera_matrix.data[1]: skew"), "{msg}");
+        let binned = format!("{text}binning_x: 2\n");
+        let msg = parse_ros_camera_info(&binned, Path::new("c.yaml"))
+            .expect_err("binning")
+            .to_string();
+        assert!(
+            msg.starts_with("binning_x: binning is not supported"),
+            "{msg}"
+        );
+        let twelve = text.replace(
+            "cols: 5\n  data: [0.1, -0.25, 1e-7, -0.00035, 0.0]",
+            "cols: 12\n  data: [0.1, -0.25, 1e-7, -0.00035, 0.0, 0, 0, 0, 0, 0, 0, 0]",
+        );
+        assert_ne!(twelve, text, "the replacement applies");
+        let msg = parse_ros_camera_info(&twelve, Path::new("c.yaml"))
+            .expect_err("thin prism")
+            .to_string();
+        assert!(
+            msg.starts_with("distortion_coefficients: has 12 values"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn missing_model_is_plumb_bob_and_count_decides() {
+        let text = ros_camera_info_to_string("c", &intrinsics()).expect("valid");
+        let old = text.replace("distortion_model: plumb_bob\n", "");
+        let info = parse_ros_camera_info(&old, Path::new("old.yaml")).expect("old file reads");
+        assert_eq!(info.intrinsics, intrinsics());
+        assert_eq!(info.notes.len(), 1, "{:?}", info.notes);
+        assert!(info.notes[0].starts_with("distortion_model: missing, read as plumb_bob"));
+        // rational_polynomial with 5 values: OpenCV (and so ROS) uses the 5 values.
+        let five = text.replace("plumb_bob", "rational_polynomial");
+        let info = parse_ros_camera_info(&five, Path::new("p.yaml")).expect("reads");
+        assert_eq!(info.intrinsics, intrinsics());
+        assert!(info.notes[0].contains("5 values under distortion_model rational_polynomial"));
     }
 }

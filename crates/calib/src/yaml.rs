@@ -7,12 +7,15 @@ use yaml_rust2::{Yaml, YamlLoader};
 
 use crate::CalibError;
 
-/// Parses the first document of a YAML text; an empty text is an empty document (Null).
+/// Parses the first document of a YAML text (a leading byte order mark is ignored); an
+/// empty text is an empty document (Null).
 pub(crate) fn load(text: &str, path: &Path) -> Result<Yaml, CalibError> {
-    let docs = YamlLoader::load_from_str(text).map_err(|e| CalibError::Syntax {
-        line: e.marker().line(),
-        reason: e.info().to_string(),
-        path: path.to_path_buf(),
+    let docs = YamlLoader::load_from_str(crate::files::without_bom(text)).map_err(|e| {
+        CalibError::Syntax {
+            line: e.marker().line(),
+            reason: e.info().to_string(),
+            path: path.to_path_buf(),
+        }
     })?;
     Ok(docs.into_iter().next().unwrap_or(Yaml::Null))
 }
@@ -127,11 +130,45 @@ impl Doc<'_> {
                 format!("must be a {rows}x{cols} matrix, the file says {got_rows}x{got_cols}"),
             ));
         }
-        let data_key = join(key, "data");
-        let Yaml::Array(items) = self.get(node, key, "data")? else {
-            return Err(self.bad(&data_key, "must be a sequence of numbers"));
+        self.data(node, key, rows as usize, cols as usize)
+    }
+
+    /// A ROS-style vector `{rows, cols, data: [...]}` of any length: one of rows and
+    /// cols is 1 (or both 0); values in order.
+    pub(crate) fn vector(&self, node: &Yaml, key: &str) -> Result<Vec<f64>, CalibError> {
+        let dim = |name: &str| -> Result<usize, CalibError> {
+            let k = join(key, name);
+            match self.get(node, key, name)? {
+                Yaml::Integer(i) => usize::try_from(*i)
+                    .map_err(|_| self.bad(&k, format!("must be a count >= 0, got {i}"))),
+                other => Err(self.bad(&k, format!("must be an integer, got {}", type_name(other)))),
+            }
         };
-        let n = (rows * cols) as usize;
+        let (rows, cols) = (dim("rows")?, dim("cols")?);
+        if rows > 1 && cols > 1 {
+            return Err(self.bad(
+                key,
+                format!("must be a 1xN vector, the file says {rows}x{cols}"),
+            ));
+        }
+        self.data(node, key, rows, cols)
+    }
+
+    /// `node.data`: exactly `rows × cols` finite numbers (an empty `data:` for 0).
+    fn data(
+        &self,
+        node: &Yaml,
+        key: &str,
+        rows: usize,
+        cols: usize,
+    ) -> Result<Vec<f64>, CalibError> {
+        let n = rows * cols;
+        let data_key = join(key, "data");
+        let items = match self.get(node, key, "data")? {
+            Yaml::Array(items) => items.as_slice(),
+            Yaml::Null if n == 0 => &[],
+            _ => return Err(self.bad(&data_key, "must be a sequence of numbers")),
+        };
         if items.len() != n {
             return Err(self.bad(
                 &data_key,

@@ -9,10 +9,11 @@
 use std::path::{Path, PathBuf};
 
 use bodyseg_calib::{
-    CalibError, Intrinsics, Pose, RgbdCamera, azure_kinect_json_to_string, parse_azure_kinect_json,
-    parse_openptrack_poses, parse_ros_camera_info, read_azure_kinect_json, read_iai_kinect2,
-    read_openptrack_poses, read_ros_camera_info, write_azure_kinect_json, write_iai_kinect2,
-    write_openptrack_poses, write_ros_camera_info,
+    AzureKinectMode, CalibError, Distortion, Intrinsics, Pose, RgbdCamera,
+    azure_kinect_json_to_string, parse_azure_kinect_json, parse_openptrack_poses,
+    parse_ros_camera_info, read_azure_kinect_json, read_iai_kinect2, read_openptrack_poses,
+    read_ros_camera_info, write_azure_kinect_json, write_iai_kinect2, write_openptrack_poses,
+    write_ros_camera_info,
 };
 
 fn data(name: &str) -> PathBuf {
@@ -42,7 +43,13 @@ fn intrinsics(width: u32, height: u32) -> Intrinsics {
         fy: 611.987_654_321_098_7,
         cx: 638.123_456_789,
         cy: 367.987_654_321,
-        distortion: [0.123_456_789, -0.234_567_891, 1.5e-4, -2.25e-5, 0.045_678_9],
+        distortion: Distortion::BrownConrady([
+            0.123_456_789,
+            -0.234_567_891,
+            1.5e-4,
+            -2.25e-5,
+            0.045_678_9,
+        ]),
     }
 }
 
@@ -69,7 +76,7 @@ fn ros_fixture_reads_exact_values() {
             fy: 430.531693,
             cx: 306.691343,
             cy: 227.224800,
-            distortion: [-0.337586, 0.111612, -0.000218, -0.000030, 0.0],
+            distortion: Distortion::BrownConrady([-0.337586, 0.111612, -0.000218, -0.000030, 0.0]),
         }
     );
 }
@@ -103,7 +110,7 @@ fn ros_bad_input_names_file_and_key() {
         parse_ros_camera_info(&text.replace("cols: 5", "cols: 4"), file).expect_err("wrong shape");
     assert_names(
         &err,
-        "distortion_coefficients: must be a 1x5 matrix",
+        "distortion_coefficients.data: a 1x4 matrix needs 4 values, got 5",
         "bad_info.yaml",
     );
     let err = parse_ros_camera_info(&text.replace("image_height: 480\n", ""), file)
@@ -204,8 +211,12 @@ fn openptrack_top_level_layout_and_bad_input() {
 
 #[test]
 fn azure_fixture_converts_normalised_intrinsics() {
-    let cal = read_azure_kinect_json(&data("azure_kinect_calibration.json"), "k4a")
-        .expect("valid fixture");
+    let cal = read_azure_kinect_json(
+        &data("azure_kinect_calibration.json"),
+        "k4a",
+        AzureKinectMode::default(),
+    )
+    .expect("valid fixture");
     let cam = &cal.camera;
     assert_eq!(cam.name, "k4a");
     assert_eq!((cam.depth.width, cam.depth.height), (1024, 1024));
@@ -216,9 +227,12 @@ fn azure_fixture_converts_normalised_intrinsics() {
     assert_eq!(cam.depth.fx, 0.49273908138275146 * 1024.0);
     assert_eq!(cam.color.fy, 0.63674253225326538 * 3072.0);
     assert_eq!(cam.color.cx, 0.49896752834320068 * 4096.0 - 0.5);
-    // k1 k2 p1 p2 k3 from k1 k2 k3 k4 k5 k6 codx cody p2 p1.
+    // k1 k2 p1 p2 k3 k4 k5 k6 from k1 k2 k3 k4 k5 k6 codx cody p2 p1.
+    let Distortion::Rational(d) = cam.color.distortion else {
+        panic!("the SDK's model is rational: {:?}", cam.color.distortion);
+    };
     assert_eq!(
-        cam.color.distortion,
+        d[..5],
         [
             0.58426177501678467,
             -2.8537509441375732,
@@ -237,9 +251,8 @@ fn azure_fixture_converts_normalised_intrinsics() {
     );
     assert_eq!(cam.color_from_depth.rotation()[1][2], -0.09915872701782413);
     assert_eq!(cam.world_from_depth, Pose::identity());
-    // k4, k5, k6 of both cameras are non-zero and dropped: 6 warnings naming them.
-    assert_eq!(cal.warnings.len(), 6, "{:?}", cal.warnings);
-    assert!(cal.warnings[0].contains("Cameras[0].Intrinsics.ModelParameters: k4"));
+    // k4, k5, k6 are kept: nothing dropped, nothing to note.
+    assert!(cal.notes.is_empty(), "{:?}", cal.notes);
 }
 
 #[test]
@@ -248,8 +261,9 @@ fn azure_write_then_read_round_trips() {
     let path = dir.path().join("calibration.json");
     let want = camera();
     write_azure_kinect_json(&path, &want).expect("writes");
-    let cal = read_azure_kinect_json(&path, "cam7").expect("reads back");
-    assert!(cal.warnings.is_empty(), "{:?}", cal.warnings);
+    let cal =
+        read_azure_kinect_json(&path, "cam7", AzureKinectMode::default()).expect("reads back");
+    assert!(cal.notes.is_empty(), "{:?}", cal.notes);
     let got = &cal.camera;
     assert_eq!(got.name, want.name);
     assert_eq!(
@@ -258,7 +272,12 @@ fn azure_write_then_read_round_trips() {
     );
     for (g, w) in [(&got.depth, &want.depth), (&got.color, &want.color)] {
         assert_eq!((g.width, g.height), (w.width, w.height));
-        assert_eq!(g.distortion, w.distortion, "coefficients are exact");
+        // Brown-Conrady is written as the rational model with k4 = k5 = k6 = 0.
+        assert_eq!(
+            g.distortion.rational_coefficients(),
+            w.distortion.rational_coefficients(),
+            "coefficients are exact"
+        );
         // (cx + 0.5) / W · W − 0.5 and fx / W · W: a few ulps of ~1000 px.
         for (a, b) in [(g.fx, w.fx), (g.fy, w.fy), (g.cx, w.cx), (g.cy, w.cy)] {
             assert!((a - b).abs() < 1e-9, "{a} vs {b}");
@@ -281,6 +300,7 @@ fn azure_bad_input_names_file_and_key() {
         ),
         "k",
         file,
+        AzureKinectMode::default(),
     )
     .expect_err("13 parameters");
     assert_names(
@@ -288,21 +308,37 @@ fn azure_bad_input_names_file_and_key() {
         "CalibrationInformation.Cameras[0].Intrinsics.ModelParameters: needs 14 values",
         "bad_k4a.json",
     );
-    let err = parse_azure_kinect_json(&text.replace("LocationPV0", "LocationPV1"), "k", file)
-        .expect_err("no colour camera");
+    let err = parse_azure_kinect_json(
+        &text.replace("LocationPV0", "LocationPV1"),
+        "k",
+        file,
+        AzureKinectMode::default(),
+    )
+    .expect_err("no colour camera");
     assert_names(&err, "CameraLocationPV0", "bad_k4a.json");
-    let err = parse_azure_kinect_json(&text.replace("0.9999832459018021", "0.9"), "k", file)
-        .expect_err("not a rotation");
+    let err = parse_azure_kinect_json(
+        &text.replace("0.9999832459018021", "0.9"),
+        "k",
+        file,
+        AzureKinectMode::default(),
+    )
+    .expect_err("not a rotation");
     assert_names(&err, "Cameras[1].Rt.Rotation", "bad_k4a.json");
     let err = parse_azure_kinect_json(
         &text.replace("\"SensorWidth\": 1024", "\"SensorWidth\": 0"),
         "k",
         file,
+        AzureKinectMode::default(),
     )
     .expect_err("zero width");
     assert_names(&err, "Cameras[0].SensorWidth", "bad_k4a.json");
-    let err =
-        parse_azure_kinect_json("{\"CalibrationInformation\": [", "k", file).expect_err("syntax");
+    let err = parse_azure_kinect_json(
+        "{\"CalibrationInformation\": [",
+        "k",
+        file,
+        AzureKinectMode::default(),
+    )
+    .expect_err("syntax");
     assert!(matches!(err, CalibError::Syntax { .. }), "{err}");
 }
 

@@ -4,9 +4,12 @@
 
 use std::path::{Path, PathBuf};
 
+mod common;
+use common::{Rng, seed};
+
 use bodyseg_calib::{
-    BackProjectOptions, CalibError, CloudFrame, DepthBackProjector, Intrinsics, Pose, RgbdCamera,
-    back_project, read_iai_kinect2,
+    BackProjectOptions, CalibError, CloudFrame, DepthBackProjector, Distortion, Intrinsics, Pose,
+    RgbdCamera, back_project, read_iai_kinect2,
 };
 
 /// The shared calibration folder; CI checks out `shared/` beside the repository.
@@ -25,33 +28,6 @@ fn kinect() -> RgbdCamera {
     read_iai_kinect2(&kinect_dir()).expect("the shared iai_kinect2 folder is valid")
 }
 
-/// Seed of the random tests: `BODYSEG_TEST_SEED` overrides it; failures print it.
-fn seed() -> u64 {
-    std::env::var("BODYSEG_TEST_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(0x5EED_CA11_B0D1_5E65)
-}
-
-/// xorshift64*: enough randomness to sample pixels and depths, and no dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Rng(seed.max(1))
-    }
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-}
-
 #[test]
 // The expected values are copied digit for digit from the files, as OpenCV printed them.
 #[allow(clippy::excessive_precision)]
@@ -65,13 +41,13 @@ fn iai_kinect2_folder_loads_with_the_files_exact_values() {
     assert_eq!(cam.color.cy, 5.2373858291060583e+02);
     assert_eq!(
         cam.color.distortion,
-        [
+        Distortion::BrownConrady([
             5.6268441170930321e-02,
             -7.4199141308694802e-02,
             1.4250797540545752e-03,
             -1.6951722389720336e-03,
             2.4107681263086548e-02
-        ]
+        ])
     );
     assert_eq!((cam.color.width, cam.color.height), (1920, 1080));
     assert_eq!(cam.depth.fx, 3.6694757270064110e+02);
@@ -80,13 +56,13 @@ fn iai_kinect2_folder_loads_with_the_files_exact_values() {
     assert_eq!(cam.depth.cy, 2.0769853575457685e+02);
     assert_eq!(
         cam.depth.distortion,
-        [
+        Distortion::BrownConrady([
             9.6558110377123016e-02,
             -2.8298244017989416e-01,
             1.5889951609432634e-04,
             -5.0751483524871712e-04,
             1.0523948765859192e-01
-        ]
+        ])
     );
     assert_eq!((cam.depth.width, cam.depth.height), (512, 424));
     assert_eq!(
@@ -381,7 +357,7 @@ fn tiny_camera() -> RgbdCamera {
         fy: 2.0,
         cx: 1.5,
         cy: 1.0,
-        distortion: [0.0; 5],
+        distortion: Distortion::NONE,
     };
     RgbdCamera::new("tiny", intr, intr)
 }

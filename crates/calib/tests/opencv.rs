@@ -4,9 +4,11 @@
 //! pure-Rust iai_kinect2 reader and the other way round.
 #![cfg(feature = "opencv")]
 
+mod common;
+
 use bodyseg_calib::{
-    Board, BoardZ, GrayImage, Intrinsics, KINECT2_DEPTH_SIZE, Pose, RgbdCamera, board_pose,
-    calibrate_intrinsics, calibrate_stereo, find_board_corners, read_iai_kinect2,
+    Board, BoardZ, Distortion, GrayImage, Intrinsics, KINECT2_DEPTH_SIZE, Pose, RgbdCamera,
+    board_pose, calibrate_intrinsics, calibrate_stereo, find_board_corners, read_iai_kinect2,
     read_opencv_intrinsics, write_iai_kinect2, write_opencv_intrinsics,
 };
 
@@ -18,7 +20,7 @@ fn kinect_ir() -> Intrinsics {
         fy: 364.8,
         cx: 243.0,
         cy: 207.7,
-        distortion: [0.0966, -0.283, 0.000159, -0.000508, 0.105],
+        distortion: Distortion::BrownConrady([0.0966, -0.283, 0.000159, -0.000508, 0.105]),
     }
 }
 
@@ -30,7 +32,7 @@ fn color() -> Intrinsics {
         fy: 527.0,
         cx: 477.2,
         cy: 261.6,
-        distortion: [0.056, -0.074, 0.0014, -0.0017, 0.024],
+        distortion: Distortion::BrownConrady([0.056, -0.074, 0.0014, -0.0017, 0.024]),
     }
 }
 
@@ -269,4 +271,47 @@ fn file_storage_written_by_opencv_reads_in_pure_rust_and_back() {
         .expect_err("json")
         .to_string();
     assert!(e.contains(".yaml, .yml or .xml"), "{e}");
+}
+
+/// The colour sensor of a real Azure Kinect at 960×540 (its rational coefficients,
+/// `tests/fixtures/calib/azure_kinect/pyk4a_calibration.json`).
+fn azure_like() -> Intrinsics {
+    Intrinsics {
+        distortion: common::AZURE_COLOR_DISTORTION,
+        ..color()
+    }
+}
+
+#[test]
+fn rational_model_is_opencvs() {
+    // solvePnP fits the pose by minimising OpenCV's own projection (cv::projectPoints)
+    // of the board: corners projected with our rational model are fitted exactly only if
+    // both models agree.
+    let board = Board::new([9, 6], 0.04).expect("board");
+    let intrinsics = azure_like();
+    for want in board_poses() {
+        let corners = project(&board, &intrinsics, &want);
+        let (got, rms_px) = board_pose(&board, &intrinsics, &corners).expect("solvePnP");
+        // OpenCV takes the corners as Point2f (~1e-5 px rounding).
+        assert!(rms_px < 1e-4, "RMS {rms_px:e} px");
+        for (g, w) in got.translation_m().iter().zip(want.translation_m()) {
+            assert!((g - w).abs() < 1e-5, "{got:?} vs {want:?}");
+        }
+    }
+    // FileStorage with 8 coefficients: OpenCV writes them, OpenCV and the pure-Rust
+    // reader read them back.
+    let dir = tempfile::tempdir().expect("tempdir");
+    for name in ["rgb.yaml", "rgb.xml"] {
+        let path = dir.path().join(name);
+        write_opencv_intrinsics(&path, &intrinsics, None).expect("write");
+        assert_eq!(
+            read_opencv_intrinsics(&path, None).expect("read"),
+            intrinsics
+        );
+    }
+    assert_eq!(
+        bodyseg_calib::read_opencv_yaml_intrinsics(&dir.path().join("rgb.yaml"), None)
+            .expect("pure Rust"),
+        intrinsics
+    );
 }

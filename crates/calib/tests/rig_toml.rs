@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use bodyseg_calib::{
-    Intrinsics, Pose, RgbdCamera, Rig, parse_rig_toml, read_iai_kinect2, read_rig_toml,
+    Distortion, Intrinsics, Pose, RgbdCamera, Rig, parse_rig_toml, read_iai_kinect2, read_rig_toml,
     rig_to_toml_string, write_rig_toml,
 };
 
@@ -87,7 +87,7 @@ fn formats_md_example_reads() {
     assert_eq!(cam.name, "cam0");
     assert_eq!(cam.depth.cx, 243.0, "integers are accepted as numbers");
     assert_eq!(cam.color.fx, 1059.9);
-    assert_eq!(cam.depth.distortion[4], 0.105);
+    assert_eq!(cam.depth.distortion.coefficients()[4], 0.105);
     assert_eq!(cam.color_from_depth.translation_m(), [-0.052, 0.0, 0.0]);
     // Rotation of -90° about x: optical z (forward) becomes world +y, optical y (down)
     // becomes world -z. Tolerance: products of 0.7071…, exact to ~1e-16.
@@ -150,7 +150,7 @@ fn writer_refuses_an_invalid_rig() {
         fy: 2.0,
         cx: 1.5,
         cy: 1.0,
-        distortion: [0.0; 5],
+        distortion: Distortion::NONE,
     };
     let cam = RgbdCamera::new("a", intr, intr);
     let rig = Rig {
@@ -201,7 +201,7 @@ fn errors_name_camera_field_and_file() {
         (
             "distortion = [0.0563, -0.0742, 0.00143, -0.00170, 0.0241]",
             "distortion = [0.0563, -0.0742, 0.00143, -0.00170]",
-            "camera cam0: color.distortion must have 5 values, got 4: calib/rig.toml",
+            "camera cam0: color.distortion must have 5 numbers (k1 k2 p1 p2 k3) or 8 (rational model: k1 k2 p1 p2 k3 k4 k5 k6), got 4 values: calib/rig.toml",
         ),
         (
             "rotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",

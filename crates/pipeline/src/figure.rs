@@ -459,7 +459,7 @@ mod tests {
             fy: 50.0,
             cx: 32.0,
             cy: 24.0,
-            distortion: [0.0; 5],
+            distortion: bodyseg_calib::Distortion::NONE,
         };
         let mut color = depth;
         color.width = 128;

@@ -18,7 +18,8 @@
 //! eval_files:      predicted PLY(s) + ground-truth PLY → Report;  merge_reports: reports → Report
 //! run_recording:   a recording, every frame through every stage → clouds, boxes, label images, report
 //! convert_dataset: recordings or 3DPeople, resumable and sharded → clouds (+ reports)
-//! import_rig, read_rig, describe_rig: calibration files ⇄ rig.toml
+//! import_rig, read_rig, describe_rig: calibration files (iai_kinect2, Azure Kinect, ROS, OpenCV;
+//!                  OpenPTrack poses) ⇄ rig.toml
 //! calibrate_*:     chessboard images → intrinsics, colour-from-depth, world poses (feature `opencv`)
 //! ```
 //!
@@ -73,7 +74,7 @@ pub use batch::{
     BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameWriter, InputFile, OutputFile,
     Shard,
 };
-pub use bodyseg_calib::Board;
+pub use bodyseg_calib::{AzureColorResolution, AzureDepthMode, AzureKinectMode, Board};
 pub use bodyseg_people::BoxMode;
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, top_view};
@@ -96,7 +97,9 @@ pub use project::{ProjectOptions, ProjectSummary, project_file};
 pub use recording::{FrameList, Layer, Recording, RecordingWriter, Sensor};
 pub use refine::{RefineOptions, RefineSummary, refine_file};
 pub use report::RunSummary;
-pub use rig::{RigFormat, RigImportOptions, RigImportSummary, describe_rig, import_rig, read_rig};
+pub use rig::{
+    RigFormat, RigImportOptions, RigImportSummary, RigInput, describe_rig, import_rig, read_rig,
+};
 pub use run::{FigureChoice, RunOptions, run_recording};
 pub use stage::Stage;
 pub use synth::{SceneSource, SynthOptions, SynthSummary, synth_recording};

@@ -150,7 +150,7 @@ impl ThreeDPeopleCamera {
                 fy,
                 cx,
                 cy,
-                distortion: [0.0; 5],
+                distortion: bodyseg_calib::Distortion::NONE,
             },
             depth_scale_m: 1.0,
             max_depth_m: 100.0,

@@ -84,7 +84,7 @@ fn default_camera_is_the_datasets() {
     let k = c.intrinsics;
     assert_eq!((k.width, k.height), (640, 480));
     assert_eq!((k.fx, k.fy, k.cx, k.cy), (700.0, 700.0, 320.0, 240.0));
-    assert_eq!(k.distortion, [0.0; 5]);
+    assert_eq!(k.distortion, bodyseg_calib::Distortion::NONE);
     assert_eq!(c.depth_scale_m, 1.0);
     assert!(!c.depth_is_ray_distance);
     c.validate().expect("defaults are valid");

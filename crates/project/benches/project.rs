@@ -8,7 +8,10 @@
 //! rayon pool (the budget's machine), and DSA on rayon's default pool; the `_reused`
 //! cases measure [`FrameProjector::project_frame_into`] with the output cloud of the
 //! previous frame reused, as a pipeline worker streaming frames does (no fresh ~12 MB
-//! allocation and page faults per frame).
+//! allocation and page faults per frame). `dsa_rational_rayon_2_threads_reused` is the
+//! same frame with the colour sensors' distortion given as OpenCV's rational model (the
+//! Brown-Conrady coefficients and a small k4): the cost of the radial denominator in the
+//! colour look-up (Azure Kinect cameras).
 //! Elements = depth pixels (3 × 512 × 424).
 
 // criterion_group!/criterion_main! generate undocumented items.
@@ -17,7 +20,9 @@
 use std::hint::black_box;
 use std::path::Path;
 
-use bodyseg_calib::{BackProjectOptions, CloudFrame, Pose, RgbdCamera, Rig, read_iai_kinect2};
+use bodyseg_calib::{
+    BackProjectOptions, CloudFrame, Distortion, Pose, RgbdCamera, Rig, read_iai_kinect2,
+};
 use bodyseg_core::{Label, LabelImage};
 use bodyseg_project::{CameraImages, FrameProjector, ProjectConfig};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -217,6 +222,28 @@ fn bench(c: &mut Criterion) {
             },
         );
     }
+    let mut rational_rig = rig.clone();
+    for cam in &mut rational_rig.cameras {
+        let mut k = cam.color.distortion.rational_coefficients();
+        k[5] = 1e-3;
+        cam.color.distortion = Distortion::Rational(k);
+    }
+    let rational = FrameProjector::new(&rational_rig).expect("a valid rig");
+    let mut cloud = bodyseg_core::LabeledCloud::default();
+    group.bench_with_input(
+        BenchmarkId::new("dsa_rational_rayon_2_threads_reused", &size),
+        &images,
+        |b, imgs| {
+            b.iter(|| {
+                two.install(|| {
+                    rational
+                        .project_frame_into(black_box(imgs), &opts, &dsa, &mut cloud)
+                        .expect("ok");
+                });
+                black_box(cloud.len())
+            });
+        },
+    );
     group.bench_with_input(
         BenchmarkId::new("dsa_rayon_default", &size),
         &images,

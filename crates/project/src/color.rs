@@ -36,7 +36,11 @@ pub struct ColorProjection {
     fy: f32,
     cx: f32,
     cy: f32,
-    distortion: [f32; 5],
+    /// OpenCV's `k1 k2 p1 p2 k3 k4 k5 k6` (k4..k6 = 0 for Brown-Conrady).
+    distortion: [f32; 8],
+    /// Whether the model is rational: the batch loop then divides by its denominator
+    /// (a separate instantiation, so Brown-Conrady cameras run the loop they always ran).
+    rational: bool,
     /// Image width and height, pixels.
     width: u32,
     height: u32,
@@ -207,7 +211,8 @@ impl ColorProjection {
             fy: c.fy as f32,
             cx: c.cx as f32,
             cy: c.cy as f32,
-            distortion: c.distortion.map(|x| x as f32),
+            distortion: c.distortion.rational_coefficients().map(|x| x as f32),
+            rational: c.distortion.is_rational(),
             width: c.width,
             height: c.height,
         }
@@ -227,13 +232,31 @@ impl ColorProjection {
         out_v: &mut [u32],
         z_color_m: &mut [f32],
     ) {
+        if self.rational {
+            self.batch::<true>(x, y, z, out_u, out_v, z_color_m);
+        } else {
+            self.batch::<false>(x, y, z, out_u, out_v, z_color_m);
+        }
+    }
+
+    /// [`ColorProjection::project_batch`] for one distortion model.
+    #[inline(always)]
+    fn batch<const RATIONAL: bool>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        out_u: &mut [u32],
+        out_v: &mut [u32],
+        z_color_m: &mut [f32],
+    ) {
         let n = x.len();
         // Equal lengths up front so the loop below has no bounds checks and vectorises.
         let (y, z) = (&y[..n], &z[..n]);
         let (out_u, out_v, z_color_m) = (&mut out_u[..n], &mut out_v[..n], &mut z_color_m[..n]);
         let bounds = self.bounds();
         for i in 0..n {
-            let (u, v, zc) = self.hit([x[i], y[i], z[i]], &bounds);
+            let (u, v, zc) = self.hit::<RATIONAL>([x[i], y[i], z[i]], &bounds);
             out_u[i] = u;
             out_v[i] = v;
             z_color_m[i] = zc;
@@ -257,9 +280,9 @@ impl ColorProjection {
     /// Nearest pixel (u = [`NO_HIT`] outside the image or behind the camera) and
     /// colour-frame z of one point.
     #[inline(always)]
-    fn hit(&self, p: [f32; 3], bounds: &[f32; 4]) -> (u32, u32, f32) {
+    fn hit<const RATIONAL: bool>(&self, p: [f32; 3], bounds: &[f32; 4]) -> (u32, u32, f32) {
         let [u_end, v_end, w_last, h_last] = *bounds;
-        let [u, v, zc] = self.uv_z(p);
+        let [u, v, zc] = self.uv_z::<RATIONAL>(p);
         // NaN and ±∞ (zc = 0, non-finite input) fail every comparison.
         let inside = (zc > 0.0) & (u >= -0.5) & (v >= -0.5) & (u < u_end) & (v < v_end);
         let (ui, vi) = (round_index(u, w_last), round_index(v, h_last));
@@ -270,7 +293,11 @@ impl ColorProjection {
     /// colour camera's z, metres; `None` behind the camera or outside the image. The same
     /// rule as the projection's batches.
     pub fn nearest_pixel(&self, p: [f32; 3]) -> Option<(u32, u32, f32)> {
-        let (u, v, z) = self.hit(p, &self.bounds());
+        let (u, v, z) = if self.rational {
+            self.hit::<true>(p, &self.bounds())
+        } else {
+            self.hit::<false>(p, &self.bounds())
+        };
         (u != NO_HIT).then_some((u, v, z))
     }
 
@@ -281,19 +308,27 @@ impl ColorProjection {
 }
 
 impl ColorProjection {
-    /// Pixel coordinates (u, v) and colour-frame z (metres) of a depth-frame point.
+    /// Pixel coordinates (u, v) and colour-frame z (metres) of a depth-frame point;
+    /// non-finite coordinates where a rational model's denominator is ≤ 0 (no image
+    /// there).
     #[inline(always)]
-    fn uv_z(&self, p: [f32; 3]) -> [f32; 3] {
+    fn uv_z<const RATIONAL: bool>(&self, p: [f32; 3]) -> [f32; 3] {
         let (r, t) = (&self.rotation, &self.translation_m);
         let [px, py, pz] = p;
         let xc = r[0][0] * px + r[0][1] * py + r[0][2] * pz + t[0];
         let yc = r[1][0] * px + r[1][1] * py + r[1][2] * pz + t[1];
         let zc = r[2][0] * px + r[2][1] * py + r[2][2] * pz + t[2];
         let (xn, yn) = (xc / zc, yc / zc);
-        // OpenCV's Brown-Conrady model, as `Intrinsics::distort`.
-        let [k1, k2, p1, p2, k3] = self.distortion;
+        // OpenCV's Brown-Conrady or rational model, as `Distortion::distort`.
+        let [k1, k2, p1, p2, k3, k4, k5, k6] = self.distortion;
         let r2 = xn * xn + yn * yn;
-        let radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        let mut radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        if RATIONAL {
+            let den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6));
+            // Where the denominator is ≤ 0 the division by 0 gives ±∞ (or NaN) and the
+            // point no hit; no branch or select, so the loop still vectorises.
+            radial /= den.max(0.0);
+        }
         let xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn);
         let yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn;
         [self.fx * xd + self.cx, self.fy * yd + self.cy, zc]
@@ -323,7 +358,7 @@ fn round_index(x: f32, last: f32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use bodyseg_calib::{Intrinsics, Pose};
+    use bodyseg_calib::{Distortion, Intrinsics, Pose};
 
     /// The iai_kinect2 calibration of the bench data (`196605135147`), rounded.
     fn kinect() -> RgbdCamera {
@@ -334,7 +369,7 @@ mod tests {
             fy: 365.4,
             cx: 257.9,
             cy: 206.8,
-            distortion: [0.0905, -0.272, 0.0, 0.0, 0.0967],
+            distortion: Distortion::BrownConrady([0.0905, -0.272, 0.0, 0.0, 0.0967]),
         };
         let color = Intrinsics {
             width: 1920,
@@ -343,7 +378,7 @@ mod tests {
             fy: 1058.6,
             cx: 968.4,
             cy: 548.1,
-            distortion: [0.0391, -0.0311, 0.00071, 0.00025, 0.0],
+            distortion: Distortion::BrownConrady([0.0391, -0.0311, 0.00071, 0.00025, 0.0]),
         };
         let mut cam = RgbdCamera::new("k", depth, color);
         let (s, c) = 0.01_f64.sin_cos();
@@ -353,6 +388,23 @@ mod tests {
         )
         .expect("a rotation about y");
         cam
+    }
+
+    /// Points of every `step`-th depth pixel (both axes) at depths 0.5..8 m, depth
+    /// frame, f32.
+    fn depth_points(cam: &RgbdCamera, step: usize) -> Vec<[f32; 3]> {
+        let mut out = Vec::new();
+        for v in (0..cam.depth.height).step_by(step) {
+            for u in (0..cam.depth.width).step_by(step) {
+                let ray = cam
+                    .depth
+                    .unproject(f64::from(u), f64::from(v))
+                    .expect("ray");
+                let d = 0.5 + 7.5 * f64::from((u * 7 + v * 13) % 100) / 100.0;
+                out.push(ray.map(|c| (c * d) as f32));
+            }
+        }
+        out
     }
 
     #[test]
@@ -370,20 +422,10 @@ mod tests {
         let cam = kinect();
         let proj = ColorProjection::new(&cam);
         // Every 3rd depth pixel at depths 0.5..8 m: the whole image and range.
-        let (mut x, mut y, mut z) = (Vec::new(), Vec::new(), Vec::new());
-        for v in (0..424).step_by(3) {
-            for u in (0..512).step_by(3) {
-                let ray = cam
-                    .depth
-                    .unproject(f64::from(u), f64::from(v))
-                    .expect("ray");
-                let d = 0.5 + 7.5 * f64::from((u * 7 + v * 13) % 100) / 100.0;
-                let p = ray.map(|c| (c * d) as f32);
-                x.push(p[0]);
-                y.push(p[1]);
-                z.push(p[2]);
-            }
-        }
+        let points = depth_points(&cam, 3);
+        let x: Vec<f32> = points.iter().map(|p| p[0]).collect();
+        let y: Vec<f32> = points.iter().map(|p| p[1]).collect();
+        let z: Vec<f32> = points.iter().map(|p| p[2]).collect();
         let mut hits = Hits::zeroed(x.len());
         proj.project_batch(&x, &y, &z, &mut hits.u, &mut hits.v, &mut hits.z_color_m);
         let (mut worst_px, mut worst_z) = (0.0f64, 0.0f64);
@@ -397,7 +439,7 @@ mod tests {
                 continue;
             }
             inside += 1;
-            let [u32_, v32, z32] = proj.uv_z([x[i], y[i], z[i]]);
+            let [u32_, v32, z32] = proj.uv_z::<false>([x[i], y[i], z[i]]);
             worst_px = worst_px
                 .max((f64::from(u32_) - uv[0]).abs())
                 .max((f64::from(v32) - uv[1]).abs());
@@ -433,6 +475,76 @@ mod tests {
         );
         // z: f32 rounding of a few metres.
         assert!(worst_z < 1e-5, "z differs by {worst_z:e} m");
+    }
+
+    #[test]
+    fn f32_rational_projection_stays_within_tolerance_of_f64() {
+        // The Kinect's geometry with an Azure Kinect colour sensor's rational model
+        // (tests/fixtures/calib/azure_kinect/pyk4a_calibration.json, 720P).
+        let mut cam = kinect();
+        cam.color = Intrinsics {
+            width: 1280,
+            height: 720,
+            fx: 611.7953491210938,
+            fy: 611.927001953125,
+            cx: 639.3043212890625,
+            cy: 365.8529052734375,
+            distortion: Distortion::Rational([
+                0.33012130856513977,
+                -2.489396572113037,
+                -0.00016178244550246745,
+                -0.00012944525224156678,
+                1.453670859336853,
+                0.20891207456588745,
+                -2.302915096282959,
+                1.3751275539398193,
+            ]),
+        };
+        let proj = ColorProjection::new(&cam);
+        let (mut worst, mut inside, mut other_pixel) = (0.0f64, 0usize, 0usize);
+        for p in depth_points(&cam, 2) {
+            let p_color = cam.color_from_depth.transform_point(p.map(f64::from));
+            let uv = cam.color.project(p_color).expect("in front");
+            let hit = proj.nearest_pixel(p);
+            if !cam.color.contains(uv) {
+                // Outside by more than the f32 tolerance: no hit.
+                let margin = (-0.5 - uv[0])
+                    .max(uv[0] - 1279.5)
+                    .max(-0.5 - uv[1])
+                    .max(uv[1] - 719.5);
+                if margin > F32_TOLERANCE_PX {
+                    assert!(hit.is_none(), "{uv:?}");
+                }
+                continue;
+            }
+            inside += 1;
+            let [u32_, v32, _] = proj.uv_z::<true>(p);
+            worst = worst
+                .max((f64::from(u32_) - uv[0]).abs())
+                .max((f64::from(v32) - uv[1]).abs());
+            let f64_pixel = (uv[0].round().max(0.0) as u32, uv[1].round().max(0.0) as u32);
+            if hit.map(|(u, v, _)| (u, v)) != Some(f64_pixel) {
+                other_pixel += 1;
+            }
+        }
+        assert!(inside > 10_000, "{inside}");
+        assert!(worst < F32_TOLERANCE_PX, "{worst:e} px");
+        assert!(other_pixel * 10_000 <= inside, "{other_pixel} of {inside}");
+    }
+
+    #[test]
+    fn rational_pole_gives_no_hit() {
+        // Denominator 1 - r² (k4 = -1): ≤ 0 from r = 1 on (45° off the colour axis).
+        let mut cam = kinect();
+        cam.color_from_depth = Pose::identity();
+        cam.color.distortion = Distortion::Rational([0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0]);
+        let proj = ColorProjection::new(&cam);
+        assert!(proj.nearest_pixel([0.1, 0.1, 2.0]).is_some());
+        // r = 1 exactly (division by 0), and r = 10, which the unguarded model would map
+        // into the image (radial factor 1/(1 - 100): about 100 px from the centre).
+        for p in [[2.0f32, 0.0, 2.0], [0.0, 20.0, 2.0], [20.0, 0.0, 2.0]] {
+            assert!(proj.nearest_pixel(p).is_none(), "{p:?}");
+        }
     }
 
     fn proj_contains(u: f32, v: f32) -> bool {

@@ -944,7 +944,7 @@ mod tests {
                 fy: 1.0,
                 cx: 0.0,
                 cy: 0.0,
-                distortion: [0.0; 5],
+                distortion: bodyseg_calib::Distortion::NONE,
             };
             let zb = ZBuffer::splat(hits.view(), r, &color, &mut buffer);
             for i in 0..n {
@@ -1020,7 +1020,7 @@ mod tests {
                 fy: 30.0,
                 cx: 18.0,
                 cy: 14.0,
-                distortion: [0.0; 5],
+                distortion: bodyseg_calib::Distortion::NONE,
             },
             bodyseg_calib::Intrinsics {
                 width: 74,
@@ -1029,7 +1029,7 @@ mod tests {
                 fy: 60.0,
                 cx: 37.0,
                 cy: 29.0,
-                distortion: [0.0; 5],
+                distortion: bodyseg_calib::Distortion::NONE,
             },
         );
         camera.depth_shift_mm = -300.0;

@@ -91,7 +91,7 @@ fn simple_camera() -> RgbdCamera {
         fy: 60.0,
         cx: 31.5,
         cy: 23.5,
-        distortion: [0.0; 5],
+        distortion: bodyseg_calib::Distortion::NONE,
     };
     let color = Intrinsics {
         width: 128,
@@ -100,7 +100,7 @@ fn simple_camera() -> RgbdCamera {
         fy: 120.0,
         cx: 63.5,
         cy: 47.5,
-        distortion: [0.0; 5],
+        distortion: bodyseg_calib::Distortion::NONE,
     };
     let mut cam = RgbdCamera::new("simple", depth, color);
     cam.color_from_depth = Pose::from_rotation_translation(
@@ -242,8 +242,9 @@ fn dsa_beats_naive_on_parallax_fixture() {
     check_dsa_beats_naive("simple 64x48", &fixture(simple_camera(), &SIMPLE_SCENE));
 }
 
-#[test]
-fn dsa_beats_naive_with_real_kinect_calibration() {
+/// The fixture with the real Kinect v2 calibration in `../shared/data`: a 0.6 × 0.8 m
+/// rectangle at 1.2 m before a wall at 3 m.
+fn kinect_fixture() -> Fixture {
     let dir =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147");
     let camera = read_iai_kinect2(&dir).expect("the example iai_kinect2 folder reads");
@@ -253,7 +254,12 @@ fn dsa_beats_naive_with_real_kinect_calibration() {
         half_w_m: 0.3,
         half_h_m: 0.4,
     };
-    check_dsa_beats_naive("kinect 512x424", &fixture(camera, &scene));
+    fixture(camera, &scene)
+}
+
+#[test]
+fn dsa_beats_naive_with_real_kinect_calibration() {
+    check_dsa_beats_naive("kinect 512x424", &kinect_fixture());
 }
 
 #[test]
@@ -893,3 +899,53 @@ fn point_colours_are_read_at_each_points_colour_pixel() {
             .all(|&c| c == [0; 3])
     );
 }
+
+/// FNV-1a over the little-endian bytes of a word.
+fn fnv(h: &mut u64, word: u64) {
+    for b in word.to_le_bytes() {
+        *h ^= u64::from(b);
+        *h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+}
+
+/// Issue 28 gave the camera model a second distortion model; for Brown-Conrady cameras
+/// every step must give the bits it gave before. The real Kinect fixture (f64
+/// undistortion of every depth and colour pixel, back-projection, f32 colour look-up in
+/// naive and DSA mode, f64 projection) hashed to this value on main at 4d8781f
+/// (before the change): the same test run there.
+#[test]
+fn kinect_projection_bits_are_those_of_main() {
+    let f = kinect_fixture();
+    let mut h = 0xcbf2_9ce4_8422_2325_u64;
+    for p in &f.points {
+        for c in p {
+            fnv(&mut h, u64::from(c.to_bits()));
+        }
+    }
+    for &d in &f.depth_raw {
+        fnv(&mut h, u64::from(d));
+    }
+    for l in &f.labels.labels {
+        fnv(&mut h, u64::from(l.id()));
+    }
+    for cfg in [ProjectConfig::naive(), ProjectConfig::default()] {
+        let (labels, _) = run(&f, &f.labels, &cfg);
+        for l in labels {
+            fnv(&mut h, u64::from(l.id()));
+        }
+    }
+    for p in &f.points {
+        let p_color = f.camera.color_from_depth.transform_point(p.map(f64::from));
+        let uv = f.camera.color.project(p_color).expect("in front");
+        fnv(&mut h, uv[0].to_bits());
+        fnv(&mut h, uv[1].to_bits());
+    }
+    println!(
+        "kinect projection hash {h:#018x} over {} points",
+        f.points.len()
+    );
+    assert_eq!(h, KINECT_PROJECTION_HASH_MAIN, "{h:#018x}");
+}
+
+/// The hash [`kinect_projection_bits_are_those_of_main`] printed on main at 4d8781f.
+const KINECT_PROJECTION_HASH_MAIN: u64 = 0x71d9_5be7_4dbf_38e9;

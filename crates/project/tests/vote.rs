@@ -28,7 +28,7 @@ fn camera(index: usize) -> RgbdCamera {
         fy: 40.0,
         cx: 31.5,
         cy: 23.5,
-        distortion: [0.0; 5],
+        distortion: bodyseg_calib::Distortion::NONE,
     };
     let mut cam = RgbdCamera::new(format!("cam{index}"), intrinsics, intrinsics);
     cam.world_from_depth = Pose::from_rotation_translation(

@@ -6,7 +6,7 @@
 #![allow(clippy::excessive_precision)]
 
 use crate::config::{DsaConfig, RigConfig, SynthError};
-use bodyseg_calib::{Intrinsics, Pose, RgbdCamera, Rig};
+use bodyseg_calib::{Distortion, Intrinsics, Pose, RgbdCamera, Rig};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -20,13 +20,13 @@ pub fn kinect_v2_depth() -> Intrinsics {
         fy: 3.6479117165721783e+02,
         cx: 2.4298551682775121e+02,
         cy: 2.0769853575457685e+02,
-        distortion: [
+        distortion: Distortion::BrownConrady([
             9.6558110377123016e-02,
             -2.8298244017989416e-01,
             1.5889951609432634e-04,
             -5.0751483524871712e-04,
             1.0523948765859192e-01,
-        ],
+        ]),
     }
 }
 
@@ -43,13 +43,13 @@ pub fn kinect_v2_color(width: u32) -> Intrinsics {
         fy: 1.0539326808799726e+03 * s,
         cx: (9.5488326677588441e+02 + 0.5) * s - 0.5,
         cy: (5.2373858291060583e+02 + 0.5) * s - 0.5,
-        distortion: [
+        distortion: Distortion::BrownConrady([
             5.6268441170930321e-02,
             -7.4199141308694802e-02,
             1.4250797540545752e-03,
             -1.6951722389720336e-03,
             2.4107681263086548e-02,
-        ],
+        ]),
     }
 }
 
