@@ -1424,10 +1424,7 @@ mod tests {
             panic!("parsed as refine");
         };
         let e = format!("{:#}", r.config().expect_err("invalid"));
-        assert_eq!(
-            e,
-            "--eps-m: refine.eps_m must be a finite number > 0, got -1"
-        );
+        assert_eq!(e, "--eps-m: refine.eps_m must be in (0, 5] metres, got -1");
     }
 
     #[test]

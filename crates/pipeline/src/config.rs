@@ -122,7 +122,7 @@ impl PipelineConfig {
     /// # Errors
     /// The file cannot be read or is not UTF-8 ([`bodyseg_io::read_text`]); it is not TOML; it has a key no section knows (the error
     /// names the key, its line and its section); a value is out of range (the error names
-    /// the field: `config.toml: refine.eps_m must be a finite number > 0, got -1`).
+    /// the field: `config.toml: refine.eps_m must be in (0, 5] metres, got -1`).
     pub fn load(path: &Path) -> Result<PipelineConfig> {
         PipelineConfig::resolve(&[path.to_path_buf()], &[])
     }
@@ -137,7 +137,7 @@ impl PipelineConfig {
     /// the file, the line and the key); a setting is not `KEY=VALUE`, names an unknown key
     /// or has a value of the wrong type (the error names the setting and the key); a value
     /// is out of range (the error names the field, after the file or setting that set it:
-    /// `--set refine.eps_m=-1: refine.eps_m must be a finite number > 0, got -1`).
+    /// `--set refine.eps_m=-1: refine.eps_m must be in (0, 5] metres, got -1`).
     pub fn resolve(files: &[PathBuf], settings: &[String]) -> Result<PipelineConfig> {
         let mut table = toml::Table::new();
         let mut file_tables = Vec::with_capacity(files.len());
@@ -254,7 +254,7 @@ impl PipelineConfig {
     ///
     /// # Errors
     /// A value out of range; the error names the flag and the field
-    /// (`--eps-m: refine.eps_m must be a finite number > 0, got -1`).
+    /// (`--eps-m: refine.eps_m must be in (0, 5] metres, got -1`).
     pub fn apply_refine_overrides(&mut self, o: &RefineOverrides) -> Result<()> {
         let r = &mut self.refine;
         if let Some(steps) = o.steps {
@@ -405,10 +405,7 @@ mod tests {
     #[test]
     fn out_of_range_values_name_the_file_and_field() {
         let e = format!("{:#}", parse("[refine]\neps_m = -1\n").expect_err("error"));
-        assert_eq!(
-            e,
-            "c.toml: refine.eps_m must be a finite number > 0, got -1"
-        );
+        assert_eq!(e, "c.toml: refine.eps_m must be in (0, 5] metres, got -1");
         let e = format!(
             "{:#}",
             parse("[refine]\nsteps = \"m-x\"\n").expect_err("error")
@@ -470,10 +467,7 @@ mod tests {
             ..Default::default()
         };
         let e = format!("{:#}", c.apply_refine_overrides(&bad).expect_err("error"));
-        assert_eq!(
-            e,
-            "--eps-m: refine.eps_m must be a finite number > 0, got 0"
-        );
+        assert_eq!(e, "--eps-m: refine.eps_m must be in (0, 5] metres, got 0");
     }
 
     #[test]
@@ -639,7 +633,7 @@ mod tests {
         // A value out of range is named with the setting that gave it...
         assert_eq!(
             err(&["refine.eps_m=-1"]),
-            "--set refine.eps_m=-1: refine.eps_m must be a finite number > 0, got -1"
+            "--set refine.eps_m=-1: refine.eps_m must be in (0, 5] metres, got -1"
         );
         // ... or the file.
         let (_dir, bad) = files(&[("neg.toml", "[refine]\neps_m = -1\n")]);
@@ -652,7 +646,7 @@ mod tests {
             .expect_err("invalid")
         );
         assert!(
-            e.ends_with("neg.toml: refine.eps_m must be a finite number > 0, got -1"),
+            e.ends_with("neg.toml: refine.eps_m must be in (0, 5] metres, got -1"),
             "{e}"
         );
         // A setting can mend a file's value: only the result is validated.

@@ -1,10 +1,10 @@
 //! The one spatial grid of the crate: points binned into cubic cells, stored sorted by cell
 //! (each cell a contiguous range), with a look-up of a cell by its integer key, and the
-//! exact nearest-neighbour and radius queries built on it ([`NnIndex`]).
+//! exact nearest-neighbour and radius queries built on it ([`nn::NnIndex`]).
 //!
 //! Every spatial search of the refinement uses it: DBSCAN's neighbour counting
 //! ([`crate::dbscan`], cells of side eps/√3), N's nearest clustered point and its votes
-//! ([`NnIndex`]), the wide votes and smoothing's cell counts (`steps::LabelCells`), R's
+//! ([`nn::NnIndex`]), the wide votes and smoothing's cell counts (`steps::LabelCells`), R's
 //! bridges through noise (`steps::restore_bridged`) and the contact graph
 //! (`graph::ContactIndex`). Each user keeps its own rule for which cell a point falls in
 //! (relative to the points' corner with [`GridFrame`], or absolute, `⌊x / side⌋`, where
@@ -20,11 +20,9 @@
 use bodyseg_core::math::Vec3;
 use rustc_hash::FxHashMap;
 
-mod nn;
+pub(crate) mod nn;
 #[cfg(test)]
 pub(crate) mod tests;
-
-pub(crate) use nn::NnIndex;
 
 /// Most cells along one axis of a [`GridFrame`]: keys and their neighbours' keys (± a few
 /// cells) stay far inside `i32`, and any side is made at least the extent over this.

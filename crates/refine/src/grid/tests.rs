@@ -1,5 +1,6 @@
 //! Property tests of the grid against brute force.
 
+use super::nn::NnIndex;
 use super::*;
 use bodyseg_core::math::dist2;
 

@@ -1,7 +1,8 @@
 //! Voters counted per label in cells, for the wide votes of N ([`super::reassign_doubted_wide`])
 //! and smoothing ([`super::smooth_labels`]).
 
-use crate::grid::{CellGrid, NnIndex};
+use crate::grid::CellGrid;
+use crate::grid::nn::NnIndex;
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, NUM_CLASSES};
 

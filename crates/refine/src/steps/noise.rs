@@ -2,7 +2,7 @@
 //! the parser's probabilities, and the wide vote for doubted labels.
 
 use super::cells::{CellScratch, LabelCells, winner};
-use crate::grid::NnIndex;
+use crate::grid::nn::NnIndex;
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, NUM_CLASSES};
 use rayon::prelude::*;
