@@ -3,6 +3,15 @@
 use super::{Aabb, CellGrid, sort_by_key};
 use bodyseg_core::math::{Vec3, dist2};
 
+/// Scratch space of [`NnIndex::nearest_with`], kept between queries.
+#[derive(Debug, Default)]
+pub(crate) struct NnScratch {
+    /// Per block: the squared distance from the query to its box.
+    blocks: Vec<f32>,
+    /// Cells to scan: (squared distance to the box, cell).
+    cells: Vec<(f32, u32)>,
+}
+
 /// Fine cells per block edge in [`NnIndex`].
 const NN_BLOCK_CELLS: i32 = 4;
 
@@ -114,17 +123,21 @@ impl NnIndex {
     ///
     /// Near the points (most noise: unknown points on a body, points at its edges) the
     /// answer lies in the query's own 3×3×3 block of cells: the own cell is scanned, then
-    /// the block, stopping as soon as the best point is nearer than the block's walls.
-    /// Farther, the block nearest to `q` is opened first so the bound is tight, then every
-    /// other block is checked against it in one linear pass (a few hundred box tests).
+    /// the other cells of the block nearest first (by their boxes), stopping as soon as the
+    /// next box is farther than the best point, and the search ends when the best point is
+    /// nearer than the block's walls. Farther, the block nearest to `q` is opened first so
+    /// the bound is tight, every other block is checked against it in one linear pass (a
+    /// few hundred box tests), and the cells of the blocks that pass are scanned nearest
+    /// first, again only while their boxes are not farther than the best point.
     pub(crate) fn nearest(&self, q: Vec3) -> Option<u32> {
-        self.nearest_with(q, &mut Vec::new())
+        self.nearest_with(q, &mut NnScratch::default())
     }
 
-    /// [`NnIndex::nearest`] with `scratch` for the far search's block bounds (no
+    /// [`NnIndex::nearest`] with `scratch` for the bounds of blocks and cells (no
     /// allocation per query).
-    pub(crate) fn nearest_with(&self, q: Vec3, scratch: &mut Vec<f32>) -> Option<u32> {
+    pub(crate) fn nearest_with(&self, q: Vec3, scratch: &mut NnScratch) -> Option<u32> {
         let mut best: Option<(f32, u32)> = None;
+        let NnScratch { blocks, cells } = scratch;
         let k = self.key_of(q);
         if self.inside(k) {
             if let Some(own) = self.grid.cell(k) {
@@ -133,6 +146,7 @@ impl NnIndex {
                     return best.map(|(_, j)| j);
                 }
             }
+            cells.clear();
             for dz in -1..=1 {
                 for dy in -1..=1 {
                     for dx in -1..=1 {
@@ -140,22 +154,23 @@ impl NnIndex {
                         if (dx, dy, dz) == (0, 0, 0) {
                             continue;
                         }
-                        if let Some(c) = self.grid.cell(n)
-                            && best.is_none_or(|(b2, _)| self.cell_box[c as usize].dist2(q) <= b2)
-                        {
-                            self.scan_cell(q, c as usize, &mut best);
+                        if let Some(c) = self.grid.cell(n) {
+                            let lb = self.cell_box[c as usize].dist2(q);
+                            if best.is_none_or(|(b2, _)| lb <= b2) {
+                                cells.push((lb, c));
+                            }
                         }
                     }
                 }
             }
+            self.scan_nearest_first(q, cells, &mut best);
             if best.is_some_and(|(b2, _)| b2 <= self.wall_dist2(q, k, 1)) {
                 return best.map(|(_, j)| j);
             }
         }
-        let blb = scratch;
-        blb.clear();
-        blb.extend(self.block_box.iter().map(|bx| bx.dist2(q)));
-        let b0 = (0..blb.len()).min_by(|&a, &b| blb[a].total_cmp(&blb[b]))?;
+        blocks.clear();
+        blocks.extend(self.block_box.iter().map(|bx| bx.dist2(q)));
+        let b0 = (0..blocks.len()).min_by(|&a, &b| blocks[a].total_cmp(&blocks[b]))?;
         let c0 = self
             .cells_of_block(b0)
             .iter()
@@ -166,17 +181,38 @@ impl NnIndex {
             })
             .copied()?;
         self.scan_cell(q, c0 as usize, &mut best);
-        for (b, &lb) in blb.iter().enumerate() {
+        cells.clear();
+        for (b, &lb) in blocks.iter().enumerate() {
             if best.is_some_and(|(b2, _)| lb > b2) {
                 continue;
             }
             for &c in self.cells_of_block(b) {
-                if c != c0 && best.is_none_or(|(b2, _)| self.cell_box[c as usize].dist2(q) <= b2) {
-                    self.scan_cell(q, c as usize, &mut best);
+                if c == c0 {
+                    continue;
+                }
+                let lb = self.cell_box[c as usize].dist2(q);
+                if best.is_none_or(|(b2, _)| lb <= b2) {
+                    cells.push((lb, c));
                 }
             }
         }
+        self.scan_nearest_first(q, cells, &mut best);
         best.map(|(_, j)| j)
+    }
+
+    /// Scans the cells of `cells` (lower bound of the squared distance to `q`, cell) in
+    /// the order of their bounds, until the next bound exceeds the best point found:
+    /// those cells cannot hold a nearer point, nor one as near (the bound is exact in
+    /// f32, see [`Aabb::near_far2`]), so the best point is the one a scan of all of them
+    /// finds. Reorders `cells`.
+    fn scan_nearest_first(&self, q: Vec3, cells: &mut [(f32, u32)], best: &mut Option<(f32, u32)>) {
+        cells.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(lb, c) in cells.iter() {
+            if best.is_some_and(|(b2, _)| lb > b2) {
+                break;
+            }
+            self.scan_cell(q, c as usize, best);
+        }
     }
 
     /// Calls `f(squared distance, id)` for every indexed point within `r2` of `q`, in no

@@ -2,7 +2,7 @@
 //! the parser's probabilities, and the wide vote for doubted labels.
 
 use super::cells::{CellScratch, LabelCells, winner};
-use crate::grid::nn::NnIndex;
+use crate::grid::nn::{NnIndex, NnScratch};
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Label, NUM_CLASSES};
 use rayon::prelude::*;
@@ -53,7 +53,7 @@ impl NoiseNearest {
         let pairs: Vec<(u32, u32)> = noise
             .par_iter()
             .with_min_len(256)
-            .map_init(Vec::new, |scratch, &i| {
+            .map_init(NnScratch::default, |scratch, &i| {
                 (i, index.nearest_with(positions_m[i as usize], scratch))
             })
             .filter_map(|(i, j)| j.map(|j| (i, j)))
