@@ -336,12 +336,14 @@ impl Neighbours {
     }
 
     fn look(&mut self, g: &GroupGrid, until: usize) {
-        self.len += g.grid.near_cells(
-            self.at,
-            &g.offs,
-            self.looked..until,
-            &mut self.cells[self.len..],
-        );
+        let out = &mut self.cells[self.len..];
+        self.len += if self.looked == NEAR_OFFSETS && until == 125 {
+            // The far cells, by rows of the look-up table (in key order).
+            g.grid
+                .shell2_cells(self.at, &g.offs, NEAR_OFFSETS..125, out)
+        } else {
+            g.grid.near_cells(self.at, &g.offs, self.looked..until, out)
+        };
         self.looked = until;
     }
 

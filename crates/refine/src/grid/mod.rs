@@ -479,6 +479,43 @@ impl CellGrid {
         n
     }
 
+    /// Writes to `out` the cells holding points in the shell of the 5×5×5 block around
+    /// `at` (keys within 2 of `at`'s on every axis, 2 away on at least one), in key order;
+    /// returns how many. The grid must have been built with a padding of at least 2. A
+    /// dense look-up reads the shell by rows of the table (25 rows, one bounds check
+    /// each, instead of one look-up per offset); a hashed one looks up `fallback`'s
+    /// offsets at `range` (the same cells, in their order).
+    #[inline]
+    pub(crate) fn shell2_cells(
+        &self,
+        at: Anchor,
+        fallback: &Offsets,
+        range: std::ops::Range<usize>,
+        out: &mut [u32],
+    ) -> usize {
+        let CellLookup::Dense { table, dims, .. } = &self.lookup else {
+            return self.near_cells(at, fallback, range, out);
+        };
+        let mut n = 0;
+        for dz in -2i64..=2 {
+            for dy in -2i64..=2 {
+                let mid = (at.slot + (dz * dims[1] + dy) * dims[0]) as usize;
+                if dz.abs() == 2 || dy.abs() == 2 {
+                    for &c in &table[mid - 2..=mid + 2] {
+                        out[n] = c;
+                        n += usize::from(c != EMPTY);
+                    }
+                } else {
+                    for c in [table[mid - 2], table[mid + 2]] {
+                        out[n] = c;
+                        n += usize::from(c != EMPTY);
+                    }
+                }
+            }
+        }
+        n
+    }
+
     /// The cell at offset `i` of `offs` from `at`, if any point lies in it.
     #[inline]
     pub(crate) fn near_cell(&self, at: Anchor, offs: &Offsets, i: usize) -> Option<u32> {
