@@ -112,7 +112,7 @@ pub fn dbscan(positions_m: &[Vec3], labels: &[Label], params: &DbscanParams) -> 
         .par_iter()
         .map(|idx| cluster_group(positions_m, labels, idx, params))
         .collect();
-    assemble(n, labels, &group_results)
+    assemble(n, labels, &group_results, separate_labels)
 }
 
 /// Per-group output: for each point of the group (in any order) its index, its local
@@ -124,10 +124,14 @@ struct GroupResult {
 }
 
 /// Gives global cluster ids (ordered by smallest point index) and cluster labels.
-fn assemble(n: usize, labels: &[Label], results: &[GroupResult]) -> Clustering {
+/// `one_label`: every group holds one label (so does each of its clusters, whose label is
+/// then its points' without a vote).
+fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool) -> Clustering {
     let mut is_core = vec![false; n];
     // (smallest point index, group, local component) for every component.
     let mut comps: Vec<(u32, usize, u32)> = Vec::new();
+    // Per group, per local component: its global id (set below).
+    let mut global: Vec<Vec<u32>> = Vec::with_capacity(results.len());
     for (g, res) in results.iter().enumerate() {
         let idx = &res.ids;
         let ncomp = res
@@ -145,39 +149,44 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult]) -> Clustering {
             }
         }
         comps.extend(first.iter().enumerate().map(|(c, &f)| (f, g, c as u32)));
+        global.push(vec![u32::MAX; ncomp as usize]);
     }
     comps.sort_unstable();
-    let mut global: Vec<Vec<u32>> = results
-        .iter()
-        .map(|r| {
-            vec![
-                u32::MAX;
-                r.component
-                    .iter()
-                    .flatten()
-                    .map(|&c| c as usize + 1)
-                    .max()
-                    .unwrap_or(0)
-            ]
-        })
-        .collect();
     for (id, &(_, g, c)) in comps.iter().enumerate() {
         global[g][c as usize] = id as u32;
     }
     let mut cluster_of = vec![None; n];
-    let mut votes = vec![[0u32; NUM_CLASSES]; comps.len()];
-    for (g, res) in results.iter().enumerate() {
-        for (&i, &c) in res.ids.iter().zip(&res.component) {
-            if let Some(c) = c {
-                let id = global[g][c as usize];
-                cluster_of[i as usize] = Some(id);
-                if let Some(class) = labels[i as usize].class() {
-                    votes[id as usize][class.index()] += 1;
+    let cluster_labels = if one_label {
+        for (g, res) in results.iter().enumerate() {
+            for (&i, &c) in res.ids.iter().zip(&res.component) {
+                if let Some(c) = c {
+                    cluster_of[i as usize] = Some(global[g][c as usize]);
                 }
             }
         }
-    }
-    let cluster_labels = votes.iter().map(majority_label).collect();
+        // The majority of one label is that label (as `majority_label` names it).
+        comps
+            .iter()
+            .map(|&(first, _, _)| {
+                let class = labels[first as usize].class().map_or(0, |c| c.index());
+                Label::from_id(class as u8).unwrap_or(Label::BACKGROUND)
+            })
+            .collect()
+    } else {
+        let mut votes = vec![[0u32; NUM_CLASSES]; comps.len()];
+        for (g, res) in results.iter().enumerate() {
+            for (&i, &c) in res.ids.iter().zip(&res.component) {
+                if let Some(c) = c {
+                    let id = global[g][c as usize];
+                    cluster_of[i as usize] = Some(id);
+                    if let Some(class) = labels[i as usize].class() {
+                        votes[id as usize][class.index()] += 1;
+                    }
+                }
+            }
+        }
+        votes.iter().map(majority_label).collect()
+    };
     Clustering {
         cluster_of,
         is_core,
@@ -863,5 +872,5 @@ pub fn dbscan_brute_force(
         component,
         is_core,
     };
-    assemble(n, labels, &[res])
+    assemble(n, labels, &[res], false)
 }

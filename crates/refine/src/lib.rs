@@ -673,16 +673,61 @@ fn fuse_labels(
             o => o,
         })
         .collect();
-    // Per point: how many people's boxes hold it, as far as the fuse cares.
-    const NONE: u8 = 0;
-    const AGREE: u8 = 1;
-    const DISAGREE: u8 = 2;
-    let mut seen = vec![NONE; n];
     let mut clusters = if with_clusters {
         vec![None; n]
     } else {
         Vec::new()
     };
+    if let [(idx, r)] = people {
+        // One person: every point of its box takes its label (what the rules below give
+        // when no point is in two boxes), without the bookkeeping.
+        for (k, (&i, &l)) in idx.iter().zip(&r.point_labels).enumerate() {
+            labels[i as usize] = l;
+            if with_clusters {
+                clusters[i as usize] = r
+                    .clustering
+                    .cluster_of
+                    .get(k)
+                    .copied()
+                    .flatten()
+                    .map(|c| (0, c));
+            }
+        }
+    } else {
+        fuse_people(
+            cloud,
+            original,
+            boxes,
+            people,
+            &mut labels,
+            &mut clusters,
+            with_clusters,
+        );
+    }
+    for l in &mut labels {
+        if l.is_unknown() {
+            *l = Label::BACKGROUND;
+        }
+    }
+    (labels, clusters)
+}
+
+/// [`fuse_labels`] of several people over `labels` (the points outside every box done).
+fn fuse_people(
+    cloud: &LabeledCloud,
+    original: &[Label],
+    boxes: &[PersonBox],
+    people: &[(&[u32], &PersonRefinement)],
+    labels: &mut [Label],
+    clusters: &mut [Option<(u32, u32)>],
+    with_clusters: bool,
+) {
+    let n = cloud.len();
+    // Per point: how many people's boxes hold it, as far as the fuse cares.
+    const NONE: u8 = 0;
+    const AGREE: u8 = 1;
+    const DISAGREE: u8 = 2;
+    let mut seen = vec![NONE; n];
     for (p, (idx, r)) in people.iter().enumerate() {
         for (k, &i) in idx.iter().enumerate() {
             let i = i as usize;
@@ -701,13 +746,13 @@ fn fuse_labels(
             };
             match seen[i] {
                 NONE => {
-                    take(&mut labels, &mut clusters);
+                    take(labels, clusters);
                     seen[i] = AGREE;
                 }
                 // Unknown is a person abstaining (a color it does not wear): the others
-                // decide; when all abstain, background (below).
+                // decide; when all abstain, background (in `fuse_labels`).
                 AGREE if l.is_unknown() => {}
-                AGREE if labels[i].is_unknown() => take(&mut labels, &mut clusters),
+                AGREE if labels[i].is_unknown() => take(labels, clusters),
                 AGREE if labels[i] != l => seen[i] = DISAGREE,
                 _ => {}
             }
@@ -729,12 +774,6 @@ fn fuse_labels(
             };
         }
     }
-    for l in &mut labels {
-        if l.is_unknown() {
-            *l = Label::BACKGROUND;
-        }
-    }
-    (labels, clusters)
 }
 
 /// The label that the person whose box centre is nearest (horizontally) gave point `i`
