@@ -34,6 +34,9 @@ mod synth_cloud;
 #[path = "common/alloc.rs"]
 mod alloc;
 
+#[path = "common/evidence.rs"]
+mod evidence;
+
 const SIZES: [usize; 3] = [30_000, 100_000, 300_000];
 const SEED: u64 = 1;
 
@@ -185,32 +188,13 @@ fn bench_refine_modes(c: &mut Criterion) {
             b.iter(|| refine(black_box(&p.cloud), &boxes, cfg))
         });
     }
-    // Probability noise needs the parser's probabilities: made up as the parser's doubts
-    // come, in strips (2.5 cm bands every 10 cm of height at 0.5, the rest at 0.9), so a
-    // quarter of the labels are doubted at 0.85.
-    let probs: Vec<f32> = p
-        .cloud
-        .positions_m
-        .iter()
-        .map(|q| {
-            if (q[2] * 10.0).rem_euclid(1.0) < 0.25 {
-                0.5
-            } else {
-                0.9
-            }
-        })
-        .collect();
+    // Probability noise needs the parser's probabilities (made up, in strips).
+    let probs = evidence::strip_probs(&p.cloud.positions_m);
     let evidence = PointEvidence {
         label_probs: Some(&probs),
         ..Default::default()
     };
-    let probability = RefineConfig {
-        graph: GraphMode::Contact,
-        tree: TreeMode::Coverage,
-        noise: NoiseMode::Probability,
-        noise_doubt_ratio: 0.85,
-        ..paper.clone()
-    };
+    let probability = evidence::probability_config(&paper);
     let improved = RefineConfig {
         noise_doubt_radius_m: 0.15,
         remove_through_noise: true,

@@ -39,6 +39,9 @@ mod synth_cloud;
 #[path = "../benches/common/alloc.rs"]
 mod alloc;
 
+#[path = "../benches/common/evidence.rs"]
+mod evidence;
+
 type Error = Box<dyn std::error::Error>;
 
 /// FNV-1a, 64 bits.
@@ -89,21 +92,6 @@ fn main() -> Result<(), Error> {
     }
 }
 
-/// Made-up parser probabilities, in strips of height (as the refine bench's).
-fn strip_probs(cloud: &LabeledCloud) -> Vec<f32> {
-    cloud
-        .positions_m
-        .iter()
-        .map(|q| {
-            if (q[2] * 10.0).rem_euclid(1.0) < 0.25 {
-                0.5
-            } else {
-                0.9
-            }
-        })
-        .collect()
-}
-
 fn digest(sizes: &[usize]) -> Result<(), Error> {
     let mut clouds: Vec<(String, LabeledCloud, PersonBox)> = Vec::new();
     for &n in sizes {
@@ -113,13 +101,7 @@ fn digest(sizes: &[usize]) -> Result<(), Error> {
     let p = human_cloud(30_000, 1);
     clouds.push(("testkit30000".into(), p.cloud, p.person_box));
     let paper = RefineConfig::default();
-    let probability = RefineConfig {
-        graph: GraphMode::Contact,
-        tree: TreeMode::Coverage,
-        noise: NoiseMode::Probability,
-        noise_doubt_ratio: 0.85,
-        ..paper.clone()
-    };
+    let probability = evidence::probability_config(&paper);
     let improved = RefineConfig {
         eps_m: 0.045,
         noise_doubt_radius_m: 0.15,
@@ -202,7 +184,7 @@ fn digest(sizes: &[usize]) -> Result<(), Error> {
         ),
     ];
     for (name, cloud, person_box) in &clouds {
-        let probs = strip_probs(cloud);
+        let probs = evidence::strip_probs(&cloud.positions_m);
         // All five configurations of the paper from one clustering.
         let v = refine_variants_with(
             cloud,
