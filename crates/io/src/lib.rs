@@ -43,6 +43,7 @@ mod error;
 mod folder;
 mod image;
 mod listing;
+mod lock;
 mod mat;
 mod pcd;
 mod ply;
@@ -61,6 +62,7 @@ pub use image::{
     write_label_png, write_label_png_with, write_rgb_png,
 };
 pub use listing::{FolderEntry, list_folder};
+pub use lock::{FolderLock, LockError, lock_folder};
 pub use mat::{MatMatrix, read_mat_matrix, read_mat_variable_names};
 pub use pcd::{parse_pcd, read_pcd};
 pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};
