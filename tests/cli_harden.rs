@@ -92,6 +92,9 @@ fn an_output_that_is_an_input_or_not_ours_is_refused() {
         &before,
         &["exists and is not a file this command writes"],
     );
+    // A socket (not /dev/null: a bodyseg without the guard would replace the device).
+    let _socket = std::os::unix::net::UnixListener::bind(d.join("sock.ply")).expect("socket");
+    let before = files_in(d);
     let out = bodyseg(
         d,
         &[
@@ -101,15 +104,21 @@ fn an_output_that_is_an_input_or_not_ours_is_refused() {
             "--boxes",
             "boxes.json",
             "--out",
-            "/dev/null",
+            "sock.ply",
         ],
     );
-    assert_refused(&out, d, &before, &["/dev/null: is a device"]);
+    assert_refused(
+        &out,
+        d,
+        &before,
+        &["sock.ply: is a socket, not a regular file"],
+    );
+    use std::os::unix::fs::FileTypeExt;
     assert!(
-        !std::fs::metadata("/dev/null")
-            .expect("/dev/null")
+        std::fs::symlink_metadata(d.join("sock.ply"))
+            .expect("socket")
             .file_type()
-            .is_file()
+            .is_socket()
     );
 }
 
@@ -293,6 +302,8 @@ fn a_wrong_depth_scale_and_a_frame_a_camera_lacks_are_warned_about() {
         .expect("a depth image of frame 7");
     std::fs::remove_file(rec.join(&cam)).expect("remove");
     let camera = cam.split('/').next().expect("camera");
+    // No ground truth for that camera: evaluation is off, with a warning.
+    std::fs::remove_dir_all(rec.join(camera).join("depth_labels")).expect("remove truth");
     let out = bodyseg(
         dir.path(),
         &[
@@ -319,6 +330,13 @@ fn a_wrong_depth_scale_and_a_frame_a_camera_lacks_are_warned_about() {
             |l| l.starts_with("warning: rec: 1 frame skipped, a camera lacks them")
                 && l.contains(&format!("000007 (no {camera})"))
         ),
+        "{err}"
+    );
+    assert!(
+        err.lines().any(|l| l
+            == format!(
+                "warning: rec: no ground truth (depth_labels/) for camera {camera}: evaluation is off"
+            )),
         "{err}"
     );
     let log = std::fs::read_to_string(dir.path().join("out/run.json")).expect("run.json");

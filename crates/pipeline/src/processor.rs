@@ -109,6 +109,14 @@ impl FrameProcessor {
             )
         })?;
         let has_truth = recording.has_layer(Layer::DepthLabels);
+        let lacking = recording.cameras_lacking(Layer::DepthLabels);
+        if !lacking.is_empty() && lacking.len() < rig.cameras.len() {
+            tracing::warn!(
+                "{}: no ground truth (depth_labels/) for camera {}: evaluation is off",
+                recording.root().display(),
+                lacking.join(", ")
+            );
+        }
         let views = rig
             .cameras
             .iter()

@@ -320,6 +320,21 @@ impl Recording {
         })
     }
 
+    /// The cameras of the rig (in rig order) without a folder of `layer`.
+    pub fn cameras_lacking(&self, layer: Layer) -> Vec<&str> {
+        self.rig
+            .cameras
+            .iter()
+            .filter(|c| {
+                !self
+                    .layout
+                    .layer_folder(&c.name, layer)
+                    .is_ok_and(|f| f.is_dir())
+            })
+            .map(|c| c.name.as_str())
+            .collect()
+    }
+
     /// The person boxes file of frame `stem`: `REC/boxes/<stem>.json`.
     ///
     /// # Errors

@@ -51,7 +51,7 @@ pub(crate) fn projected_scale_warning(
         format!(
             "{what}: the median point is {m:.3} m from its camera, implausible for people in \
              a room ({MIN_MEDIAN_DISTANCE_M}-{MAX_MEDIAN_DISTANCE_M} m): check the depth unit \
-             (the rig's depth_scale: metres per raw depth value)"
+             (rig.toml's depth_scale: raw depth units per metre, 1000 for millimetres)"
         )
     })
 }
