@@ -33,6 +33,7 @@ fn main() -> ExitCode {
     bodyseg_pipeline::keep_freed_memory();
     let cli = Cli::parse();
     init_logging(cli.verbose);
+    handle_signals();
     match run(&cli) {
         Ok(Outcome::Done) => ExitCode::SUCCESS,
         Ok(Outcome::SomeFramesFailed) => ExitCode::from(3),
@@ -41,6 +42,30 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// SIGINT and SIGTERM: remove the temporary files of the writes in flight (and the
+/// output folder's lock) and exit 130 or 143 (128 + the signal) with one `error:` line. A
+/// batch is resumed by running the command again: finished frames are kept.
+fn handle_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            bodyseg_io::remove_temporaries();
+            let name = if signal == SIGINT {
+                "SIGINT"
+            } else {
+                "SIGTERM"
+            };
+            eprintln!(
+                "error: interrupted ({name}): temporary files removed; what was finished is kept (run the command again to resume a batch)"
+            );
+            std::process::exit(128 + signal);
+        }
+    });
 }
 
 /// Logs go to stderr. `-v` flags pick the level; without them RUST_LOG does, else `warn`.

@@ -50,7 +50,8 @@ mod ply;
 mod text;
 
 pub use atomic::{
-    Durability, sync_file_system, write_atomic, write_atomic_with, write_bytes_atomic,
+    Durability, remove_temporaries, sync_file_system, write_atomic, write_atomic_with,
+    write_bytes_atomic,
 };
 pub use boxes::{parse_boxes, read_boxes, write_boxes, write_boxes_with};
 pub use error::IoError;

@@ -13,6 +13,8 @@ pub struct FolderLock {
     /// Open while the lock is held (closing it releases the lock).
     _file: File,
     path: PathBuf,
+    /// Removed by [`crate::remove_temporaries`] when a signal ends the process.
+    _registered: crate::atomic::InFlight,
 }
 
 impl Drop for FolderLock {
@@ -107,7 +109,12 @@ pub fn lock_folder(folder: &Path, name: &str) -> Result<FolderLock, LockError> {
         file.seek(SeekFrom::Start(0)).map_err(wrap)?;
         file.write_all(format!("{}\n", std::process::id()).as_bytes())
             .map_err(wrap)?;
-        return Ok(FolderLock { _file: file, path });
+        let _registered = crate::atomic::InFlight::new(&path);
+        return Ok(FolderLock {
+            _file: file,
+            path,
+            _registered,
+        });
     }
     Err(wrap(std::io::Error::other(
         "the lock file keeps being replaced",
