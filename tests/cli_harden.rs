@@ -6,10 +6,11 @@ use crate::common::{
     bodyseg, bodyseg_env, copy_tree, files_in, recording, stderr, tempdir, tree, write_scene,
 };
 use std::path::Path;
+use std::process::Output;
 
 /// Exit status 1, one `error:` line holding every needle, and the folder's files as
 /// `before` (nothing written, nothing left).
-fn assert_refused(out: &std::process::Output, d: &Path, before: &[String], needles: &[&str]) {
+fn assert_refused(out: &Output, d: &Path, before: &[String], needles: &[&str]) {
     let err = stderr(out);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
@@ -20,6 +21,20 @@ fn assert_refused(out: &std::process::Output, d: &Path, before: &[String], needl
     assert_eq!(files_in(d), before, "{err}");
 }
 
+/// `bodyseg refine --cloud CLOUD --boxes BOXES --out OUT EXTRA...` in `d`.
+fn refine(d: &Path, cloud: &str, boxes: &str, out: &str, extra: &[&str]) -> Output {
+    let mut args = vec!["refine", "--cloud", cloud, "--boxes", boxes, "--out", out];
+    args.extend_from_slice(extra);
+    bodyseg(d, &args)
+}
+
+/// `bodyseg eval --pred PRED --gt GT EXTRA...` in `d`.
+fn eval(d: &Path, pred: &str, gt: &str, extra: &[&str]) -> Output {
+    let mut args = vec!["eval", "--pred", pred, "--gt", gt];
+    args.extend_from_slice(extra);
+    bodyseg(d, &args)
+}
+
 #[test]
 fn an_output_that_is_an_input_or_not_ours_is_refused() {
     let dir = tempdir();
@@ -27,65 +42,22 @@ fn an_output_that_is_an_input_or_not_ours_is_refused() {
     write_scene(d);
     let before = files_in(d);
     let input = std::fs::read(d.join("in.ply")).expect("in.ply");
-    let out = bodyseg(
-        d,
-        &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
-            "--out",
-            "in.ply",
-        ],
-    );
+    let out = refine(d, "in.ply", "boxes.json", "in.ply", &[]);
     assert_refused(&out, d, &before, &["--out in.ply is the input --cloud"]);
     assert_eq!(std::fs::read(d.join("in.ply")).expect("in.ply"), input);
     // The same file through another name.
     std::os::unix::fs::symlink("in.ply", d.join("link.ply")).expect("symlink");
     let before = files_in(d);
-    let out = bodyseg(
-        d,
-        &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
-            "--out",
-            "link.ply",
-        ],
-    );
+    let out = refine(d, "in.ply", "boxes.json", "link.ply", &[]);
     assert_refused(&out, d, &before, &["is the input --cloud"]);
     // A report over a cloud; a device.
-    let out = bodyseg(
-        d,
-        &[
-            "eval", "--pred", "in.ply", "--gt", "gt.ply", "--out", "in.ply",
-        ],
-    );
+    let out = eval(d, "in.ply", "gt.ply", &["--out", "in.ply"]);
     assert_refused(&out, d, &before, &["is the input --pred"]);
-    let out = bodyseg(
-        d,
-        &[
-            "eval", "--pred", "in.ply", "--gt", "gt.ply", "--out", "link.ply",
-        ],
-    );
+    let out = eval(d, "in.ply", "gt.ply", &["--out", "link.ply"]);
     assert_refused(&out, d, &before, &["is the input --pred"]);
     std::fs::copy(d.join("in.ply"), d.join("other.ply")).expect("copy");
     let before = files_in(d);
-    let out = bodyseg(
-        d,
-        &[
-            "eval",
-            "--pred",
-            "in.ply",
-            "--gt",
-            "gt.ply",
-            "--out",
-            "other.ply",
-        ],
-    );
+    let out = eval(d, "in.ply", "gt.ply", &["--out", "other.ply"]);
     assert_refused(
         &out,
         d,
@@ -95,18 +67,7 @@ fn an_output_that_is_an_input_or_not_ours_is_refused() {
     // A socket (not /dev/null: a bodyseg without the guard would replace the device).
     let _socket = std::os::unix::net::UnixListener::bind(d.join("sock.ply")).expect("socket");
     let before = files_in(d);
-    let out = bodyseg(
-        d,
-        &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
-            "--out",
-            "sock.ply",
-        ],
-    );
+    let out = refine(d, "in.ply", "boxes.json", "sock.ply", &[]);
     assert_refused(
         &out,
         d,
@@ -220,12 +181,7 @@ fn implausible_inputs_are_warned_about() {
         boxes: vec![far],
     };
     bodyseg_io::write_boxes(&d.join("far.json"), &boxes).expect("write");
-    let out = bodyseg(
-        d,
-        &[
-            "refine", "--cloud", "in.ply", "--boxes", "far.json", "--out", "r.ply", "-q",
-        ],
-    );
+    let out = refine(d, "in.ply", "far.json", "r.ply", &["-q"]);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(0), "{err}");
     assert!(
@@ -240,18 +196,7 @@ fn implausible_inputs_are_warned_about() {
         boxes: vec![],
     };
     bodyseg_io::write_boxes(&d.join("none.json"), &none).expect("write");
-    let out = bodyseg(
-        d,
-        &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "none.json",
-            "--out",
-            "r.ply",
-        ],
-    );
+    let out = refine(d, "in.ply", "none.json", "r.ply", &[]);
     assert!(
         stderr(&out).contains("warning: in.ply: no person found"),
         "{}",
@@ -264,7 +209,7 @@ fn implausible_inputs_are_warned_about() {
     }
     let opts = bodyseg_io::PlyWriteOptions::default();
     bodyseg_io::write_ply(&d.join("moved.ply"), &moved, &opts).expect("write");
-    let out = bodyseg(d, &["eval", "--pred", "moved.ply", "--gt", "gt.ply"]);
+    let out = eval(d, "moved.ply", "gt.ply", &[]);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
@@ -277,7 +222,7 @@ fn implausible_inputs_are_warned_about() {
         p[2] += 0.5;
     }
     bodyseg_io::write_ply(&d.join("part.ply"), &part, &opts).expect("write");
-    let out = bodyseg(d, &["eval", "--pred", "part.ply", "--gt", "gt.ply", "-q"]);
+    let out = eval(d, "part.ply", "gt.ply", &["-q"]);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(0), "{err}");
     assert!(err.starts_with("warning: part.ply: 2"), "{err}");
