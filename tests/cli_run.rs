@@ -357,3 +357,63 @@ fn probability_noise_uses_the_models_probabilities() {
         assert_eq!(metrics(&rec_w, name), metrics(&rec_p, name), "{name}");
     }
 }
+
+#[test]
+fn sigterm_and_sigint_leave_no_temporary_and_the_run_resumes() {
+    let rec = recording();
+    let dir = tempdir();
+    for (signal, status) in [("-TERM", 143), ("-INT", 130)] {
+        let out = format!("out{status}");
+        let child = Command::new(env!("CARGO_BIN_EXE_bodyseg"))
+            .args([
+                "run",
+                "--recording",
+                rec.to_str().expect("utf-8"),
+                "--out",
+                &out,
+                "-q",
+            ])
+            .current_dir(dir.path())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn");
+        // Signal it while it writes (a frame's files are in flight most of the time).
+        let clouds = dir.path().join(&out).join("clouds");
+        let start = Instant::now();
+        while std::fs::read_dir(&clouds).map_or(0, |d| d.count()) == 0
+            && start.elapsed() < Duration::from_secs(120)
+        {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        let kill = Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .expect("kill");
+        assert!(kill.success());
+        let result = child.wait_with_output().expect("wait");
+        let err = String::from_utf8_lossy(&result.stderr).into_owned();
+        if result.status.code() == Some(0) {
+            continue; // finished before the signal: nothing to check
+        }
+        assert_eq!(result.status.code(), Some(status), "{err}");
+        assert!(err.starts_with("error: interrupted ("), "{err}");
+        let hidden: Vec<String> = tree(&dir.path().join(&out))
+            .into_iter()
+            .filter(|f| f.rsplit('/').next().is_some_and(|n| n.starts_with('.')))
+            .collect();
+        assert!(hidden.is_empty(), "left behind: {hidden:?}");
+        let again = bodyseg(
+            dir.path(),
+            &[
+                "run",
+                "--recording",
+                rec.to_str().expect("utf-8"),
+                "--out",
+                &out,
+                "-q",
+            ],
+        );
+        assert_ok(&again, "resumed run");
+    }
+}

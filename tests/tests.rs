@@ -9,6 +9,7 @@ mod cli_boxes;
 mod cli_calibrate;
 mod cli_convert;
 mod cli_eval;
+mod cli_harden;
 mod cli_help;
 mod cli_parse;
 mod cli_project;

@@ -116,6 +116,25 @@ pub enum Command {
     /// world poses → rig.toml
     #[command(subcommand, long_about = CALIBRATE_LONG_ABOUT)]
     Calibrate(CalibrateCommand),
+    /// Print the version; with -v also the ONNX Runtime library and the model that would
+    /// be loaded, and the rule that found each
+    #[command(long_about = VERSION_LONG_ABOUT)]
+    Version(VersionArgs),
+}
+
+const VERSION_LONG_ABOUT: &str = "\
+Print bodyseg's version. With -v, also the ONNX Runtime library and the parsing model that \
+would be loaded (nothing is loaded) and where each was found: parsing.runtime_library / \
+parsing.model of the configuration, ORT_DYLIB_PATH, the install prefix (<prefix>/bin/bodyseg \
+with <prefix>/lib/bodyseg/libonnxruntime.so and \
+<prefix>/share/bodyseg/models/bodyseg_parser_small.onnx), or the checkout bodyseg was built \
+from (.deps/onnxruntime/, models/). The current folder is never searched.";
+
+/// `bodyseg version`.
+#[derive(Debug, Args)]
+pub struct VersionArgs {
+    #[command(flatten)]
+    pub config: ConfigArgs,
 }
 
 const SYNTH_LONG_ABOUT: &str = "\
@@ -257,7 +276,9 @@ scripts/train_parser.py). SCHP checkpoints convert with scripts/export_schp_onnx
 predictions), to preview them the same way.
 
 ONNX Runtime is loaded at run time from parsing.runtime_library, else ORT_DYLIB_PATH, else \
-.deps/onnxruntime/libonnxruntime.so, which scripts/setup_onnxruntime.sh fetches once.
+the install prefix's lib/bodyseg/libonnxruntime.so, else the checkout's \
+.deps/onnxruntime/libonnxruntime.so, which scripts/setup_onnxruntime.sh fetches once; never \
+from the current folder (`bodyseg version -v` says which).
 
 Reads, in the recording folder REC (shared/FORMATS.md): REC/rig.toml and for each camera \
 REC/<camera>/color/<FRAME>.png (or .jpg). Writes into OUT: <camera>/parsing/<FRAME>.png \

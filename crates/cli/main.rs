@@ -13,9 +13,9 @@ use args::{
     SynthArgs,
 };
 use bodyseg_pipeline::{
-    Stage, calibrate_intrinsics, calibrate_stereo, calibrate_world, describe_rig, eval_files,
-    import_rig, merge_reports, parse_file, project_file, read_rig, refine_file, render_report,
-    synth_recording, write_text,
+    Stage, calibrate_intrinsics, calibrate_stereo, calibrate_world, check_output_file,
+    describe_rig, eval_files, import_rig, merge_reports, parse_file, project_file, read_rig,
+    refine_file, render_report, synth_recording, write_text,
 };
 use clap::Parser;
 use std::io::Write;
@@ -33,6 +33,7 @@ fn main() -> ExitCode {
     bodyseg_pipeline::keep_freed_memory();
     let cli = Cli::parse();
     init_logging(cli.verbose);
+    handle_signals();
     match run(&cli) {
         Ok(Outcome::Done) => ExitCode::SUCCESS,
         Ok(Outcome::SomeFramesFailed) => ExitCode::from(3),
@@ -41,6 +42,30 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// SIGINT and SIGTERM: remove the temporary files of the writes in flight (and the
+/// output folder's lock) and exit 130 or 143 (128 + the signal) with one `error:` line. A
+/// batch is resumed by running the command again: finished frames are kept.
+fn handle_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            bodyseg_io::remove_temporaries();
+            let name = if signal == SIGINT {
+                "SIGINT"
+            } else {
+                "SIGTERM"
+            };
+            eprintln!(
+                "error: interrupted ({name}): temporary files removed; what was finished is kept (run the command again to resume a batch)"
+            );
+            std::process::exit(128 + signal);
+        }
+    });
 }
 
 /// Logs go to stderr. `-v` flags pick the level; without them RUST_LOG does, else `warn`.
@@ -56,8 +81,37 @@ fn init_logging(verbose: u8) {
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
-        .with_target(false)
+        .event_format(OneLine)
         .try_init();
+}
+
+/// Log events as one line each, `warning: <message> <fields>` (`error:`, `info:`,
+/// `debug:`, `trace:` for the other levels), like the binary's own `error:` lines. Warnings
+/// are shown with `--quiet` too (it silences the stage lines only).
+struct OneLine;
+
+impl<S, N> tracing_subscriber::fmt::FormatEvent<S, N> for OneLine
+where
+    S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
+    N: for<'a> tracing_subscriber::fmt::FormatFields<'a> + 'static,
+{
+    fn format_event(
+        &self,
+        ctx: &tracing_subscriber::fmt::FmtContext<'_, S, N>,
+        mut writer: tracing_subscriber::fmt::format::Writer<'_>,
+        event: &tracing::Event<'_>,
+    ) -> std::fmt::Result {
+        let level = match *event.metadata().level() {
+            tracing::Level::ERROR => "error",
+            tracing::Level::WARN => "warning",
+            tracing::Level::INFO => "info",
+            tracing::Level::DEBUG => "debug",
+            tracing::Level::TRACE => "trace",
+        };
+        write!(writer, "{level}: ")?;
+        ctx.field_format().format_fields(writer.by_ref(), event)?;
+        writeln!(writer)
+    }
 }
 
 /// How a command that did its job ended.
@@ -93,6 +147,7 @@ fn run(cli: &Cli) -> Result<Outcome> {
             stages
         }
         Command::Calibrate(cmd) => calibrate(cmd, cli.quiet)?,
+        Command::Version(args) => version(args, cli.verbose)?,
     };
     if !cli.quiet {
         for s in stages {
@@ -204,6 +259,19 @@ fn refine(args: &RefineArgs) -> Result<Vec<Stage>> {
 }
 
 fn eval(args: &EvalArgs) -> Result<Vec<Stage>> {
+    if let Some(out) = &args.out {
+        let mut inputs: Vec<(&str, &std::path::Path)> = args
+            .merge
+            .iter()
+            .map(|p| ("--merge", p.as_path()))
+            .collect();
+        let options = args.merge.is_empty().then(|| args.options()).transpose()?;
+        if let Some(o) = &options {
+            inputs.push(("--gt", &o.gt));
+            inputs.extend(o.predictions.iter().map(|p| ("--pred", p.path.as_path())));
+        }
+        check_output_file(out, &["md", "json", "txt"], &inputs)?;
+    }
     let (report, mut stages) = if args.merge.is_empty() {
         let summary = eval_files(&args.options()?)?;
         (summary.report, summary.stages)
@@ -272,6 +340,21 @@ fn calibrate(cmd: &CalibrateCommand, quiet: bool) -> Result<Vec<Stage>> {
         eprintln!("  {:>7.4}  all", summary.rms_px);
     }
     Ok(summary.stages)
+}
+
+/// `bodyseg version [-v]`: the version; with -v the parser's files and where they were
+/// found (nothing is loaded).
+fn version(args: &args::VersionArgs, verbose: u8) -> Result<Vec<Stage>> {
+    let mut text = format!("bodyseg {}\n", env!("CARGO_PKG_VERSION"));
+    if verbose > 0 {
+        let config = args.config.load()?;
+        for line in bodyseg_pipeline::describe_parser_files(&config) {
+            text.push_str(&line);
+            text.push('\n');
+        }
+    }
+    print_stdout(&text)?;
+    Ok(Vec::new())
 }
 
 /// Prints to stdout; a closed pipe (`bodyseg eval ... | head`) is not an error.

@@ -68,6 +68,8 @@ where
     }
     // Dropping `tmp` on any early return deletes the temporary file.
     let mut tmp = builder.tempfile_in(dir).map_err(wrap)?;
+    // Known to `remove_temporaries` (a signal handler) until renamed or deleted.
+    let _in_flight = InFlight::new(tmp.path());
     {
         let mut w = BufWriter::new(tmp.as_file_mut());
         write(&mut w).map_err(wrap)?;
@@ -108,6 +110,59 @@ pub fn sync_file_system(folder: &Path) -> Result<(), IoError> {
     }
 }
 
+/// The temporary files of [`write_atomic_with`] being written now, process-wide.
+static IN_FLIGHT: std::sync::Mutex<Vec<std::path::PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Registers a temporary file in [`IN_FLIGHT`] while it lives (also a folder's lock file,
+/// which [`remove_temporaries`] removes too).
+#[derive(Debug)]
+pub(crate) struct InFlight(std::path::PathBuf);
+
+impl InFlight {
+    pub(crate) fn new(path: &Path) -> InFlight {
+        let path = path.to_path_buf();
+        if let Ok(mut v) = IN_FLIGHT.lock() {
+            v.push(path.clone());
+        }
+        InFlight(path)
+    }
+}
+
+impl Drop for InFlight {
+    fn drop(&mut self) {
+        if let Ok(mut v) = IN_FLIGHT.lock()
+            && let Some(i) = v.iter().position(|p| *p == self.0)
+        {
+            v.swap_remove(i);
+        }
+    }
+}
+
+/// Removes the temporary files of the atomic writes in flight (from a SIGINT/SIGTERM
+/// handler, just before the process exits): an interrupted command leaves no hidden
+/// `.bodyseg-*.tmp` behind. Returns how many were removed. A write that finishes
+/// meanwhile is unaffected (its file was renamed: nothing to remove).
+pub fn remove_temporaries() -> usize {
+    remove_temporaries_where(|_| true)
+}
+
+/// [`remove_temporaries`] for the paths `which` selects (the others stay registered).
+fn remove_temporaries_where(which: impl Fn(&Path) -> bool) -> usize {
+    let paths: Vec<std::path::PathBuf> = {
+        let mut v = match IN_FLIGHT.lock() {
+            Ok(v) => v,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        let (take, keep) = std::mem::take(&mut *v).into_iter().partition(|p| which(p));
+        *v = keep;
+        take
+    };
+    paths
+        .iter()
+        .filter(|p| std::fs::remove_file(p).is_ok())
+        .count()
+}
+
 /// Makes the rename durable where the platform allows it; errors are ignored on purpose
 /// (the file itself is already synced and in place).
 fn sync_dir(dir: &Path) {
@@ -125,4 +180,30 @@ fn sync_dir(dir: &Path) {
 /// [`IoError::Write`] naming `path`.
 pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
     write_atomic(path, |w| w.write_all(bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temporaries_in_flight_are_removed_on_request() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let d = dir.path().to_path_buf();
+        let path = d.join("out.txt");
+        let err = write_atomic(&path, |w| {
+            w.write_all(b"partial")?;
+            // What the signal handler does while this write is in flight (only this
+            // folder's: other tests write at the same time).
+            assert_eq!(remove_temporaries_where(|p| p.starts_with(&d)), 1);
+            Ok(())
+        });
+        // The temporary is gone, so the rename fails; nothing is left.
+        assert!(err.is_err());
+        let left: Vec<_> = std::fs::read_dir(&d).expect("list").collect();
+        assert!(left.is_empty(), "{left:?}");
+        write_bytes_atomic(&path, b"x").expect("a later write");
+        assert_eq!(remove_temporaries_where(|p| p.starts_with(&d)), 0);
+        assert_eq!(std::fs::read(&path).expect("read"), b"x");
+    }
 }

@@ -43,13 +43,15 @@ mod error;
 mod folder;
 mod image;
 mod listing;
+mod lock;
 mod mat;
 mod pcd;
 mod ply;
 mod text;
 
 pub use atomic::{
-    Durability, sync_file_system, write_atomic, write_atomic_with, write_bytes_atomic,
+    Durability, remove_temporaries, sync_file_system, write_atomic, write_atomic_with,
+    write_bytes_atomic,
 };
 pub use boxes::{parse_boxes, read_boxes, write_boxes, write_boxes_with};
 pub use error::IoError;
@@ -61,6 +63,7 @@ pub use image::{
     write_label_png, write_label_png_with, write_rgb_png,
 };
 pub use listing::{FolderEntry, list_folder};
+pub use lock::{FolderLock, LockError, lock_folder};
 pub use mat::{MatMatrix, read_mat_matrix, read_mat_variable_names};
 pub use pcd::{parse_pcd, read_pcd};
 pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};

@@ -47,7 +47,7 @@ fn bad_config_and_file_mode_are_errors() {
     let e = find_boxes(&cloud, &cfg).expect_err("invalid");
     assert_eq!(
         e.to_string(),
-        "boxes.voxel_m must be a finite number > 0, got -1"
+        "boxes.voxel_m must be in [0.01, 0.5] metres, got -1"
     );
     let cfg = BoxesConfig {
         mode: BoxMode::File,

@@ -23,6 +23,7 @@
 //! (journaling file systems such as ext4 and XFS set a file's on-disk size only once its
 //! data is written), so its record no longer matches and the frame is done again.
 
+use crate::recording::check_relative_path;
 use crate::stage::Stage;
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
@@ -268,6 +269,7 @@ impl FrameWriter {
         relative: &str,
         write: impl FnOnce(&Path) -> Result<()>,
     ) -> Result<PathBuf> {
+        check_relative_path(relative)?;
         let path = self.out.join(relative);
         if let Some(parent) = path.parent() {
             bodyseg_io::create_folder(parent)?;
@@ -353,6 +355,53 @@ fn remove_stale_temporaries(out: &Path) {
     }
 }
 
+/// Locks the output folder of a batch for this process and shard
+/// (`OUT/.bodyseg.lock`, `OUT/.bodyseg.shard-0-of-4.lock`): a second `run` or `convert`
+/// of the same shard into the same folder is refused while the first runs (its frames
+/// would clash), naming the first's pid. Shards of one batch share the folder. The lock
+/// file goes when the returned guard is dropped.
+///
+/// # Errors
+/// Another process holds the lock, or the file cannot be created.
+pub(crate) fn lock_output(out: &Path, shard: Shard) -> Result<bodyseg_io::FolderLock> {
+    bodyseg_io::create_folder(out)?;
+    Ok(bodyseg_io::lock_folder(
+        out,
+        &format!(".bodyseg{}.lock", shard.suffix()),
+    )?)
+}
+
+/// Runs `process` on one frame, turning a panic into the frame's error
+/// (`internal error: <panic message>`), so that one frame's bug fails that frame only and
+/// the batch goes on.
+///
+/// `AssertUnwindSafe` is sound here: what the frame function touches mutably is this
+/// frame's own (`writer`, whose files the batch removes after a failure, and `stages`,
+/// dropped with the failure); the shared state it reads (`job`, the processor) is behind
+/// shared references, and what it locks (the segmenter, the buffer pool) is behind
+/// mutexes, which a panic poisons (the segmenter's lock then fails later frames with a
+/// message; a buffer taken from the pool is dropped, not returned).
+fn process_caught<J>(
+    process: &FrameFn<'_, J>,
+    frame: BatchFrame<'_, J>,
+    writer: &mut FrameWriter,
+    stages: &mut Vec<Stage>,
+) -> Result<FrameRecord> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        process(frame, writer, stages)
+    })) {
+        Ok(result) => result,
+        Err(payload) => {
+            let message = payload
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic without a message".to_string());
+            Err(anyhow::anyhow!("internal error: {message}"))
+        }
+    }
+}
+
 /// What [`run_batch`] calls per frame: the frame, a writer for its files, its stage
 /// records; returns its record.
 pub(crate) type FrameFn<'a, J> =
@@ -410,25 +459,27 @@ pub(crate) fn run_batch<J: Sync>(
         Skipped(FrameRecord),
         Failed(FrameFailure),
     }
-    let results: Vec<Done> =
-        mine.par_iter()
-            .with_max_len(1)
-            .map(|(id, job)| {
-                let done = if let Some(r) = (!redo)
-                    .then(|| complete_record(out, id, config_hash))
-                    .flatten()
-                {
-                    skipped_count.fetch_add(1, Ordering::Relaxed);
-                    Done::Skipped(r)
-                } else {
-                    let mut writer = FrameWriter::new(out);
-                    let mut stages = Vec::new();
-                    let result = process(BatchFrame { id, job }, &mut writer, &mut stages)
+    let results: Vec<Done> = mine
+        .par_iter()
+        .with_max_len(1)
+        .map(|(id, job)| {
+            let done = if let Some(r) = (!redo)
+                .then(|| complete_record(out, id, config_hash))
+                .flatten()
+            {
+                skipped_count.fetch_add(1, Ordering::Relaxed);
+                Done::Skipped(r)
+            } else {
+                let mut writer = FrameWriter::new(out);
+                let mut stages = Vec::new();
+                let result =
+                    process_caught(process, BatchFrame { id, job }, &mut writer, &mut stages)
                         .and_then(|mut record| {
                             record.frame = id.clone();
                             record.config_hash = config_hash.to_string();
                             record.outputs = writer.outputs().to_vec();
                             let json = serde_json::to_string_pretty(&record)?;
+                            check_relative_path(id)?;
                             let path = record_path(out, id);
                             if let Some(parent) = path.parent() {
                                 bodyseg_io::create_folder(parent)?;
@@ -440,39 +491,39 @@ pub(crate) fn run_batch<J: Sync>(
                             )?;
                             Ok(record)
                         });
-                    match result {
-                        Ok(record) => {
-                            if let Ok(mut t) = totals.lock() {
-                                for s in &stages {
-                                    match t.iter_mut().find(|(n, _)| *n == s.name) {
-                                        Some((_, d)) => *d += s.elapsed,
-                                        None => t.push((s.name, s.elapsed)),
-                                    }
+                match result {
+                    Ok(record) => {
+                        if let Ok(mut t) = totals.lock() {
+                            for s in &stages {
+                                match t.iter_mut().find(|(n, _)| *n == s.name) {
+                                    Some((_, d)) => *d += s.elapsed,
+                                    None => t.push((s.name, s.elapsed)),
                                 }
                             }
-                            Done::Processed(record)
                         }
-                        Err(e) => {
-                            writer.remove_all();
-                            let _ = std::fs::remove_file(record_path(out, id));
-                            failed_count.fetch_add(1, Ordering::Relaxed);
-                            tracing::debug!(frame = %id, "frame failed: {e:#}");
-                            Done::Failed(FrameFailure {
-                                frame: id.clone(),
-                                error: format!("{e:#}"),
-                            })
-                        }
+                        Done::Processed(record)
                     }
-                };
-                progress(BatchProgress {
-                    finished: finished.fetch_add(1, Ordering::Relaxed) + 1,
-                    total,
-                    failed: failed_count.load(Ordering::Relaxed),
-                    skipped: skipped_count.load(Ordering::Relaxed),
-                });
-                done
-            })
-            .collect();
+                    Err(e) => {
+                        writer.remove_all();
+                        let _ = std::fs::remove_file(record_path(out, id));
+                        failed_count.fetch_add(1, Ordering::Relaxed);
+                        tracing::debug!(frame = %id, "frame failed: {e:#}");
+                        Done::Failed(FrameFailure {
+                            frame: id.clone(),
+                            error: format!("{e:#}"),
+                        })
+                    }
+                }
+            };
+            progress(BatchProgress {
+                finished: finished.fetch_add(1, Ordering::Relaxed) + 1,
+                total,
+                failed: failed_count.load(Ordering::Relaxed),
+                skipped: skipped_count.load(Ordering::Relaxed),
+            });
+            done
+        })
+        .collect();
 
     let mut outcome = BatchOutcome {
         records: Vec::new(),
@@ -593,6 +644,50 @@ mod tests {
         .expect("batch");
         let ids: Vec<&str> = s.records.iter().map(|r| r.frame.as_str()).collect();
         assert_eq!(ids, ["001", "003", "005"]);
+    }
+
+    #[test]
+    fn a_panicking_frame_fails_alone_and_leaves_nothing() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let out = dir.path();
+        let jobs: Vec<(String, u32)> = (0..4).map(|i| (format!("{i:03}"), i)).collect();
+        let process = |f: BatchFrame<'_, u32>, w: &mut FrameWriter, _: &mut Vec<Stage>| {
+            w.write(&format!("a/{}.txt", f.id), |p| {
+                Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
+            })?;
+            if *f.job == 2 {
+                let cells: Vec<u32> = Vec::new();
+                // A bug: an index out of bounds.
+                return record_of(&cells[*f.job as usize].to_string());
+            }
+            if *f.job == 3 {
+                panic!("frame {} panicked", f.id);
+            }
+            record_of(f.id)
+        };
+        let outcome =
+            run_batch(&jobs, out, Shard::ALL, "h", false, &|_| {}, &process).expect("batch");
+        assert_eq!(outcome.processed, 2, "the batch goes on");
+        let failed: Vec<(&str, &str)> = outcome
+            .failed
+            .iter()
+            .map(|f| (f.frame.as_str(), f.error.as_str()))
+            .collect();
+        assert_eq!(failed.len(), 2);
+        assert_eq!(failed[0].0, "002");
+        assert!(
+            failed[0]
+                .1
+                .starts_with("internal error: index out of bounds"),
+            "{}",
+            failed[0].1
+        );
+        assert_eq!(failed[1], ("003", "internal error: frame 003 panicked"));
+        for id in ["002", "003"] {
+            assert!(!out.join(format!("a/{id}.txt")).exists(), "{id}");
+            assert!(!record_path(out, id).exists(), "{id}");
+        }
+        assert!(out.join("a/001.txt").exists());
     }
 
     #[test]

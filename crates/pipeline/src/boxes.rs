@@ -3,8 +3,9 @@
 
 use crate::config::PipelineConfig;
 use crate::frame::read_and_project;
-use crate::outputs::{read_cloud, resolved_config_path, write_text};
+use crate::outputs::{check_output_file, read_cloud, resolved_config_path, write_with_side_file};
 use crate::recording::{Recording, check_stem};
+use crate::sanity::{boxes_warnings, cloud_scale_warning, warn_all};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_core::{Class, LabeledCloud, PersonBox, PersonBoxes};
@@ -64,6 +65,11 @@ pub struct BoxesSummary {
 pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
     let cfg = &opts.config;
     let mode = cfg.boxes.mode;
+    let input = match &opts.input {
+        BoxesInput::Cloud(path) => Some(("--cloud", path.as_path())),
+        BoxesInput::Recording { .. } => None,
+    };
+    check_output_file(&opts.out, &["json"], input.as_slice())?;
     let mut stages = Vec::new();
     let (cloud, frame) = match &opts.input {
         BoxesInput::Cloud(path) => {
@@ -117,6 +123,16 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
     if boxes.frame.is_empty() {
         boxes.frame = frame;
     }
+    if let Some(cloud) = &cloud {
+        let what = match &opts.input {
+            BoxesInput::Cloud(path) => {
+                warn_all(cloud_scale_warning(cloud, &path.display().to_string()));
+                path.display().to_string()
+            }
+            BoxesInput::Recording { frame, .. } => format!("frame {frame}"),
+        };
+        warn_all(boxes_warnings(&boxes.boxes, cloud, &what));
+    }
     stages.push(Stage::new(
         "boxes",
         took,
@@ -135,11 +151,14 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
             let (w, h, rgb) = top_view(cloud, &boxes.boxes);
             bodyseg_io::write_rgb_png(path, w, h, &rgb).context("preview (--preview)")?;
         }
-        bodyseg_io::write_boxes(&opts.out, &boxes).context("person boxes (--out)")?;
-        if let Some(path) = &resolved_config {
-            write_text(path, &cfg.resolved_toml()?).context("resolved configuration")?;
-        }
-        Ok(())
+        let text = resolved_config
+            .as_ref()
+            .map(|_| cfg.resolved_toml())
+            .transpose()?;
+        let side = resolved_config.as_deref().zip(text.as_deref());
+        write_with_side_file(&opts.out, side, || {
+            bodyseg_io::write_boxes(&opts.out, &boxes).context("person boxes (--out)")
+        })
     })?;
     let mut written = opts.out.display().to_string();
     for path in resolved_config.iter().chain(&opts.preview) {

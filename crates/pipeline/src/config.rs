@@ -478,7 +478,7 @@ mod tests {
         let e = format!("{:#}", parse("[boxes]\nvoxel_m = 0\n").expect_err("error"));
         assert_eq!(
             e,
-            "c.toml: boxes.voxel_m must be a finite number > 0, got 0"
+            "c.toml: boxes.voxel_m must be in [0.01, 0.5] metres, got 0"
         );
         let e = format!("{:#}", parse("[boxes]\ngap = 1\n").expect_err("error"));
         assert!(

@@ -18,8 +18,9 @@ use crate::batch::{
 };
 use crate::config::PipelineConfig;
 use crate::model::ParserChoice;
+use crate::outputs::check_output_folder;
 use crate::processor::FrameProcessor;
-use crate::recording::Recording;
+use crate::recording::{Recording, check_folder_name};
 use crate::report::{ReportTarget, RunSummary, write_reports};
 use crate::stage::{Stage, plural, timed};
 use crate::threedpeople::{ThreeDPeopleCamera, list_3dpeople_views, read_3dpeople_view};
@@ -105,6 +106,9 @@ pub(crate) fn list_recordings(input: &Path) -> Result<Vec<(String, PathBuf)>> {
         .filter(|(name, _)| !name.starts_with('.'))
         .collect();
     found.sort();
+    for (name, _) in &found {
+        check_folder_name(&format!("{}: recording", input.display()), name)?;
+    }
     if found.is_empty() {
         bail!(
             "{}: no recording (a folder with rig.toml) in it or below it",
@@ -124,6 +128,7 @@ pub fn convert_dataset(
     opts: &ConvertOptions,
     progress: &(dyn Fn(BatchProgress) + Sync),
 ) -> Result<ConvertSummary> {
+    check_output_folder(&opts.out, "--input", &opts.input)?;
     match opts.format {
         ConvertFormat::Recording => convert_recordings(opts, progress),
         ConvertFormat::ThreeDPeople => convert_3dpeople(opts, progress),
@@ -159,6 +164,7 @@ fn convert_recordings(
         Ok((recordings, processors, jobs))
     })?;
     let (recordings, processors, jobs) = setup;
+    let _lock = crate::batch::lock_output(&opts.out, opts.shard)?;
     let mut stages = vec![Stage::new(
         "setup",
         took,
@@ -235,6 +241,8 @@ fn convert_recordings(
                 out: &opts.out.join(name),
                 input: path,
                 shard: opts.shard,
+                header: false,
+                incomplete: &[],
             };
             let (_, w) = write_reports(target, &frames, &sub, &resolved, fps)?;
             written.extend(w);
@@ -256,6 +264,8 @@ impl ConvertOptions {
             out: &self.out,
             input: &self.input,
             shard: self.shard,
+            header: false,
+            incomplete: &[],
         }
     }
 }
@@ -275,6 +285,7 @@ fn convert_3dpeople(
         bodyseg_io::create_folder(&opts.out)?;
         Ok(views)
     })?;
+    let _lock = crate::batch::lock_output(&opts.out, opts.shard)?;
     let mut jobs: Vec<(String, _)> = views.into_iter().map(|v| (v.stem(), v)).collect();
     jobs.sort_by(|a, b| a.0.cmp(&b.0));
     let mut stages = vec![Stage::new(

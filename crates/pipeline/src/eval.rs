@@ -3,8 +3,10 @@
 
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
+use bodyseg_core::{LabeledCloud, PointOrigin};
 use bodyseg_eval::{Report, match_clouds};
-use std::path::PathBuf;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
 /// The configuration name given to a single prediction when none is named.
 pub const DEFAULT_PREDICTION_NAME: &str = "prediction";
@@ -76,6 +78,7 @@ pub fn eval_files(opts: &EvalOptions) -> Result<EvalSummary> {
         })?;
         read += took;
         points += pred.len();
+        check_same_points(&pred, &gt, &p.path, &opts.gt)?;
         let (stats, took) = timed(|| {
             match_clouds(&pred, &gt).with_context(|| {
                 format!(
@@ -113,6 +116,74 @@ pub fn eval_files(opts: &EvalOptions) -> Result<EvalSummary> {
         ],
         report,
     })
+}
+
+/// Share of a prediction's points that must have a ground-truth point at the same origin
+/// and position; below it, the clouds are of different frames (or recordings) and
+/// [`eval_files`] refuses them.
+pub(crate) const MIN_SAME_POINTS: f64 = 0.5;
+
+/// Two points with one origin are the same point when their positions are this close,
+/// metres (PLY stores f32 positions: written and read again they are equal).
+const SAME_POSITION_M: f32 = 0.01;
+
+/// Fraction of `pred`'s points that have a point of `gt` at the same origin `(camera,
+/// pixel)` and the same position (within [`SAME_POSITION_M`]); 1 for an empty `pred`.
+pub(crate) fn same_points_fraction(pred: &LabeledCloud, gt: &LabeledCloud) -> f64 {
+    if pred.is_empty() {
+        return 1.0;
+    }
+    let index: HashMap<PointOrigin, usize> = gt
+        .origins
+        .iter()
+        .enumerate()
+        .map(|(i, o)| (*o, i))
+        .collect();
+    let same = pred
+        .origins
+        .iter()
+        .zip(&pred.positions_m)
+        .filter(|(o, p)| {
+            index.get(o).is_some_and(|&j| {
+                let q = gt.positions_m[j];
+                (0..3).all(|a| (p[a] - q[a]).abs() <= SAME_POSITION_M)
+            })
+        })
+        .count();
+    same as f64 / pred.len() as f64
+}
+
+/// Refuses a prediction whose points are mostly not the ground truth's (fewer than
+/// [`MIN_SAME_POINTS`] at the same origin and position: another frame's cloud scores
+/// plausibly otherwise) and warns when some are not.
+///
+/// # Errors
+/// Fewer than half the points match; the message names both files and the share.
+fn check_same_points(
+    pred: &LabeledCloud,
+    gt: &LabeledCloud,
+    pred_path: &Path,
+    gt_path: &Path,
+) -> Result<()> {
+    let f = same_points_fraction(pred, gt);
+    if f < MIN_SAME_POINTS {
+        bail!(
+            "{}: only {:.1}% of its points are points of the ground truth {} (same camera, pixel and position; at least {:.0}% needed): clouds of different frames or recordings?",
+            pred_path.display(),
+            100.0 * f,
+            gt_path.display(),
+            100.0 * MIN_SAME_POINTS
+        );
+    }
+    if f < 1.0 {
+        tracing::warn!(
+            "{}: {:.1}% of its points are not points of the ground truth {} (no point at their camera and pixel, or at another position)",
+            pred_path.display(),
+            100.0 * (1.0 - f),
+            gt_path.display()
+        );
+    }
+    Ok(())
 }
 
 /// Reads `report.json` files (written by `bodyseg eval --format json`) and sums them
@@ -162,4 +233,45 @@ pub fn render_report(report: &Report, format: ReportFormat) -> Result<String> {
             s
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bodyseg_core::Label;
+
+    /// A cloud of `n` points at pixels `first..first + n` of camera 0, each at
+    /// `(pixel, z, 0)`.
+    fn cloud(first: u32, n: u32, z: f32) -> LabeledCloud {
+        LabeledCloud {
+            positions_m: (first..first + n).map(|i| [i as f32, z, 0.0]).collect(),
+            labels: vec![Label::BACKGROUND; n as usize],
+            colors: None,
+            origins: (first..first + n)
+                .map(|pixel| PointOrigin { camera: 0, pixel })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn clouds_of_other_points_are_refused_and_partial_ones_noted() {
+        let gt = cloud(0, 100, 0.0);
+        assert_eq!(same_points_fraction(&cloud(0, 100, 0.0), &gt), 1.0);
+        // Same pixels, other positions: another frame of the recording.
+        assert_eq!(same_points_fraction(&cloud(0, 100, 0.5), &gt), 0.0);
+        assert_eq!(same_points_fraction(&cloud(60, 100, 0.0), &gt), 0.4);
+        let p = Path::new("pred.ply");
+        let g = Path::new("gt.ply");
+        let e = format!(
+            "{:#}",
+            check_same_points(&cloud(0, 100, 0.5), &gt, p, g).expect_err("other frame")
+        );
+        assert_eq!(
+            e,
+            "pred.ply: only 0.0% of its points are points of the ground truth gt.ply (same \
+             camera, pixel and position; at least 50% needed): clouds of different frames or \
+             recordings?"
+        );
+        assert!(check_same_points(&cloud(40, 100, 0.0), &gt, p, g).is_ok());
+    }
 }

@@ -269,6 +269,11 @@ pub(crate) fn read_and_project(
         // Geometry-mode boxes split people from what is nobody's by colour too.
         project_parsed(&parsed, rig, config, colour).with_context(context)
     })?;
+    crate::sanity::warn_all(crate::sanity::projected_scale_warning(
+        &cloud,
+        rig,
+        &context(),
+    ));
     let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
     let mode_name = match config.project.mode {
         ProjectMode::Naive => "naive",

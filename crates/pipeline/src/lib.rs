@@ -65,6 +65,7 @@ mod refine;
 mod report;
 mod rig;
 mod run;
+mod sanity;
 mod stage;
 mod synth;
 mod threedpeople;
@@ -89,8 +90,8 @@ pub use eval::{
     merge_reports, render_report,
 };
 pub use frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
-pub use model::ParserChoice;
-pub use outputs::write_text;
+pub use model::{FoundBy, ParserChoice, describe_parser_files};
+pub use outputs::{check_output_file, check_output_folder, write_text};
 pub use parse::{ParseOptions, ParseSource, ParseSummary, parse_file};
 pub use processor::FrameProcessor;
 pub use project::{ProjectOptions, ProjectSummary, project_file};

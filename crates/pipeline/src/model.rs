@@ -1,19 +1,45 @@
-//! Where the 2D parser comes from: the ONNX model and the ONNX Runtime library (found
-//! beside the executable, in the current folder or in the checkout), or a recording's own
-//! predictions; [`open_segmenter`] makes the [`Segmenter`] of `bodyseg run` and `convert`.
+//! Where the 2D parser comes from: the ONNX model and the ONNX Runtime library, or a
+//! recording's own predictions; [`open_segmenter`] makes the [`Segmenter`] of `bodyseg run`
+//! and `convert`.
+//!
+//! # Where the library and the model are looked for
+//! A shared library is code: it is loaded only from a place the user or the installer
+//! chose, never from the current folder or a folder above the executable (a planted
+//! `.deps/onnxruntime/libonnxruntime.so` in `/tmp` must not run). In this order:
+//!
+//! 1. `parsing.runtime_library` (configuration, `--set`);
+//! 2. the `ORT_DYLIB_PATH` environment variable;
+//! 3. the install prefix: `<prefix>/lib/bodyseg/libonnxruntime.so`, where the executable
+//!    is `<prefix>/bin/bodyseg` (a prefix install: `bin/bodyseg`,
+//!    `lib/bodyseg/libonnxruntime.so`, `share/bodyseg/models/bodyseg_parser_small.onnx`
+//!    and its `.json`);
+//! 4. the checkout the binary was built from (a path fixed at build time):
+//!    `.deps/onnxruntime/libonnxruntime.so`, where `scripts/setup_onnxruntime.sh` puts it.
+//!
+//! The bundled model follows the same rule (a model is data, but a planted one would
+//! mislead): `parsing.model`, else `<prefix>/share/bodyseg/models/…`, else the checkout's
+//! `models/bodyseg_parser_small.onnx`. [`describe_parser_files`] says what would be
+//! loaded (`bodyseg version -v`).
 
 use crate::config::PipelineConfig;
 use crate::recording::{Layer, Recording};
 use anyhow::{Context, Result, bail};
 use bodyseg_parsing::{ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, sidecar_path};
+use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// The bundled model, relative to the project root (its sidecar: the same with `.json`).
+/// The bundled model, relative to the checkout (its sidecar: the same with `.json`).
 pub(crate) const BUNDLED_MODEL: &str = "models/bodyseg_parser_small.onnx";
 
+/// The bundled model, relative to an install prefix.
+pub(crate) const PREFIX_MODEL: &str = "share/bodyseg/models/bodyseg_parser_small.onnx";
+
 /// Where `scripts/setup_onnxruntime.sh` puts the ONNX Runtime library, relative to the
-/// project root.
+/// checkout.
 pub(crate) const LOCAL_RUNTIME_LIBRARY: &str = ".deps/onnxruntime/libonnxruntime.so";
+
+/// The ONNX Runtime library of a prefix install, relative to the prefix.
+pub(crate) const PREFIX_RUNTIME_LIBRARY: &str = "lib/bodyseg/libonnxruntime.so";
 
 /// Environment variable naming the ONNX Runtime library (ort's convention).
 pub(crate) const RUNTIME_LIBRARY_ENV: &str = "ORT_DYLIB_PATH";
@@ -30,53 +56,134 @@ pub enum ParserChoice {
     Recorded,
 }
 
-/// Candidate locations of a project-relative file: beside the executable and its parent
-/// folders (a `target/release/bodyseg` of a checkout), the current folder, and the
-/// checkout this binary was built from.
-fn project_candidates(relative: &str) -> Vec<PathBuf> {
-    let mut roots: Vec<PathBuf> = Vec::new();
-    if let Ok(exe) = std::env::current_exe() {
-        roots.extend(exe.ancestors().skip(1).take(4).map(Path::to_path_buf));
-    }
-    if let Ok(cwd) = std::env::current_dir() {
-        roots.push(cwd);
-    }
-    roots.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."));
-    roots.into_iter().map(|r| r.join(relative)).collect()
+/// Which rule found a file ([`resolve_runtime_library`], [`resolve_model`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FoundBy {
+    /// The configuration (`parsing.runtime_library`, `parsing.model`).
+    Config,
+    /// The `ORT_DYLIB_PATH` environment variable.
+    Environment,
+    /// The install prefix of the executable (`<prefix>/bin/bodyseg`).
+    Prefix,
+    /// The checkout the binary was built from.
+    Checkout,
 }
 
-/// The ONNX Runtime library: `parsing.runtime_library`, else `ORT_DYLIB_PATH`, else the
-/// project-local copy of `scripts/setup_onnxruntime.sh`.
+impl fmt::Display for FoundBy {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            FoundBy::Config => "the configuration",
+            FoundBy::Environment => RUNTIME_LIBRARY_ENV,
+            FoundBy::Prefix => "the install prefix",
+            FoundBy::Checkout => "the checkout bodyseg was built from",
+        })
+    }
+}
+
+/// The places a bundled file may be, in order: the install prefix of `exe`
+/// (`<exe>/../../<prefix_relative>`) and the checkout this binary was built from. Never
+/// the current folder, never another folder above the executable.
+fn bundled_candidates(
+    exe: Option<&Path>,
+    prefix_relative: &str,
+    checkout_relative: &str,
+) -> Vec<(PathBuf, FoundBy)> {
+    let mut out = Vec::new();
+    if let Some(prefix) = exe.and_then(Path::parent).and_then(Path::parent) {
+        out.push((prefix.join(prefix_relative), FoundBy::Prefix));
+    }
+    out.push((checkout_root().join(checkout_relative), FoundBy::Checkout));
+    out
+}
+
+/// The checkout this binary was built from (fixed at build time).
+fn checkout_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The first candidate that is a file.
+fn first_file(candidates: Vec<(PathBuf, FoundBy)>) -> Option<(PathBuf, FoundBy)> {
+    candidates.into_iter().find(|(p, _)| p.is_file())
+}
+
+/// The ONNX Runtime library and the rule that found it (see the module documentation):
+/// `parsing.runtime_library`, else `ORT_DYLIB_PATH`, else the install prefix's, else the
+/// checkout's copy of `scripts/setup_onnxruntime.sh`.
 ///
 /// # Errors
 /// None of them is set or exists; the message says how to get the library.
-pub(crate) fn resolve_runtime_library(config: &PipelineConfig) -> Result<PathBuf> {
+pub(crate) fn resolve_runtime_library(config: &PipelineConfig) -> Result<(PathBuf, FoundBy)> {
+    let exe = std::env::current_exe().ok();
+    let env = std::env::var_os(RUNTIME_LIBRARY_ENV);
+    runtime_library_from(config, env.as_deref(), exe.as_deref())
+}
+
+/// [`resolve_runtime_library`] with the environment variable's value and the executable's
+/// path given.
+fn runtime_library_from(
+    config: &PipelineConfig,
+    env: Option<&std::ffi::OsStr>,
+    exe: Option<&Path>,
+) -> Result<(PathBuf, FoundBy)> {
     if !config.parsing.runtime_library.is_empty() {
-        return Ok(PathBuf::from(&config.parsing.runtime_library));
+        return Ok((
+            PathBuf::from(&config.parsing.runtime_library),
+            FoundBy::Config,
+        ));
     }
-    if let Some(path) = std::env::var_os(RUNTIME_LIBRARY_ENV).filter(|p| !p.is_empty()) {
-        return Ok(PathBuf::from(path));
+    if let Some(path) = env.filter(|p| !p.is_empty()) {
+        return Ok((PathBuf::from(path), FoundBy::Environment));
     }
-    bodyseg_io::first_existing_file(&project_candidates(LOCAL_RUNTIME_LIBRARY)).with_context(|| {
+    first_file(bundled_candidates(
+        exe,
+        PREFIX_RUNTIME_LIBRARY,
+        LOCAL_RUNTIME_LIBRARY,
+    ))
+    .with_context(|| {
         format!(
             "ONNX Runtime library not found: run scripts/setup_onnxruntime.sh (it writes \
-                 {LOCAL_RUNTIME_LIBRARY}), or set {RUNTIME_LIBRARY_ENV} or \
-                 parsing.runtime_library to a libonnxruntime.so"
+             {LOCAL_RUNTIME_LIBRARY} in the checkout), install it as \
+             <prefix>/{PREFIX_RUNTIME_LIBRARY}, or set {RUNTIME_LIBRARY_ENV} or \
+             parsing.runtime_library to a libonnxruntime.so"
         )
     })
 }
 
-/// The model file: `parsing.model`, else the bundled model.
+/// The model file and the rule that found it: `parsing.model`, else the bundled model of
+/// the install prefix or the checkout.
 ///
 /// # Errors
-/// The bundled model is not found (neither beside the executable, in the current folder,
-/// nor in the checkout the binary was built from).
-pub(crate) fn resolve_model(config: &PipelineConfig) -> Result<PathBuf> {
+/// The bundled model is not found.
+pub(crate) fn resolve_model(config: &PipelineConfig) -> Result<(PathBuf, FoundBy)> {
+    let exe = std::env::current_exe().ok();
+    model_from(config, exe.as_deref())
+}
+
+/// [`resolve_model`] with the executable's path given.
+fn model_from(config: &PipelineConfig, exe: Option<&Path>) -> Result<(PathBuf, FoundBy)> {
     if !config.parsing.model.is_empty() {
-        return Ok(PathBuf::from(&config.parsing.model));
+        return Ok((PathBuf::from(&config.parsing.model), FoundBy::Config));
     }
-    bodyseg_io::first_existing_file(&project_candidates(BUNDLED_MODEL))
-        .with_context(|| format!("bundled model {BUNDLED_MODEL} not found: pass --model FILE.onnx"))
+    first_file(bundled_candidates(exe, PREFIX_MODEL, BUNDLED_MODEL)).with_context(|| {
+        format!(
+            "bundled model not found ({BUNDLED_MODEL} of the checkout, \
+             <prefix>/{PREFIX_MODEL}): pass --model FILE.onnx"
+        )
+    })
+}
+
+/// What `bodyseg version -v` prints about the parser's files, one line each: the ONNX
+/// Runtime library that would be loaded and the rule that found it, and the model. Loads
+/// nothing.
+pub fn describe_parser_files(config: &PipelineConfig) -> Vec<String> {
+    let line = |what: &str, found: Result<(PathBuf, FoundBy)>| match found {
+        Ok((path, by)) => format!("{what}: {} (from {by})", path.display()),
+        Err(e) => format!("{what}: none ({e:#})"),
+    };
+    vec![
+        line("ONNX Runtime library", resolve_runtime_library(config)),
+        line("model", resolve_model(config)),
+    ]
 }
 
 /// Loads an ONNX model and its sidecar (`model.json`) into an [`OnnxSegmenter`].
@@ -89,7 +196,7 @@ pub(crate) fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<On
     let text = bodyseg_io::read_text(&sidecar)
         .context("model sidecar (the model's .json: input_size, channel_order, mean, std, ...)")?;
     let spec = ModelSpec::from_json(&text, &sidecar)?;
-    let library = resolve_runtime_library(config)?;
+    let (library, _) = resolve_runtime_library(config)?;
     let bytes = bodyseg_io::read_bytes(model).context("parsing model")?;
     let segmenter = OnnxSegmenter::new(
         &library,
@@ -129,7 +236,7 @@ pub(crate) fn open_segmenter(
         ParserChoice::Auto => !recorded_present,
     };
     let segmenter: Box<dyn Segmenter + Send> = if use_model {
-        let model = resolve_model(config)?;
+        let (model, _) = resolve_model(config)?;
         Box::new(load_segmenter(config, &model)?)
     } else {
         Box::new(RecordedSegmenter::new())
@@ -147,12 +254,66 @@ mod tests {
         cfg.parsing.runtime_library = "/x/libonnxruntime.so".into();
         cfg.parsing.model = "m.onnx".into();
         assert_eq!(
-            resolve_runtime_library(&cfg).expect("configured"),
-            Path::new("/x/libonnxruntime.so")
+            runtime_library_from(&cfg, Some("/y/lib.so".as_ref()), None).expect("configured"),
+            (PathBuf::from("/x/libonnxruntime.so"), FoundBy::Config)
         );
         assert_eq!(
             resolve_model(&cfg).expect("configured"),
-            Path::new("m.onnx")
+            (PathBuf::from("m.onnx"), FoundBy::Config)
         );
+        cfg.parsing.runtime_library.clear();
+        assert_eq!(
+            runtime_library_from(&cfg, Some("/y/lib.so".as_ref()), None).expect("env"),
+            (PathBuf::from("/y/lib.so"), FoundBy::Environment)
+        );
+    }
+
+    /// A library planted in the current folder, or in a folder above the executable, is
+    /// never chosen: only the install prefix's and the checkout's.
+    #[test]
+    fn a_planted_library_is_never_chosen() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let root = dir.path();
+        let plant = |folder: &Path| {
+            let lib = folder.join(LOCAL_RUNTIME_LIBRARY);
+            std::fs::create_dir_all(lib.parent().expect("parent")).expect("mkdir");
+            std::fs::write(&lib, b"not a library").expect("plant");
+            lib
+        };
+        // An executable at ROOT/a/bin/bodyseg, libraries planted at ROOT, ROOT/a,
+        // ROOT/a/bin (the old search's parents) and in the current folder.
+        let exe = root.join("a/bin/bodyseg");
+        let planted: Vec<PathBuf> = [root, &root.join("a"), &root.join("a/bin")]
+            .into_iter()
+            .map(plant)
+            .collect();
+        let candidates =
+            bundled_candidates(Some(&exe), PREFIX_RUNTIME_LIBRARY, LOCAL_RUNTIME_LIBRARY);
+        assert_eq!(
+            candidates,
+            [
+                (root.join("a").join(PREFIX_RUNTIME_LIBRARY), FoundBy::Prefix),
+                (
+                    checkout_root().join(LOCAL_RUNTIME_LIBRARY),
+                    FoundBy::Checkout
+                )
+            ]
+        );
+        let cfg = PipelineConfig::default();
+        if let Ok((path, by)) = runtime_library_from(&cfg, None, Some(&exe)) {
+            assert_eq!(by, FoundBy::Checkout, "{}", path.display());
+            assert!(!planted.contains(&path));
+        }
+        // The install prefix's library is found.
+        let installed = root.join("a").join(PREFIX_RUNTIME_LIBRARY);
+        std::fs::create_dir_all(installed.parent().expect("parent")).expect("mkdir");
+        std::fs::write(&installed, b"x").expect("install");
+        assert_eq!(
+            runtime_library_from(&cfg, Some("".as_ref()), Some(&exe)).expect("prefix"),
+            (installed, FoundBy::Prefix)
+        );
+        let lines = describe_parser_files(&cfg);
+        assert!(lines[0].starts_with("ONNX Runtime library: "), "{lines:?}");
+        assert!(lines[1].starts_with("model: "), "{lines:?}");
     }
 }

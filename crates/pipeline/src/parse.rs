@@ -4,7 +4,7 @@
 use crate::config::PipelineConfig;
 use crate::frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
 use crate::model::{load_segmenter, resolve_model};
-use crate::outputs::write_text;
+use crate::outputs::{check_output_folder, write_text};
 use crate::recording::{Layer, Layout, Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
@@ -81,6 +81,7 @@ pub(crate) fn palette_preview(image: &RgbImage, labels: &LabelImage) -> Vec<u8> 
 /// Nothing is written unless every view was parsed.
 pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     check_stem(&opts.frame)?;
+    check_output_folder(&opts.out, "--recording", &opts.recording)?;
     let cfg = &opts.config;
     // The colour images for the previews; the recorded predictions for --recorded.
     let needs = FrameNeeds {
@@ -105,7 +106,7 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     )];
 
     let model = match opts.source {
-        ParseSource::Model => Some(resolve_model(cfg)?),
+        ParseSource::Model => Some(resolve_model(cfg)?.0),
         ParseSource::Recorded => None,
     };
     let (parsed, took) = timed(|| -> Result<ParsedFrame> {

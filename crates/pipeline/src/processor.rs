@@ -13,6 +13,7 @@ use crate::figure::{FigurePanel, LabelView, figure_image, panel_view};
 use crate::frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
 use crate::model::{ParserChoice, open_segmenter};
 use crate::recording::{Layer, Recording};
+use crate::sanity::{boxes_warnings, projected_scale_warning, warn_all};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
 use bodyseg_calib::Rig;
@@ -108,6 +109,14 @@ impl FrameProcessor {
             )
         })?;
         let has_truth = recording.has_layer(Layer::DepthLabels);
+        let lacking = recording.cameras_lacking(Layer::DepthLabels);
+        if !lacking.is_empty() && lacking.len() < rig.cameras.len() {
+            tracing::warn!(
+                "{}: no ground truth (depth_labels/) for camera {}: evaluation is off",
+                recording.root().display(),
+                lacking.join(", ")
+            );
+        }
         let views = rig
             .cameras
             .iter()
@@ -376,6 +385,9 @@ impl FrameProcessor {
             boxes.frame = frame.to_string();
             Ok(boxes)
         })?;
+        let what = format!("frame {}{frame}", self.prefix);
+        warn_all(projected_scale_warning(cloud, self.rig(), &what));
+        warn_all(boxes_warnings(&boxes.boxes, cloud, &what));
         stages.push(Stage::new("boxes", took, String::new()));
 
         // The configurations: the configured one, and the paper's five when they are

@@ -3,7 +3,7 @@
 
 use crate::config::PipelineConfig;
 use crate::frame::read_and_project;
-use crate::outputs::{ply_options, resolved_config_path, write_text};
+use crate::outputs::{check_output_file, ply_options, resolved_config_path, write_with_side_file};
 use crate::stage::{Stage, timed};
 use anyhow::{Context, Result};
 use bodyseg_project::ProjectMode;
@@ -60,6 +60,7 @@ pub struct ProjectSummary {
 /// written unless every earlier step succeeded.
 pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
     let cfg = &opts.config;
+    check_output_file(&opts.out, &["ply"], &[])?;
     let (rig, cloud, mut stages) = read_and_project(&opts.recording, &opts.frame, cfg)?;
     let unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
     let mut points_per_camera = vec![0; rig.cameras.len()];
@@ -73,12 +74,15 @@ pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
     let resolved_config = opts
         .write_resolved_config
         .then(|| resolved_config_path(&opts.out));
-    let ((), took) = timed(|| -> Result<()> {
-        bodyseg_io::write_ply(&opts.out, &cloud, &ply).context("labelled cloud (--out)")?;
-        if let Some(path) = &resolved_config {
-            write_text(path, &cfg.resolved_toml()?).context("resolved configuration")?;
-        }
-        Ok(())
+    let resolved_text = match &resolved_config {
+        Some(_) => Some(cfg.resolved_toml()?),
+        None => None,
+    };
+    let side = resolved_config.as_deref().zip(resolved_text.as_deref());
+    let ((), took) = timed(|| {
+        write_with_side_file(&opts.out, side, || {
+            bodyseg_io::write_ply(&opts.out, &cloud, &ply).context("labelled cloud (--out)")
+        })
     })?;
     let mut written = opts.out.display().to_string();
     if let Some(path) = &resolved_config {

@@ -142,6 +142,39 @@ pub(crate) fn check_stem(stem: &str) -> Result<()> {
     Ok(())
 }
 
+/// Checks the name of a folder that becomes part of an output path (a recording of a
+/// dataset in `bodyseg convert`: `OUT/<name>/clouds/...`): [`is_valid_name`].
+///
+/// # Errors
+/// As [`check_camera_name`]; the message names `what` and the name.
+pub(crate) fn check_folder_name(what: &str, name: &str) -> Result<()> {
+    if !is_valid_name(name) {
+        bail!(
+            "{what} {name:?}: its name becomes a folder of the output: rename it to letters, \
+             digits, '_', '-' and '.' only"
+        );
+    }
+    Ok(())
+}
+
+/// Checks a `/`-separated path relative to an output folder (a batch's
+/// `clouds/<frame>.ply`, `<recording>/boxes/<frame>.json`): every component a valid name
+/// ([`is_valid_name`]), so the path stays inside the folder.
+///
+/// # Errors
+/// A component is empty, `.`, `..` or holds another character; the message names the
+/// path.
+pub(crate) fn check_relative_path(relative: &str) -> Result<()> {
+    if !relative.split('/').all(is_valid_name) {
+        bail!(
+            "output {relative:?}: every part of an output path must be letters, digits, '_', \
+             '-' and '.' (not '.' or '..'): a name from an input file would lead out of the \
+             output folder"
+        );
+    }
+    Ok(())
+}
+
 /// The paths of a recording folder: the one function that joins a camera name, a layer
 /// and a frame stem into a path, after checking the names. No I/O except, for colour, the
 /// look-up of which extension exists.
@@ -285,6 +318,21 @@ impl Recording {
                 .layer_folder(&c.name, layer)
                 .is_ok_and(|f| f.is_dir())
         })
+    }
+
+    /// The cameras of the rig (in rig order) without a folder of `layer`.
+    pub fn cameras_lacking(&self, layer: Layer) -> Vec<&str> {
+        self.rig
+            .cameras
+            .iter()
+            .filter(|c| {
+                !self
+                    .layout
+                    .layer_folder(&c.name, layer)
+                    .is_ok_and(|f| f.is_dir())
+            })
+            .map(|c| c.name.as_str())
+            .collect()
     }
 
     /// The person boxes file of frame `stem`: `REC/boxes/<stem>.json`.
@@ -644,6 +692,27 @@ pub(crate) mod tests {
         assert!(e.starts_with("camera \"../etc\""), "{e}");
         assert!(l.image_path("cam0", Layer::Depth, "../../x").is_err());
         assert!(l.boxes_path("..").is_err());
+        for good in [
+            "clouds/000001.ply",
+            "rec_a/boxes/1.json",
+            "labels/cam0/x.png",
+        ] {
+            assert!(check_relative_path(good).is_ok(), "{good}");
+        }
+        for bad in [
+            "",
+            "/abs/x.ply",
+            "clouds/../../x.ply",
+            "clouds//x.ply",
+            "labels/kamera_ä/1.png",
+            "a\0b",
+            "./x",
+        ] {
+            let e = format!("{:#}", check_relative_path(bad).expect_err(bad));
+            assert!(e.contains("lead out of the output folder"), "{e}");
+        }
+        assert!(check_folder_name("recording", "kamera_ä").is_err());
+        assert!(check_folder_name("recording", "rec-1.a").is_ok());
     }
 
     /// The rig of the `single` preset (three Kinect v2-like cameras), for tests.

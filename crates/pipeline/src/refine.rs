@@ -1,7 +1,8 @@
 //! `bodyseg refine`: labelled PLY + person boxes JSON → refined labelled PLY.
 
 use crate::config::PipelineConfig;
-use crate::outputs::{ply_options, resolved_config_path, write_text};
+use crate::outputs::{check_output_file, ply_options, resolved_config_path, write_with_side_file};
+use crate::sanity::{boxes_warnings, cloud_scale_warning, warn_all};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
 use std::path::PathBuf;
@@ -49,6 +50,11 @@ pub struct RefineSummary {
 /// unless every earlier step succeeded, and a failed write leaves `out` as it was.
 pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
     let cfg = &opts.config.refine;
+    check_output_file(
+        &opts.out,
+        &["ply"],
+        &[("--cloud", &opts.cloud), ("--boxes", &opts.boxes)],
+    )?;
     let ((cloud, boxes), read) = timed(|| -> Result<_> {
         let cloud = bodyseg_io::read_ply(&opts.cloud).context("input cloud (--cloud)")?;
         let boxes = bodyseg_io::read_boxes(&opts.boxes).context("person boxes (--boxes)")?;
@@ -64,6 +70,9 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
         ),
     )];
     tracing::info!(cloud = %opts.cloud.display(), points = cloud.len(), "read cloud");
+    let what = opts.cloud.display().to_string();
+    warn_all(cloud_scale_warning(&cloud, &what));
+    warn_all(boxes_warnings(&boxes.boxes, &cloud, &what));
     if cfg.noise == bodyseg_refine::NoiseMode::Probability {
         // A cloud file carries no parser probabilities (FORMATS.md's PLY has labels only).
         tracing::warn!(
@@ -96,12 +105,15 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
     let resolved_config = opts
         .write_resolved_config
         .then(|| resolved_config_path(&opts.out));
-    let ((), took) = timed(|| -> Result<()> {
-        bodyseg_io::write_ply(&opts.out, &refined.cloud, &ply).context("refined cloud (--out)")?;
-        if let Some(path) = &resolved_config {
-            write_text(path, &opts.config.resolved_toml()?).context("resolved configuration")?;
-        }
-        Ok(())
+    let resolved_text = match &resolved_config {
+        Some(_) => Some(opts.config.resolved_toml()?),
+        None => None,
+    };
+    let side = resolved_config.as_deref().zip(resolved_text.as_deref());
+    let ((), took) = timed(|| {
+        write_with_side_file(&opts.out, side, || {
+            bodyseg_io::write_ply(&opts.out, &refined.cloud, &ply).context("refined cloud (--out)")
+        })
     })?;
     let mut written = opts.out.display().to_string();
     if let Some(path) = &resolved_config {

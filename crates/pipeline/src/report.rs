@@ -3,6 +3,7 @@
 //! the run's log (`run.json`).
 
 use crate::batch::{BatchOutcome, FrameFailure, Shard};
+use crate::eval::{ReportFormat, render_report};
 use crate::outputs::write_text;
 use crate::stage::{Stage, plural};
 use anyhow::{Context, Result};
@@ -38,9 +39,18 @@ struct RunLog<'a> {
     processed: usize,
     skipped: usize,
     failed: &'a [FrameFailure],
+    /// Stems a camera lacks: skipped, not frames.
+    incomplete_frames: Vec<IncompleteFrame<'a>>,
     seconds: f64,
     frames_per_second: f64,
     stage_seconds: Vec<(&'static str, f64)>,
+}
+
+/// A stem some cameras lack (`run.json`).
+#[derive(Serialize)]
+struct IncompleteFrame<'a> {
+    frame: &'a str,
+    missing_cameras: &'a [String],
 }
 
 /// Where a batch's reports go and what they describe.
@@ -52,6 +62,15 @@ pub(crate) struct ReportTarget<'a> {
     pub input: &'a Path,
     /// This process's shard.
     pub shard: Shard,
+    /// `report.md` starts with what ran (input, frame counts) and lists failed frames,
+    /// frames a camera lacks and figures (`bodyseg run`); without it, `report.md` is the
+    /// tables only, byte for byte what `bodyseg eval --merge --format md` writes for the
+    /// same scores (`bodyseg convert`: a sharded conversion merged equals the unsharded
+    /// one; the rest is in `run.json`).
+    pub header: bool,
+    /// Stems some cameras lack (not frames), with those cameras: listed in `run.json`
+    /// and, with the header, in `report.md`.
+    pub incomplete: &'a [(String, Vec<String>)],
 }
 
 /// Merges the frames' scores and writes `report.md`, `report.json` (when there are
@@ -81,10 +100,14 @@ pub(crate) fn write_reports(
     let mut written = Vec::new();
     if let Some(report) = &report {
         let path = opts.out.join(format!("report{suffix}.json"));
-        write_text(&path, &report.to_json()?)?;
+        write_text(&path, &render_report(report, ReportFormat::Json)?)?;
         written.push(path);
     }
-    let md = report_markdown(opts, frames, outcome, report.as_ref());
+    let md = match (opts.header, &report) {
+        (true, _) => report_markdown(opts, frames, outcome, report.as_ref()),
+        (false, Some(r)) => render_report(r, ReportFormat::Markdown)?,
+        (false, None) => "No ground truth: no scores.\n".to_string(),
+    };
     let path = opts.out.join(format!("report{suffix}.md"));
     write_text(&path, &md)?;
     written.push(path);
@@ -98,6 +121,14 @@ pub(crate) fn write_reports(
         processed: outcome.processed,
         skipped: outcome.skipped,
         failed: &outcome.failed,
+        incomplete_frames: opts
+            .incomplete
+            .iter()
+            .map(|(frame, missing_cameras)| IncompleteFrame {
+                frame,
+                missing_cameras,
+            })
+            .collect(),
         seconds: outcome.elapsed.as_secs_f64(),
         frames_per_second: fps,
         stage_seconds: outcome
@@ -150,6 +181,19 @@ fn report_markdown(
             md.push('\n');
         }
         None => md.push_str("No ground truth: no scores.\n\n"),
+    }
+    if !opts.incomplete.is_empty() {
+        md.push_str(&format!(
+            "## Skipped: a camera lacks them ({})\n\n",
+            opts.incomplete.len()
+        ));
+        for (frame, cameras) in opts.incomplete {
+            md.push_str(&format!(
+                "- `{frame}`: no depth image of {}\n",
+                cameras.join(", ")
+            ));
+        }
+        md.push('\n');
     }
     if !outcome.failed.is_empty() {
         md.push_str(&format!("## Failed frames ({})\n\n", outcome.failed.len()));

@@ -2,6 +2,7 @@
 //! human-readable summary of a rig.
 
 use crate::outputs::write_text;
+use crate::recording::check_camera_name;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, anyhow, bail};
 use bodyseg_calib::{AzureKinectMode, Intrinsics, Pose, RgbdCamera, Rig};
@@ -243,6 +244,11 @@ pub fn import_rig(opts: &RigImportOptions) -> Result<RigImportSummary> {
             if name.trim().is_empty() {
                 bail!("camera name of {} is empty", input.path.display());
             }
+            // The name becomes the camera's folder of every recording with this rig.
+            check_camera_name(&name).with_context(|| match opts.names.get(i) {
+                Some(_) => "--name".to_string(),
+                None => format!("{}: give --name", input.path.display()),
+            })?;
             if let Some(j) = names.iter().position(|n| *n == name) {
                 bail!(
                     "camera name {name:?} is used twice ({} and {}): give distinct names with --name",
@@ -465,6 +471,31 @@ mod tests {
             e,
             "1 --name for 2 cameras: give one --name per camera, in the same order"
         );
+    }
+
+    #[test]
+    fn names_that_would_leave_a_recording_are_refused() {
+        for bad in [
+            "../../x",
+            "/abs",
+            "a/b",
+            ".",
+            "..",
+            "kamera_ä",
+            "a\0b",
+            "a b",
+        ] {
+            let opts = options(vec![iai("a")], vec![bad.into()]);
+            let e = format!("{:#}", import_rig(&opts).expect_err(bad));
+            assert!(
+                e.starts_with("--name: camera ") && e.contains("letters, digits"),
+                "{bad}: {e}"
+            );
+        }
+        // A folder name that is no valid camera name: named, with the way out.
+        let opts = options(vec![iai("calib/kamera ä")], vec![]);
+        let e = format!("{:#}", import_rig(&opts).expect_err("folder name"));
+        assert!(e.starts_with("calib/kamera ä: give --name: camera"), "{e}");
     }
 
     #[test]

@@ -18,6 +18,7 @@
 use crate::batch::{BatchFrame, BatchProgress, FrameWriter, Shard};
 use crate::config::PipelineConfig;
 use crate::model::ParserChoice;
+use crate::outputs::check_output_folder;
 use crate::processor::FrameProcessor;
 use crate::recording::check_stem;
 use crate::report::{ReportTarget, RunSummary, figure_outputs, write_reports};
@@ -85,11 +86,13 @@ impl RunOptions {
     }
 
     /// Where the run's reports go.
-    fn report_target(&self) -> ReportTarget<'_> {
+    fn report_target<'a>(&'a self, incomplete: &'a [(String, Vec<String>)]) -> ReportTarget<'a> {
         ReportTarget {
             out: &self.out,
             input: &self.recording,
             shard: self.shard,
+            header: true,
+            incomplete,
         }
     }
 }
@@ -127,11 +130,14 @@ pub fn run_recording(
     opts: &RunOptions,
     progress: &(dyn Fn(BatchProgress) + Sync),
 ) -> Result<RunSummary> {
+    check_output_folder(&opts.out, "REC", &opts.recording)?;
     let (setup, took) = timed(|| -> Result<_> {
         let processor = FrameProcessor::open(&opts.recording, &opts.config, opts.parser)?
             .with_stage_clouds(opts.write_stages)
             .with_label_images(opts.label_images);
-        let all = processor.recording().frames()?.complete;
+        let listed = processor.recording().frames()?;
+        let incomplete = listed.incomplete;
+        let all = listed.complete;
         let frames = match &opts.frames {
             None => all,
             Some(want) => {
@@ -161,9 +167,22 @@ pub fn run_recording(
         let figures = figure_frames(&opts.figures, &frames);
         let processor = processor.with_figures(figures.clone());
         bodyseg_io::create_folder(&opts.out)?;
-        Ok((frames, figures, processor))
+        Ok((frames, figures, processor, incomplete))
     })?;
-    let (frames, figures, processor) = setup;
+    let (frames, figures, processor, incomplete) = setup;
+    let _lock = crate::batch::lock_output(&opts.out, opts.shard)?;
+    if !incomplete.is_empty() {
+        let list: Vec<String> = incomplete
+            .iter()
+            .map(|(f, cams)| format!("{f} (no {})", cams.join(", ")))
+            .collect();
+        tracing::warn!(
+            "{}: {} skipped, a camera lacks them (listed in run.json and report.md): {}",
+            opts.recording.display(),
+            plural(incomplete.len(), "frame", "frames"),
+            list.join(", ")
+        );
+    }
     let mut stages = vec![Stage::new(
         "setup",
         took,
@@ -200,8 +219,15 @@ pub fn run_recording(
     let fps = outcome.frames_per_second();
     stages.extend(outcome.stage_lines());
 
-    let ((report, written), took) =
-        timed(|| write_reports(opts.report_target(), &frames, &outcome, &resolved, fps))?;
+    let ((report, written), took) = timed(|| {
+        write_reports(
+            opts.report_target(&incomplete),
+            &frames,
+            &outcome,
+            &resolved,
+            fps,
+        )
+    })?;
     stages.push(Stage::new(
         "report",
         took,
