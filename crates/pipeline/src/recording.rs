@@ -535,6 +535,44 @@ impl RecordingWriter {
         Ok(bodyseg_io::write_rgb_png(&path, w, h, rgb)?)
     }
 
+    /// Where camera `index`'s image of `layer` for frame `stem` is written, with the file
+    /// extension `extension` (`png`; `jpg` for a colour image passed through).
+    ///
+    /// # Errors
+    /// `index` is not a camera of the rig; the camera's name or `stem` is not a valid name.
+    pub fn image_path(
+        &self,
+        index: usize,
+        layer: Layer,
+        stem: &str,
+        extension: &str,
+    ) -> Result<PathBuf> {
+        let (name, _, _) = self.size(index, layer)?;
+        check_stem(stem)?;
+        Ok(self
+            .layout
+            .layer_folder(name, layer)?
+            .join(format!("{stem}.{extension}")))
+    }
+
+    /// Writes camera `index`'s colour image of frame `stem` as the JPEG `jpeg`
+    /// (`color/<stem>.jpg`, e.g. a camera's own compressed image, passed through), and
+    /// removes a `color/<stem>.png` left from an earlier write, which readers would take
+    /// first. The caller checks the JPEG's size.
+    ///
+    /// # Errors
+    /// Writing fails.
+    pub fn write_colour_jpeg(&self, index: usize, stem: &str, jpeg: &[u8]) -> Result<()> {
+        let path = self.image_path(index, Layer::Color, stem, "jpg")?;
+        bodyseg_io::write_bytes_atomic(&path, jpeg)?;
+        let png = path.with_extension("png");
+        if png.is_file() {
+            std::fs::remove_file(&png)
+                .with_context(|| format!("{}: cannot remove the older image", png.display()))?;
+        }
+        Ok(())
+    }
+
     /// Writes camera `index`'s depth image of frame `stem` (`depth/<stem>.png`, 16-bit,
     /// the depth sensor's size).
     ///
