@@ -10,6 +10,7 @@ mod cli_calibrate;
 mod cli_convert;
 mod cli_eval;
 mod cli_help;
+mod cli_import_ros2;
 mod cli_parse;
 mod cli_project;
 mod cli_refine;
