@@ -26,8 +26,8 @@ use crate::recording::{Layer, RecordingWriter};
 use crate::stage::{Stage, plural};
 use anyhow::{Context, Result, bail};
 use bodyseg_ros2::{
-    BagMessage, BagReader, BagScan, Colour, ImportOptions, ImportPlan, MsgKind, PlannedFrame,
-    decode_colour, decode_depth,
+    BagMessage, BagReader, BagScan, Colour, ImportOptions, ImportPlan, PlannedFrame, decode_colour,
+    decode_depth,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -303,12 +303,13 @@ struct Assembly {
 }
 
 /// The second pass's reader: streams the bag and hands each frame on as soon as its
-/// messages are all read. Returns the reader's error, if any.
+/// messages are all read. Returns the reader's error, if any; `send` is dropped on
+/// return, which ends the receiving loop.
 fn read_frames(
     files: &[PathBuf],
     wanted: &HashMap<u64, (usize, usize, usize)>,
     cameras: usize,
-    send: &std::sync::mpsc::SyncSender<FrameData>,
+    send: std::sync::mpsc::SyncSender<FrameData>,
 ) -> Result<()> {
     let mut open: HashMap<usize, Assembly> = HashMap::new();
     for message in open_bag(files)? {
@@ -491,8 +492,10 @@ pub fn import_ros2(
         let (send, receive) =
             std::sync::mpsc::sync_channel::<FrameData>(QUEUE_PER_WORKER * workers);
         let reader_result = std::thread::scope(|scope| {
-            let reader =
-                scope.spawn(|| read_frames(&files, &wanted, plan.rig.cameras.len(), &send));
+            // The sender moves into the reader thread: when it returns, the channel
+            // closes and the workers' loop ends.
+            let (files, wanted, cameras) = (&files, &wanted, plan.rig.cameras.len());
+            let reader = scope.spawn(move || read_frames(files, wanted, cameras, send));
             receive.into_iter().par_bridge().for_each(|frame| {
                 let stem = stem_of(frame.index);
                 let mut writer = FrameWriter::new(out);
