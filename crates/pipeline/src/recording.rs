@@ -694,6 +694,34 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn a_passed_through_jpeg_replaces_an_older_png() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let root = dir.path().join("rec");
+        let rig = rig();
+        let writer =
+            RecordingWriter::create(&root, &rig, &[Layer::Color, Layer::Depth]).expect("create");
+        let colour = root.join(&rig.cameras[0].name).join("color");
+        assert_eq!(
+            writer
+                .image_path(0, Layer::Color, "000000", "jpg")
+                .expect("path"),
+            colour.join("000000.jpg")
+        );
+        assert!(writer.image_path(9, Layer::Color, "000000", "jpg").is_err());
+        assert!(writer.image_path(0, Layer::Color, "../x", "jpg").is_err());
+        let rgb = vec![7u8; 3 * rig.cameras[0].color.num_pixels()];
+        writer.write_colour(0, "000000", &rgb).expect("png");
+        assert!(colour.join("000000.png").is_file());
+        let jpeg = b"\xff\xd8 the bytes as they are".to_vec();
+        writer.write_colour_jpeg(0, "000000", &jpeg).expect("jpeg");
+        assert!(!colour.join("000000.png").exists(), "the older PNG is gone");
+        assert_eq!(
+            std::fs::read(colour.join("000000.jpg")).expect("read"),
+            jpeg
+        );
+    }
+
+    #[test]
     fn a_written_recording_reads_back_with_its_frames_and_size_checks() {
         let dir = tempfile::tempdir().expect("temp dir");
         let root = dir.path().join("rec");
