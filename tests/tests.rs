@@ -11,6 +11,7 @@ mod cli_convert;
 mod cli_eval;
 mod cli_harden;
 mod cli_help;
+mod cli_import_ros2;
 mod cli_parse;
 mod cli_project;
 mod cli_refine;

@@ -7,8 +7,8 @@ use bodyseg_pipeline::{
     DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice, IntrinsicsCalibOptions, NamedPrediction,
     ParseOptions, ParseSource, ParserChoice, PipelineConfig, ProjectMode, ProjectOptions,
     RefineOptions, RefineOverrides, ReportFormat, RigFormat, RigImportOptions, RigInput,
-    RunOptions, SceneSource, StereoCalibOptions, SynthOptions, ThreeDPeopleCamera,
-    WorldCalibOptions,
+    Ros2ImportOptions, RunOptions, SceneSource, StereoCalibOptions, SynthOptions,
+    ThreeDPeopleCamera, WorldCalibOptions,
 };
 use bodyseg_refine::Steps;
 use bodyseg_synth::ChessboardConfig;
@@ -37,6 +37,7 @@ Examples:
   bodyseg refine --cloud frame.ply --boxes frame_boxes.json --out refined.ply
   bodyseg eval --pred refined.ply --gt truth.ply
   bodyseg rig import --from iai_kinect2 calib/cam0 calib/cam1 --out rig.toml
+  bodyseg import ros2 session.mcap --out rec
   bodyseg run --recording rec --out run1
   bodyseg convert --input datasets/recs --format recording --out converted --shard 0/4
   bodyseg calibrate intrinsics --images calib/cam0/ir --board 9x6 --square-m 0.04 --out cam0_ir.toml
@@ -120,6 +121,9 @@ pub enum Command {
     /// be loaded, and the rule that found each
     #[command(long_about = VERSION_LONG_ABOUT)]
     Version(VersionArgs),
+    /// Import recordings of other tools into a bodyseg recording: ROS 2 bags
+    #[command(subcommand)]
+    Import(ImportCommand),
 }
 
 const VERSION_LONG_ABOUT: &str = "\
@@ -135,6 +139,113 @@ from (.deps/onnxruntime/, models/). The current folder is never searched.";
 pub struct VersionArgs {
     #[command(flatten)]
     pub config: ConfigArgs,
+}
+
+/// `bodyseg import ...`.
+#[derive(Debug, Subcommand)]
+pub enum ImportCommand {
+    /// A ROS 2 bag (MCAP; iai_kinect2 or other RGB-D topics, CameraInfo, /tf_static) into
+    /// a recording: rig.toml, depth and colour images per camera
+    #[command(long_about = IMPORT_ROS2_LONG_ABOUT, after_help = IMPORT_ROS2_EXAMPLES)]
+    Ros2(ImportRos2Args),
+}
+
+const IMPORT_ROS2_LONG_ABOUT: &str = "\
+Import a ROS 2 bag into a recording (shared/FORMATS.md) that every other command reads. \
+BAG is an .mcap file or a rosbag2 folder (metadata.yaml and its MCAP files); SQLite (.db3) \
+bags are refused with the `ros2 bag convert` command that turns them into MCAP.
+
+Read: sensor_msgs/Image (depth 16UC1/mono16 in mm, 32FC1 in metres; colour rgb8, bgr8, \
+bgra8, rgba8, mono8), sensor_msgs/CompressedImage (JPEG or PNG colour, written as it is for \
+JPEG; compressedDepth PNG depth), sensor_msgs/CameraInfo (plumb_bob, rational_polynomial), \
+tf2_msgs/TFMessage on /tf_static and /tf.
+
+Cameras: iai_kinect2's /<name>/{sd,qhd,hd}/{image_depth,image_depth_rect,image_color,\
+image_color_rect} topics are found by name: per camera the raw sd depth (IR frame) and the \
+raw qhd (else hd) colour first, else a registered qhd/hd depth with the colour of its \
+resolution (one frame, colour_from_depth the identity). Other layouts: --camera \
+NAME=TOPIC_PREFIX (repeatable, in rig order) takes the depth and colour image topics under \
+the prefix. Intrinsics as ROS means them: a raw image uses CameraInfo's k and d, a *_rect \
+image its p and no distortion. color_from_depth is the tf from the depth image's frame to \
+the colour image's; world_from_depth the tf from the depth frame to --world-frame (default: \
+the root of the tf tree; bodyseg's world is z up, a warning says when the root is an \
+optical frame).
+
+Frames: per camera, depth and colour images paired by nearest stamp within --max-skew-ms, \
+the cameras' pairs grouped by stamp within the same skew; frames are named 000000, 000001, \
+... in stamp order, OUT/stamps.csv maps them to the stamps, OUT/import_ros2/import.json \
+says what was imported; unpaired images are counted in a note. Depth is written as 16-bit \
+millimetre PNG (32FC1 rounded, NaN → 0), colour as PNG (JPEG as it is).
+
+The bag is read twice, streamed (memory does not grow with its length): every error (a \
+truncated bag, an unknown encoding, a camera without CameraInfo, no transform between depth \
+and colour) is found in the first pass and reported as one line naming the topic or field \
+and the stamp, before anything is written. Resumable like `run`: a frame complete in OUT \
+is skipped (--force writes it again). Exit status: 0, 3 when some frames failed to decode \
+(listed; the others written), 1 on an error.";
+
+const IMPORT_ROS2_EXAMPLES: &str = "\
+Examples:
+  bodyseg import ros2 session.mcap --out rec
+  bodyseg import ros2 rosbag2_2026_12_01-10_00_00/ --out rec --world-frame map
+  bodyseg import ros2 bag/ --out rec --camera left=/kinect2_left --camera right=/kinect2_right
+  bodyseg import ros2 bag/ --out rec --camera front=/camera --max-skew-ms 10
+  bodyseg run --recording rec --out run1";
+
+/// `bodyseg import ros2`.
+#[derive(Debug, Args)]
+pub struct ImportRos2Args {
+    /// The bag: an .mcap file, or a rosbag2 folder (metadata.yaml and MCAP files)
+    #[arg(value_name = "BAG")]
+    pub bag: PathBuf,
+
+    /// The recording to write (created; frames complete in it are skipped)
+    #[arg(long, value_name = "REC")]
+    pub out: PathBuf,
+
+    /// A camera and the topic prefix of its images, e.g. left=/kinect2_left (repeatable,
+    /// rig order) [default: found by topic layout, sorted by name]
+    #[arg(long = "camera", value_name = "NAME=TOPIC_PREFIX", value_parser = parse_camera)]
+    pub cameras: Vec<(String, String)>,
+
+    /// The tf frame that becomes the world (z up) [default: the root of the tf tree]
+    #[arg(long, value_name = "FRAME")]
+    pub world_frame: Option<String>,
+
+    /// Largest stamp difference between a camera's depth and colour images, and between
+    /// the cameras of a frame, milliseconds
+    #[arg(long, value_name = "MS", default_value_t = 20.0)]
+    pub max_skew_ms: f64,
+
+    /// Write frames already complete in REC again
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `NAME=TOPIC_PREFIX`.
+fn parse_camera(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((name, prefix)) if !name.is_empty() && !prefix.is_empty() => {
+            Ok((name.to_string(), prefix.to_string()))
+        }
+        _ => Err(format!(
+            "expected NAME=TOPIC_PREFIX (e.g. left=/kinect2_left), got {s:?}"
+        )),
+    }
+}
+
+impl ImportRos2Args {
+    /// The pipeline's options.
+    pub fn options(&self) -> Ros2ImportOptions {
+        Ros2ImportOptions {
+            bag: self.bag.clone(),
+            out: self.out.clone(),
+            cameras: self.cameras.clone(),
+            world_frame: self.world_frame.clone(),
+            max_skew_ms: self.max_skew_ms,
+            redo: self.force,
+        }
+    }
 }
 
 const SYNTH_LONG_ABOUT: &str = "\

@@ -9,8 +9,8 @@ mod args;
 
 use anyhow::Result;
 use args::{
-    CalibrateCommand, Cli, Command, EvalArgs, ParseArgs, ProjectArgs, RefineArgs, RigCommand,
-    SynthArgs,
+    CalibrateCommand, Cli, Command, EvalArgs, ImportCommand, ParseArgs, ProjectArgs, RefineArgs,
+    RigCommand, SynthArgs,
 };
 use bodyseg_pipeline::{
     Stage, calibrate_intrinsics, calibrate_stereo, calibrate_world, check_output_file,
@@ -148,6 +148,13 @@ fn run(cli: &Cli) -> Result<Outcome> {
         }
         Command::Calibrate(cmd) => calibrate(cmd, cli.quiet)?,
         Command::Version(args) => version(args, cli.verbose)?,
+        Command::Import(ImportCommand::Ros2(args)) => {
+            let (stages, failed) = import_ros2(args, cli.quiet)?;
+            if failed {
+                outcome = Outcome::SomeFramesFailed;
+            }
+            stages
+        }
     };
     if !cli.quiet {
         for s in stages {
@@ -218,6 +225,22 @@ fn convert(args: &args::ConvertArgs, quiet: bool) -> Result<(Vec<Stage>, bool)> 
     bar.finish_and_clear();
     print_failures(&summary.outcome.failed);
     Ok((summary.stages, !summary.outcome.failed.is_empty()))
+}
+
+fn import_ros2(args: &args::ImportRos2Args, quiet: bool) -> Result<(Vec<Stage>, bool)> {
+    let bar = progress_bar(quiet, "import");
+    let summary = bodyseg_pipeline::import_ros2(&args.options(), &|p| show_progress(&bar, p))?;
+    bar.finish_and_clear();
+    if !quiet {
+        for line in &summary.cameras {
+            eprintln!("{line}");
+        }
+    }
+    for note in &summary.notes {
+        eprintln!("note: {note}");
+    }
+    print_failures(&summary.failed);
+    Ok((summary.stages, !summary.failed.is_empty()))
 }
 
 fn synth(args: &SynthArgs, quiet: bool) -> Result<Vec<Stage>> {

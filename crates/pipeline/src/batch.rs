@@ -291,7 +291,7 @@ impl FrameWriter {
     }
 
     /// Removes every file written (a failed frame leaves nothing).
-    fn remove_all(&self) {
+    pub(crate) fn remove_all(&self) {
         for f in &self.written {
             let _ = std::fs::remove_file(self.out.join(&f.path));
         }

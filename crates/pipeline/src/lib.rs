@@ -18,6 +18,7 @@
 //! eval_files:      predicted PLY(s) + ground-truth PLY → Report;  merge_reports: reports → Report
 //! run_recording:   a recording, every frame through every stage → clouds, boxes, label images, report
 //! convert_dataset: recordings or 3DPeople, resumable and sharded → clouds (+ reports)
+//! import_ros2:     a ROS 2 bag (MCAP) → bodyseg_ros2 (scan, plan, decode) → a recording
 //! import_rig, read_rig, describe_rig: calibration files (iai_kinect2, Azure Kinect, ROS, OpenCV;
 //!                  OpenPTrack poses) ⇄ rig.toml
 //! calibrate_*:     chessboard images → intrinsics, colour-from-depth, world poses (feature `opencv`)
@@ -54,6 +55,7 @@ mod convert;
 mod eval;
 mod figure;
 mod frame;
+mod import_ros2;
 mod layers;
 mod model;
 mod outputs;
@@ -90,6 +92,7 @@ pub use eval::{
     merge_reports, render_report,
 };
 pub use frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
+pub use import_ros2::{Ros2ImportOptions, Ros2ImportSummary, import_ros2};
 pub use model::{FoundBy, ParserChoice, describe_parser_files};
 pub use outputs::{check_output_file, check_output_folder, write_text};
 pub use parse::{ParseOptions, ParseSource, ParseSummary, parse_file};

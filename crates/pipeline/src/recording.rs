@@ -583,6 +583,44 @@ impl RecordingWriter {
         Ok(bodyseg_io::write_rgb_png(&path, w, h, rgb)?)
     }
 
+    /// Where camera `index`'s image of `layer` for frame `stem` is written, with the file
+    /// extension `extension` (`png`; `jpg` for a colour image passed through).
+    ///
+    /// # Errors
+    /// `index` is not a camera of the rig; the camera's name or `stem` is not a valid name.
+    pub fn image_path(
+        &self,
+        index: usize,
+        layer: Layer,
+        stem: &str,
+        extension: &str,
+    ) -> Result<PathBuf> {
+        let (name, _, _) = self.size(index, layer)?;
+        check_stem(stem)?;
+        Ok(self
+            .layout
+            .layer_folder(name, layer)?
+            .join(format!("{stem}.{extension}")))
+    }
+
+    /// Writes camera `index`'s colour image of frame `stem` as the JPEG `jpeg`
+    /// (`color/<stem>.jpg`, e.g. a camera's own compressed image, passed through), and
+    /// removes a `color/<stem>.png` left from an earlier write, which readers would take
+    /// first. The caller checks the JPEG's size.
+    ///
+    /// # Errors
+    /// Writing fails.
+    pub fn write_colour_jpeg(&self, index: usize, stem: &str, jpeg: &[u8]) -> Result<()> {
+        let path = self.image_path(index, Layer::Color, stem, "jpg")?;
+        bodyseg_io::write_bytes_atomic(&path, jpeg)?;
+        let png = path.with_extension("png");
+        if png.is_file() {
+            std::fs::remove_file(&png)
+                .with_context(|| format!("{}: cannot remove the older image", png.display()))?;
+        }
+        Ok(())
+    }
+
     /// Writes camera `index`'s depth image of frame `stem` (`depth/<stem>.png`, 16-bit,
     /// the depth sensor's size).
     ///
@@ -722,6 +760,34 @@ pub(crate) mod tests {
             .expect("synth")
             .true_rig()
             .clone()
+    }
+
+    #[test]
+    fn a_passed_through_jpeg_replaces_an_older_png() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let root = dir.path().join("rec");
+        let rig = rig();
+        let writer =
+            RecordingWriter::create(&root, &rig, &[Layer::Color, Layer::Depth]).expect("create");
+        let colour = root.join(&rig.cameras[0].name).join("color");
+        assert_eq!(
+            writer
+                .image_path(0, Layer::Color, "000000", "jpg")
+                .expect("path"),
+            colour.join("000000.jpg")
+        );
+        assert!(writer.image_path(9, Layer::Color, "000000", "jpg").is_err());
+        assert!(writer.image_path(0, Layer::Color, "../x", "jpg").is_err());
+        let rgb = vec![7u8; 3 * rig.cameras[0].color.num_pixels()];
+        writer.write_colour(0, "000000", &rgb).expect("png");
+        assert!(colour.join("000000.png").is_file());
+        let jpeg = b"\xff\xd8 the bytes as they are".to_vec();
+        writer.write_colour_jpeg(0, "000000", &jpeg).expect("jpeg");
+        assert!(!colour.join("000000.png").exists(), "the older PNG is gone");
+        assert_eq!(
+            std::fs::read(colour.join("000000.jpg")).expect("read"),
+            jpeg
+        );
     }
 
     #[test]
