@@ -9,8 +9,8 @@ mod args;
 
 use anyhow::Result;
 use args::{
-    CalibrateCommand, Cli, Command, EvalArgs, ParseArgs, ProjectArgs, RefineArgs, RigCommand,
-    SynthArgs,
+    CalibrateCommand, Cli, Command, EvalArgs, ImportCommand, ParseArgs, ProjectArgs, RefineArgs,
+    RigCommand, SynthArgs,
 };
 use bodyseg_pipeline::{
     Stage, calibrate_intrinsics, calibrate_stereo, calibrate_world, describe_rig, eval_files,
@@ -78,6 +78,7 @@ fn run(cli: &Cli) -> Result<Outcome> {
         Command::Refine(args) => refine(args)?,
         Command::Eval(args) => eval(args)?,
         Command::Rig(cmd) => rig(cmd)?,
+        Command::Import(cmd) => import(cmd)?,
         Command::Run(args) => {
             let (stages, failed) = run_recording_command(args, cli.quiet)?;
             if failed {
@@ -195,7 +196,22 @@ fn project(args: &ProjectArgs) -> Result<Vec<Stage>> {
 
 fn boxes(args: &args::BoxesArgs) -> Result<Vec<Stage>> {
     let summary = bodyseg_pipeline::boxes_file(&args.options()?)?;
+    for note in &summary.notes {
+        eprintln!("note: {note}");
+    }
     Ok(summary.stages)
+}
+
+fn import(cmd: &ImportCommand) -> Result<Vec<Stage>> {
+    match cmd {
+        ImportCommand::Cloud(args) => {
+            let summary = bodyseg_pipeline::import_cloud(&args.options())?;
+            for note in &summary.notes {
+                eprintln!("note: {note}");
+            }
+            Ok(summary.stages)
+        }
+    }
 }
 
 fn refine(args: &RefineArgs) -> Result<Vec<Stage>> {

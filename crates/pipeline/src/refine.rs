@@ -1,7 +1,8 @@
 //! `bodyseg refine`: labelled PLY + person boxes JSON → refined labelled PLY.
 
 use crate::config::PipelineConfig;
-use crate::outputs::{ply_options, resolved_config_path, write_text};
+use crate::floor::transformed;
+use crate::outputs::{ply_options, read_labelled_ply, resolved_config_path, write_text};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
 use std::path::PathBuf;
@@ -50,7 +51,7 @@ pub struct RefineSummary {
 pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
     let cfg = &opts.config.refine;
     let ((cloud, boxes), read) = timed(|| -> Result<_> {
-        let cloud = bodyseg_io::read_ply(&opts.cloud).context("input cloud (--cloud)")?;
+        let cloud = read_labelled_ply(&opts.cloud).context("input cloud (--cloud)")?;
         let boxes = bodyseg_io::read_boxes(&opts.boxes).context("person boxes (--boxes)")?;
         Ok((cloud, boxes))
     })?;
@@ -72,8 +73,17 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
     }
 
     let (refined, took) = timed(|| {
-        bodyseg_refine::refine(&cloud, &boxes.boxes, cfg)
-            .with_context(|| format!("{}: cannot refine", opts.cloud.display()))
+        // Boxes found in the floor's frame of a cloud that is not z up (`boxes --cloud`
+        // on a camera's cloud) are compared with the cloud moved into that frame; the
+        // output keeps the input's positions (only labels change).
+        let in_world = boxes.world_from_cloud.map(|t| transformed(&cloud, &t));
+        let mut refined =
+            bodyseg_refine::refine(in_world.as_ref().unwrap_or(&cloud), &boxes.boxes, cfg)
+                .with_context(|| format!("{}: cannot refine", opts.cloud.display()))?;
+        if in_world.is_some() {
+            refined.cloud.positions_m.clone_from(&cloud.positions_m);
+        }
+        anyhow::Ok(refined)
     })?;
     let labels_changed = cloud
         .labels

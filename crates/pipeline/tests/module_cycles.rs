@@ -18,11 +18,12 @@ use std::path::{Path, PathBuf};
 
 /// bodyseg-pipeline's command modules (one per `bodyseg` command), which must not use one
 /// another.
-const PIPELINE_COMMANDS: [&str; 10] = [
+const PIPELINE_COMMANDS: [&str; 11] = [
     "boxes",
     "calibrate",
     "convert",
     "eval",
+    "import_cloud",
     "parse",
     "project",
     "refine",
