@@ -1,5 +1,5 @@
 //! A point cloud file as it was read, before the caller decides what its labels and its
-//! layout mean: [`CloudFile`] (PLY or PCD, by extension: [`read_cloud_file`]).
+//! layout mean: [`CloudFile`] (PLY or PCD, by extension: `read_cloud_file`).
 //!
 //! The readers no longer insist on bodyseg's class ids: a cloud without a `label` field
 //! (trimesh's, a scanner's) reads with every label unknown and [`FileLabels::Absent`]; a
@@ -79,30 +79,4 @@ impl CloudFile {
             FileLabels::Classes | FileLabels::Absent => Ok(self.cloud),
         }
     }
-}
-
-/// Reads a PLY or PCD file by its extension (`.ply`, `.pcd`, any case) with
-/// [`crate::parse_ply_file`] or [`crate::parse_pcd_file`].
-///
-/// # Errors
-/// [`IoError::UnknownCloudFormat`] for another extension, [`IoError::Read`] when the file
-/// cannot be read, otherwise the parser's errors.
-pub fn read_cloud_file(path: &Path) -> Result<CloudFile, IoError> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    let parse = match ext.as_deref() {
-        Some("pcd") => crate::parse_pcd_file,
-        Some("ply") => crate::parse_ply_file,
-        _ => {
-            return Err(IoError::UnknownCloudFormat {
-                path: path.to_path_buf(),
-            });
-        }
-    };
-    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
-        cause,
-        path: path.to_path_buf(),
-    })?;
-    parse(&bytes, path)
 }

@@ -50,13 +50,14 @@ mod listing;
 mod mat;
 mod pcd;
 mod ply;
+mod read_cloud;
 mod text;
 
 pub use atomic::{
     Durability, sync_file_system, write_atomic, write_atomic_with, write_bytes_atomic,
 };
 pub use boxes::{parse_boxes, read_boxes, write_boxes, write_boxes_with};
-pub use cloud_file::{CloudFile, CloudGrid, FileLabels, read_cloud_file};
+pub use cloud_file::{CloudFile, CloudGrid, FileLabels};
 pub use error::IoError;
 pub use folder::{
     create_folder, discard_folder, image_files, publish_folder, require_folder, staging_folder,
@@ -72,4 +73,5 @@ pub use ply::{
     PlyColors, PlyFormat, PlyWriteOptions, parse_ply, parse_ply_file, ply_bytes, read_ply,
     read_ply_file, write_ply,
 };
+pub use read_cloud::read_cloud_file;
 pub use text::{first_existing_file, read_bytes, read_text};

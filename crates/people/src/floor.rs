@@ -4,13 +4,14 @@
 //! [`find_floor`]: the cloud is averaged into voxels; planes are found one after the other
 //! by RANSAC over all orientations (Fischler & Bolles 1981; seeded, so deterministic),
 //! each refined by least squares and its voxels set aside before the next is searched. A
-//! candidate must bound the scene: almost every voxel off it lies on one side, and its
+//! candidate must bound the scene: almost every voxel off it (95%) lies on one side, and its
 //! normal is turned towards that side. Floors, walls and ceilings all do that; the floor
 //! is the one **the points stand on**: the objects left when every candidate plane is
 //! removed (people, furniture) are clustered, and a cluster stands on a plane when its
 //! lowest voxel along that plane's normal is within [`CONTACT_M`] of it and beside its
-//! voxels. The floor is the candidate the most object voxels stand on; when nothing stands
-//! on any (a bare room), the candidate with the most voxels. A wall larger than the floor
+//! voxels, and its highest voxel rises at least [`MIN_RISE_M`] above it. The floor is the
+//! candidate the most object voxels stand on; when nothing stands on any (a bare room),
+//! the candidate with the most voxels, if it holds more than half of all voxels. A wall larger than the floor
 //! loses because people do not lean on it; the ceiling because nothing hangs from it.
 //!
 //! [`FloorHint`] overrides the search: a plane given as `a·x + b·y + c·z + d = 0` (as
@@ -53,11 +54,16 @@ pub const MIN_FLOOR_VOXELS: usize = 300;
 /// A candidate bounds the scene: at least this fraction of the voxels farther than
 /// 2 × [`PLANE_TOL_M`] from it lie on one side (the rest: depth noise below a floor,
 /// what is seen through a doorway).
-const MIN_ONE_SIDE: f32 = 0.9;
+const MIN_ONE_SIDE: f32 = 0.95;
 /// A cluster stands on a plane when its lowest voxel along the normal is at most this
 /// high, metres: feet and shoes are removed with the floor or sit just above it; a
 /// Kinect at 5 m may lose them up to the ankles.
 pub const CONTACT_M: f32 = 0.3;
+/// ... and its highest voxel rises at least this far above the plane, metres: people
+/// (even seated) and furniture do; the far side of people lined up along a plane that
+/// only touches their sides (a vertical plane tangent to them) does not (≈ 0.4 m, a
+/// body's depth).
+pub const MIN_RISE_M: f32 = 0.6;
 /// ... and that lowest voxel lies within about this distance of one of the plane's own
 /// voxels, metres (not beside the plane's infinite extension past a wall's end).
 const BESIDE_M: f32 = 0.3;
@@ -430,14 +436,13 @@ fn choose_floor(centers: &[Vec3], candidates: &[Candidate]) -> Option<Candidate>
         objects
             .iter()
             .filter(|o| {
-                let lowest = o.iter().copied().min_by(|&a, &b| {
-                    plane
-                        .height(centers[a as usize])
-                        .total_cmp(&plane.height(centers[b as usize]))
-                });
+                let height = |i: &u32| plane.height(centers[*i as usize]);
+                let lowest = o.iter().min_by(|a, b| height(a).total_cmp(&height(b)));
+                let top = o.iter().map(height).fold(f64::NEG_INFINITY, f64::max);
                 lowest.is_some_and(|i| {
-                    let p = centers[i as usize];
-                    plane.height(p) <= f64::from(CONTACT_M) && near_cells(&beside, p, BESIDE_M)
+                    height(i) <= f64::from(CONTACT_M)
+                        && top >= f64::from(MIN_RISE_M)
+                        && near_cells(&beside, centers[*i as usize], BESIDE_M)
                 })
             })
             .map(Vec::len)
@@ -452,7 +457,7 @@ fn choose_floor(centers: &[Vec3], candidates: &[Candidate]) -> Option<Candidate>
     }
     // Most voxels standing on it; ties (none standing anywhere): the larger plane, then
     // the earlier candidate (deterministic).
-    let &(k, plane, _) = scored.iter().max_by(|a, b| {
+    let &(k, plane, on) = scored.iter().max_by(|a, b| {
         a.2.cmp(&b.2)
             .then(
                 candidates[a.0]
@@ -462,6 +467,11 @@ fn choose_floor(centers: &[Vec3], candidates: &[Candidate]) -> Option<Candidate>
             )
             .then(b.0.cmp(&a.0))
     })?;
+    // Nothing stands on any plane: a bare floor holds most of the scene's voxels; a plane
+    // that does not (one touching the sides of people lined up, a wall) is no floor.
+    if on == 0 && 2 * candidates[k].inliers.len() <= centers.len() {
+        return None;
+    }
     // The floor's voxels among all of them (a later candidate may have taken none, but
     // the count is the plane's support).
     Some(Candidate {

@@ -82,29 +82,16 @@ fn random_pose(rng: &mut Rng) -> ([[f32; 3]; 3], Vec3) {
     );
     let tau = std::f32::consts::TAU;
     let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
-    let [w, x, y, z] = [
+    let q = [
         a * (tau * u2).sin(),
         a * (tau * u2).cos(),
         b * (tau * u3).sin(),
         b * (tau * u3).cos(),
     ];
-    let r = [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ];
+    let r = bodyseg_calib::Pose::from_quaternion_wxyz(q.map(f64::from), [0.0; 3])
+        .expect("a unit quaternion")
+        .rotation()
+        .map(|row| row.map(|v| v as f32));
     let t = [0; 3].map(|_| rng.uniform(-5.0, 5.0));
     (r, t)
 }
@@ -334,7 +321,7 @@ fn hints_give_the_plane_or_the_axis() {
     )
     .expect("no plane given")
     .expect("the lowest level");
-    assert_eq!(lowest.source, FloorSource::Lowest);
+    assert_eq!(lowest.source, FloorSource::Lowest, "{lowest:?}");
     assert_eq!(lowest.normal, [1.0, 0.0, 0.0]);
     assert!((lowest.height([-2.0, 0.0, 0.0])).abs() < 0.05, "{lowest:?}");
 }

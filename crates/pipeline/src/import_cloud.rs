@@ -438,14 +438,14 @@ mod tests {
     use bodyseg_core::{LabeledCloud, PointOrigin};
     use bodyseg_io::FileLabels;
 
-    /// A 40×30 grid seen by a camera with `f` and `c`, every point at depth 2 m + a
-    /// slope, optionally moved by `shift` (no longer in the camera's frame).
+    /// A 40×30 grid seen by a camera with `f` and `c`, the points at a bumpy depth of
+    /// 2–2.5 m, optionally moved by `shift` (no longer in the camera's frame).
     fn grid_cloud(f: [f64; 2], c: [f64; 2], shift: [f32; 3]) -> (CloudFile, CloudGrid) {
         let (w, h) = (40u32, 30u32);
         let mut cloud = LabeledCloud::default();
         for v in 0..h {
             for u in 0..w {
-                let z = 2.0 + 0.01 * f64::from(u);
+                let z = depth_at(u, v);
                 let x = (f64::from(u) - c[0]) * z / f[0];
                 let y = (f64::from(v) - c[1]) * z / f[1];
                 cloud.positions_m.push([
@@ -471,6 +471,12 @@ mod tests {
             grid: None,
         };
         (file, grid)
+    }
+
+    /// The depth of cell (u, v), metres: 2 m plus steps that follow neither u nor v, so
+    /// that a moved cloud's x/z, y/z cannot be fitted by other intrinsics.
+    fn depth_at(u: u32, v: u32) -> f64 {
+        2.0 + 0.05 * f64::from((7 * u + 3 * v) % 11)
     }
 
     #[test]
@@ -509,6 +515,7 @@ mod tests {
         let (depth, far) = depth_image(&file, &grid);
         assert_eq!(far, 1);
         assert_eq!((depth[0], depth[1]), (0, 0));
-        assert_eq!(depth[2], 2020);
+        assert_eq!(depth[2], (depth_at(2, 0) * 1000.0).round() as u16);
+        assert_eq!(depth[2], 2150);
     }
 }
