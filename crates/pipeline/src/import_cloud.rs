@@ -401,7 +401,7 @@ fn fit_grid(clouds: &[(CloudFile, CloudGrid)], files: &[PathBuf]) -> Result<Grid
             fit.fy
         );
     }
-    if !(fit.rms_px <= MAX_GRID_RMS_PX) {
+    if fit.rms_px.is_nan() || fit.rms_px > MAX_GRID_RMS_PX {
         bail!(
             "{}: the points are no pinhole grid: fitting u = fx*x/z + cx, v = fy*y/z + cy leaves \
              an RMS residual of {:.2} px (at most {MAX_GRID_RMS_PX} px): the cloud is not in its \

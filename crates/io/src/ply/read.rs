@@ -194,7 +194,7 @@ fn place_on_grid(
     cloud: &mut LabeledCloud,
     width: u32,
     height: u32,
-    range_grid: Option<Vec<Option<u32>>>,
+    range_grid: Option<RangeGrid>,
     has_pixel: bool,
 ) -> Option<CloudGrid> {
     let cells = (width as usize).checked_mul(height as usize)?;
@@ -310,6 +310,9 @@ impl Plan {
         roles
     }
 }
+
+/// PCL's `range_grid` of an organised PLY: each cell's first vertex index, if any.
+type RangeGrid = Vec<Option<u32>>;
 
 /// The vertices read, and the first label that is no class id (vertex, value).
 struct Vertices {
@@ -492,7 +495,7 @@ fn binary<const BIG_ENDIAN: bool>(
     plan: &Plan,
     organised: bool,
     path: &Path,
-) -> Result<(Vertices, Option<Vec<Option<u32>>>), IoError> {
+) -> Result<(Vertices, Option<RangeGrid>), IoError> {
     let mut pos = 0;
     for e in before {
         skip_binary::<BIG_ENDIAN>(data, &mut pos, e, path)?;
