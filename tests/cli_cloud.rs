@@ -3,7 +3,8 @@
 //! through `bodyseg boxes --mode geometry` with no option (its floor found) and through
 //! `bodyseg import cloud` + `bodyseg run`; the same points without labels (PLY), with
 //! PCL's segment ids as labels, in millimetres and unorganised: a note, a refusal naming
-//! the fix, a warning naming the unit, an error naming HEIGHT.
+//! the fix, a warning naming the unit, an error naming HEIGHT; and the view above the
+//! floor only: warnings that no floor and no person are found, with the likely cause.
 
 use crate::common::{assert_ok, bodyseg, files_in, stderr, tempdir};
 use bodyseg_core::PersonBoxes;
@@ -280,6 +281,25 @@ fn unlabelled_foreign_labelled_millimetre_and_unorganised_clouds() {
     assert_ok(&out, "geometry mode in millimetres");
     let err = stderr(&out);
     assert!(err.contains("WARN") && err.contains("millimetres"), "{err}");
+
+    // The camera's view above the floor (rows 0..260 of the grid: heads and trunks,
+    // walls, no floor): warnings that no floor and no person are found, naming that.
+    let file = read_cloud_file(&five_people()).expect("five_people.pcd reads");
+    let upper: Vec<Vec3> = file
+        .cloud
+        .positions_m
+        .iter()
+        .zip(&file.cloud.origins)
+        .filter(|(_, o)| o.pixel / 640 < 260)
+        .map(|(&p, _)| p)
+        .collect();
+    write_pcd(&d.join("upper.pcd"), &upper, None, 1);
+    let out = boxes_geometry(d, &d.join("upper.pcd"), &[]);
+    assert_ok(&out, "geometry mode without a floor in view");
+    let err = stderr(&out);
+    assert!(err.contains("no floor found"), "{err}");
+    assert!(err.contains("no person found"), "{err}");
+    assert!(err.contains("a camera's view with no floor in it"), "{err}");
 
     // An unorganised PCD cannot be imported: one error naming HEIGHT, nothing written.
     let flat = d.join("flat.pcd");
