@@ -74,6 +74,7 @@ pub fn write_scene(dir: &Path) -> Scene {
     let boxes = PersonBoxes {
         frame: "000000".into(),
         boxes: vec![scene.person.person_box.clone()],
+        world_from_cloud: None,
     };
     write_boxes(&scene.boxes, &boxes).expect("write boxes.json");
     scene

@@ -7,6 +7,7 @@ mod common;
 mod cli_bad_input;
 mod cli_boxes;
 mod cli_calibrate;
+mod cli_cloud;
 mod cli_convert;
 mod cli_eval;
 mod cli_harden;

@@ -4,11 +4,11 @@
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
     AzureColorResolution, AzureDepthMode, AzureKinectMode, Board, ConvertFormat, ConvertOptions,
-    DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice, IntrinsicsCalibOptions, NamedPrediction,
-    ParseOptions, ParseSource, ParserChoice, PipelineConfig, ProjectMode, ProjectOptions,
-    RefineOptions, RefineOverrides, ReportFormat, RigFormat, RigImportOptions, RigInput,
-    Ros2ImportOptions, RunOptions, SceneSource, StereoCalibOptions, SynthOptions,
-    ThreeDPeopleCamera, WorldCalibOptions,
+    DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice, FloorHint, ImportCloudOptions,
+    IntrinsicsCalibOptions, NamedPrediction, ParseOptions, ParseSource, ParserChoice,
+    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
+    RigFormat, RigImportOptions, RigInput, Ros2ImportOptions, RunOptions, SceneSource,
+    StereoCalibOptions, SynthOptions, ThreeDPeopleCamera, WorldCalibOptions,
 };
 use bodyseg_refine::Steps;
 use bodyseg_synth::ChessboardConfig;
@@ -38,6 +38,7 @@ Examples:
   bodyseg eval --pred refined.ply --gt truth.ply
   bodyseg rig import --from iai_kinect2 calib/cam0 calib/cam1 --out rig.toml
   bodyseg import ros2 session.mcap --out rec
+  bodyseg import cloud kinect.pcd --out rec
   bodyseg run --recording rec --out run1
   bodyseg convert --input datasets/recs --format recording --out converted --shard 0/4
   bodyseg calibrate intrinsics --images calib/cam0/ir --board 9x6 --square-m 0.04 --out cam0_ir.toml
@@ -121,7 +122,8 @@ pub enum Command {
     /// be loaded, and the rule that found each
     #[command(long_about = VERSION_LONG_ABOUT)]
     Version(VersionArgs),
-    /// Import recordings of other tools into a bodyseg recording: ROS 2 bags
+    /// Import other tools' data as a bodyseg recording: ROS 2 bags, organised point
+    /// clouds
     #[command(subcommand)]
     Import(ImportCommand),
 }
@@ -148,6 +150,11 @@ pub enum ImportCommand {
     /// a recording: rig.toml, depth and colour images per camera
     #[command(long_about = IMPORT_ROS2_LONG_ABOUT, after_help = IMPORT_ROS2_EXAMPLES)]
     Ros2(ImportRos2Args),
+    /// Organised point clouds of one depth camera (PCD, organised PLY) → a one-camera
+    /// recording: depth and colour images, intrinsics fitted from the grid, world frame
+    /// from the floor
+    #[command(long_about = IMPORT_CLOUD_LONG_ABOUT, after_help = IMPORT_CLOUD_EXAMPLES)]
+    Cloud(ImportCloudArgs),
 }
 
 const IMPORT_ROS2_LONG_ABOUT: &str = "\
@@ -580,14 +587,33 @@ head-height maxima with a body column below them, in the spirit of Munaro et al.
 ground-based people detector) or `file` (read REC/boxes/<FRAME>.json, e.g. from an external \
 tracker).
 
-Reads: a cloud (--cloud: PLY as written by `bodyseg project`, or PCL's PCD: ascii, binary \
-or binary_compressed, organised or not, fields x y z [rgb|rgba] [label]; world frame, \
-metres, z up, floor at z = 0 for labels mode), or one frame of a recording (--recording, \
---frame: projected as `bodyseg project` does). Writes: the boxes (--out, JSON: {\"frame\", \
-\"boxes\": [{\"id\", \"center_m\", \"half_extents_m\", \"yaw_rad\"}]}), beside it the exact \
-configuration used (--out b.json writes b.config.resolved.toml) and, with --preview, a top \
-view of the cloud (class colours) with the boxes drawn. Nothing is written when the \
-command fails.
+Reads: a cloud (--cloud: PLY, as `bodyseg project` writes it or any other tool's, or PCL's \
+PCD: ascii, binary or binary_compressed, organised or not; x y z in metres, colours \
+optional, a `label` field of bodyseg's class ids for labels mode; geometry mode needs no \
+labels and ignores a label field of other ids, e.g. PCL's segment ids, with a note), or \
+one frame of a recording (--recording, --frame: projected as `bodyseg project` does, in \
+the world frame of its rig.toml).
+
+Up and the floor: a cloud file may be in any frame, e.g. a camera's (x right, y down, z \
+forward). Its floor is found: the largest plane that the points stand on (RANSAC over all \
+orientations; walls and ceilings lose because nothing stands on them). When the floor is \
+level in the cloud's own frame (within boxes.max_ground_tilt_deg of its z), the cloud is \
+taken as it is and the boxes are in its frame. Otherwise the cloud is moved into the \
+floor's frame (z up along the floor's normal, the floor at z = 0, x along the cloud's x), \
+the boxes are found and written in that frame, and the JSON records the transform as \
+\"world_from_cloud\" (rotation, translation_m: p_world = rotation * p_cloud + translation); \
+`bodyseg refine` applies it to the cloud. --ground a,b,c,d gives the floor instead (the \
+plane a*x + b*y + c*z + d = 0 in the cloud's frame, metres, as PCL's people detector takes \
+it), --up AXIS the cloud axis that points up (within 45 degrees; only floors along it are \
+looked for); either makes the boxes be written in the floor's frame. A warning says when \
+no floor or no person is found, with the likely cause (a camera view with no floor in it, \
+a cloud in millimetres).
+
+Writes: the boxes (--out, JSON: {\"frame\", \"boxes\": [{\"id\", \"center_m\", \
+\"half_extents_m\", \"yaw_rad\"}], \"world_from_cloud\" when not the cloud's own frame}), \
+beside it the exact configuration used (--out b.json writes b.config.resolved.toml) and, \
+with --preview, a top view of the cloud in the boxes' frame (class colours) with the boxes \
+drawn. Nothing is written when the command fails.
 
 Configuration: built-in defaults (configs/default.toml, section [boxes]; [backproject] and \
 [project] for a recording) < --config FILE (repeatable) < --set SECTION.KEY=VALUE \
@@ -598,8 +624,11 @@ Examples:
   # Boxes of a projected frame, from its body labels, with a preview:
   bodyseg project --recording rec --frame 000012 --out frame.ply
   bodyseg boxes --cloud frame.ply --out frame_boxes.json --preview frame_top.png
-  # A PCL cloud without labels:
-  bodyseg boxes --cloud scene.pcd --mode geometry --out boxes.json
+  # A PCL cloud without labels, in any frame (a Kinect's: its floor is found):
+  bodyseg boxes --cloud scene.pcd --mode geometry --out boxes.json --preview top.png
+  # ... with the floor given, as PCL's ground coefficients, or the up axis:
+  bodyseg boxes --cloud scene.pcd --mode geometry --ground 0,-1,0,1.1 --out boxes.json
+  bodyseg boxes --cloud scene.pcd --mode geometry --up -y --out boxes.json
   # Project and find boxes in one go; or read the recording's own boxes/000012.json:
   bodyseg boxes --recording rec --frame 000012 --out frame_boxes.json
   bodyseg boxes --recording rec --frame 000012 --mode file --out frame_boxes.json";
@@ -636,6 +665,67 @@ pub struct BoxesArgs {
     /// Also write a top view of the cloud with the boxes drawn (PNG)
     #[arg(long, value_name = "TOP.png")]
     pub preview: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub floor: FloorArgs,
+}
+
+/// `--ground` and `--up`: the floor of a cloud, when the user knows it.
+#[derive(Debug, Args)]
+pub struct FloorArgs {
+    /// The floor of the cloud: the plane a*x + b*y + c*z + d = 0 in the cloud's frame,
+    /// metres (PCL's ground coefficients) [default: found]
+    #[arg(long, value_name = "A,B,C,D", value_parser = parse_plane, allow_hyphen_values = true)]
+    pub ground: Option<[f32; 4]>,
+
+    /// The axis of the cloud's frame that points up, roughly (within 45 degrees): x, y,
+    /// z, -x, -y or -z (a camera's optical frame: -y) [default: found]
+    #[arg(long, value_name = "AXIS", value_parser = parse_up, allow_hyphen_values = true)]
+    pub up: Option<bodyseg_pipeline::Up>,
+}
+
+impl FloorArgs {
+    /// The pipeline's floor hint.
+    pub fn hint(&self) -> FloorHint {
+        FloorHint {
+            ground: self.ground,
+            up: self.up,
+        }
+    }
+
+    /// Whether either flag is given.
+    fn given(&self) -> bool {
+        self.ground.is_some() || self.up.is_some()
+    }
+}
+
+/// `--ground a,b,c,d`: four finite numbers, (a, b, c) not all zero.
+fn parse_plane(text: &str) -> std::result::Result<[f32; 4], String> {
+    let values: Vec<f32> = text
+        .split(',')
+        .map(|v| {
+            v.trim()
+                .parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("'{}' is not a finite number", v.trim()))
+        })
+        .collect::<std::result::Result<_, _>>()?;
+    let [a, b, c, d] = values[..] else {
+        return Err(format!(
+            "expected four numbers a,b,c,d (the plane a*x + b*y + c*z + d = 0), got {}",
+            values.len()
+        ));
+    };
+    if a == 0.0 && b == 0.0 && c == 0.0 {
+        return Err("a, b and c are all 0: no plane".into());
+    }
+    Ok([a, b, c, d])
+}
+
+/// `--up AXIS`.
+fn parse_up(text: &str) -> std::result::Result<bodyseg_pipeline::Up, String> {
+    text.parse()
 }
 
 /// `bodyseg boxes --mode`.
@@ -663,6 +753,12 @@ impl BoxesArgs {
 
     /// The pipeline's options for `boxes_file`.
     pub fn options(&self) -> Result<bodyseg_pipeline::BoxesOptions> {
+        if self.floor.given() && self.cloud.is_none() {
+            bail!(
+                "--ground and --up apply to --cloud: a recording's frame is the world frame of \
+                 its rig.toml"
+            );
+        }
         let input = match (&self.cloud, &self.recording, &self.frame) {
             (Some(cloud), _, _) => bodyseg_pipeline::BoxesInput::Cloud(cloud.clone()),
             (None, Some(recording), Some(frame)) => bodyseg_pipeline::BoxesInput::Recording {
@@ -677,6 +773,7 @@ impl BoxesArgs {
             out: self.out.clone(),
             preview: self.preview.clone(),
             write_resolved_config: true,
+            floor: self.floor.hint(),
         })
     }
 }
@@ -892,6 +989,68 @@ fn split_named(value: &str) -> (Option<String>, PathBuf) {
             (Some(name.to_string()), PathBuf::from(path))
         }
         _ => (None, PathBuf::from(value)),
+    }
+}
+
+
+const IMPORT_CLOUD_LONG_ABOUT: &str = "\
+Turn organised point clouds of one depth camera into a bodyseg recording (shared/FORMATS.md) \
+that `bodyseg run` reads: one frame per cloud, in the order given (a folder: its .pcd and \
+.ply files sorted by name), named 000000, 000001, ...
+
+Reads: organised clouds in the camera's own frame (x right, y down, z forward, metres), as \
+PCL's grabbers and ROS's depth_image_proc write them: a PCD with WIDTH x HEIGHT (HEIGHT > 1) \
+and fields x y z [rgb|rgba], or a PLY with obj_info num_cols / num_rows (and PCL's \
+range_grid). NaN points are cells without depth. All clouds come from one static camera \
+and have the same grid.
+
+Writes into OUT: cam0/depth/<frame>.png (z in millimetres, 16-bit, 0 = no point), \
+cam0/color/<frame>.png (the points' colours; grey without colours) and rig.toml: one \
+camera whose depth and colour sensor are the cloud's grid (color_from_depth identity, no \
+distortion), with fx, fy, cx, cy fitted by least squares of u = fx*x/z + cx, \
+v = fy*y/z + cy over every valid point (the RMS residual is printed; a cloud that is no \
+pinhole grid, e.g. one moved into another frame, is refused), and world_from_depth from \
+the floor: the largest plane that the points stand on, found as `bodyseg boxes` finds it \
+(or --ground, --up), at z = 0 with z up. Nothing is written when an input is refused; an \
+existing OUT is only replaced with --force.
+
+Then: `bodyseg run --recording OUT --out RUN --set boxes.mode=geometry` finds every \
+person without labels (a parser labels the body parts for the refinement).";
+
+const IMPORT_CLOUD_EXAMPLES: &str = "\
+Examples:
+  bodyseg import cloud five_people.pcd --out rec
+  bodyseg import cloud grabber_frames/ --out rec --up -y
+  bodyseg run --recording rec --out run1 --set boxes.mode=geometry";
+
+/// `bodyseg import cloud`.
+#[derive(Debug, Args)]
+pub struct ImportCloudArgs {
+    /// Organised clouds (.pcd, .ply), or folders of them, in frame order
+    #[arg(required = true, value_name = "CLOUD")]
+    pub inputs: Vec<PathBuf>,
+
+    /// The recording folder to write
+    #[arg(long, value_name = "REC")]
+    pub out: PathBuf,
+
+    #[command(flatten)]
+    pub floor: FloorArgs,
+
+    /// Replace OUT if it exists
+    #[arg(long)]
+    pub force: bool,
+}
+
+impl ImportCloudArgs {
+    /// The pipeline's options for `import_cloud`.
+    pub fn options(&self) -> ImportCloudOptions {
+        ImportCloudOptions {
+            inputs: self.inputs.clone(),
+            out: self.out.clone(),
+            floor: self.floor.hint(),
+            force: self.force,
+        }
     }
 }
 

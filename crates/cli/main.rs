@@ -132,6 +132,14 @@ fn run(cli: &Cli) -> Result<Outcome> {
         Command::Refine(args) => refine(args)?,
         Command::Eval(args) => eval(args)?,
         Command::Rig(cmd) => rig(cmd)?,
+        Command::Import(ImportCommand::Ros2(args)) => {
+            let (stages, failed) = import_ros2(args, cli.quiet)?;
+            if failed {
+                outcome = Outcome::SomeFramesFailed;
+            }
+            stages
+        }
+        Command::Import(ImportCommand::Cloud(args)) => import_cloud(args)?,
         Command::Run(args) => {
             let (stages, failed) = run_recording_command(args, cli.quiet)?;
             if failed {
@@ -148,13 +156,6 @@ fn run(cli: &Cli) -> Result<Outcome> {
         }
         Command::Calibrate(cmd) => calibrate(cmd, cli.quiet)?,
         Command::Version(args) => version(args, cli.verbose)?,
-        Command::Import(ImportCommand::Ros2(args)) => {
-            let (stages, failed) = import_ros2(args, cli.quiet)?;
-            if failed {
-                outcome = Outcome::SomeFramesFailed;
-            }
-            stages
-        }
     };
     if !cli.quiet {
         for s in stages {
@@ -273,6 +274,17 @@ fn project(args: &ProjectArgs) -> Result<Vec<Stage>> {
 
 fn boxes(args: &args::BoxesArgs) -> Result<Vec<Stage>> {
     let summary = bodyseg_pipeline::boxes_file(&args.options()?)?;
+    for note in &summary.notes {
+        eprintln!("note: {note}");
+    }
+    Ok(summary.stages)
+}
+
+fn import_cloud(args: &args::ImportCloudArgs) -> Result<Vec<Stage>> {
+    let summary = bodyseg_pipeline::import_cloud(&args.options())?;
+    for note in &summary.notes {
+        eprintln!("note: {note}");
+    }
     Ok(summary.stages)
 }
 

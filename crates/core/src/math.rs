@@ -59,6 +59,47 @@ pub fn near_chroma_bins(bin: usize) -> impl Iterator<Item = usize> {
     near(r).flat_map(move |i| near(g).map(move |j| i * CHROMA_BINS + j))
 }
 
+/// A rigid transform `p_a = rotation · p_b + translation_m`, named `a_from_b` where it is
+/// stored (`world_from_cloud`). Row-major rotation (orthonormal, determinant +1), metres;
+/// f64, so that a rotation written out and read back stays orthonormal to 1e-12.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RigidTransform {
+    /// Rotation matrix, row-major.
+    pub rotation: [[f64; 3]; 3],
+    /// Translation, metres.
+    pub translation_m: [f64; 3],
+}
+
+impl RigidTransform {
+    /// The identity (frame a = frame b).
+    pub const IDENTITY: RigidTransform = RigidTransform {
+        rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        translation_m: [0.0; 3],
+    };
+
+    /// `rotation · p + translation_m`, computed in f64.
+    #[inline]
+    pub fn apply(&self, p: Vec3) -> Vec3 {
+        let r = &self.rotation;
+        let t = self.translation_m;
+        let p = p.map(f64::from);
+        std::array::from_fn(|i| (r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2] + t[i]) as f32)
+    }
+
+    /// The inverse transform (`b_from_a` of an `a_from_b`).
+    pub fn inverse(&self) -> RigidTransform {
+        let r = &self.rotation;
+        let t = self.translation_m;
+        let rotation: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| r[j][i]));
+        let translation_m =
+            std::array::from_fn(|i| -(0..3).map(|j| rotation[i][j] * t[j]).sum::<f64>());
+        RigidTransform {
+            rotation,
+            translation_m,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -74,5 +115,18 @@ mod tests {
         assert_eq!(corner, vec![0, 1, CHROMA_BINS, CHROMA_BINS + 1]);
         assert_eq!(near_chroma_bins(CHROMA_BINS + 1).count(), 9);
         assert!((srgb_to_linear(255) - 1.0).abs() < 1e-6 && srgb_to_linear(0) == 0.0);
+    }
+
+    #[test]
+    fn a_rigid_transform_and_its_inverse_cancel() {
+        // 90° about z, then 1 m along x.
+        let t = RigidTransform {
+            rotation: [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+            translation_m: [1.0, 0.0, 0.0],
+        };
+        assert_eq!(t.apply([1.0, 0.0, 2.0]), [1.0, 1.0, 2.0]);
+        let back = t.inverse().apply(t.apply([0.3, -0.7, 1.1]));
+        assert!(dist(back, [0.3, -0.7, 1.1]) < 1e-6, "{back:?}");
+        assert_eq!(RigidTransform::IDENTITY.apply([0.5; 3]), [0.5; 3]);
     }
 }

@@ -1,6 +1,6 @@
 //! Person boxes: oriented boxes in the world frame around each person (ALGORITHM.md §4).
 
-use crate::math::Vec3;
+use crate::math::{RigidTransform, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// An oriented box around one person, world frame (z up).
@@ -89,6 +89,12 @@ pub struct PersonBoxes {
     pub frame: String,
     /// One box per person.
     pub boxes: Vec<PersonBox>,
+    /// Set when the boxes were found in a cloud whose own frame is not z up (a camera's
+    /// frame): the transform from the cloud's frame into the world frame the boxes are in
+    /// (z up, floor at z = 0), found from the floor. `None` (and absent from the JSON):
+    /// the cloud's frame is the world frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub world_from_cloud: Option<RigidTransform>,
 }
 
 #[cfg(test)]

@@ -197,6 +197,31 @@ pub enum IoError {
         /// The file.
         path: PathBuf,
     },
+    /// A cloud's `label` field holds a value that is no bodyseg class id (PCL's segment
+    /// ids): where labels are needed, the cloud is refused.
+    #[error(
+        "{}: {element} {index}: label is {value}, not a bodyseg class id (0..=6, 255 = unknown): \
+         the label field holds other ids (PCL's segment ids?); relabel the cloud with bodyseg's \
+         classes, or find person boxes without labels (bodyseg boxes --mode geometry), which \
+         ignores the field",
+        .path.display()
+    )]
+    ForeignLabels {
+        /// `point` (PCD) or `vertex` (PLY).
+        element: &'static str,
+        /// 0-based index of the first such point.
+        index: usize,
+        /// Its label, as text.
+        value: String,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A cloud file's extension is neither `.ply` nor `.pcd`.
+    #[error("{}: unknown cloud format: give a .ply or .pcd file", .path.display())]
+    UnknownCloudFormat {
+        /// The file.
+        path: PathBuf,
+    },
     /// A cloud handed to a writer is inconsistent (array lengths differ, non-finite
     /// coordinate); nothing was written.
     #[error("{}: refusing to write an invalid cloud: {cause}", .path.display())]

@@ -5,6 +5,9 @@
 //! [`LabeledCloud`](bodyseg_core::LabeledCloud) ⇄ PLY ([`read_ply`], [`write_ply`]) and
 //! [`PersonBoxes`](bodyseg_core::PersonBoxes) ⇄ JSON ([`read_boxes`], [`write_boxes`]).
 //! PCL's `.pcd` files (ascii, binary, binary_compressed) read into a cloud ([`read_pcd`]).
+//! Either read as a [`CloudFile`] ([`read_cloud_file`]) leaves the `label` field's meaning
+//! to the caller (absent, bodyseg's class ids, or foreign ids such as PCL's segments) and
+//! keeps an organised cloud's grid.
 //! A recording's images: depth PNGs ⇄ [`DepthImage`] ([`read_depth_png`],
 //! [`write_depth_png`]) and label PNGs ⇄ [`LabelImage`](bodyseg_core::LabelImage)
 //! ([`read_label_png`], [`write_label_png`]); colour PNG/JPEG → [`RgbImage`](bodyseg_core::RgbImage)
@@ -39,6 +42,7 @@
 
 mod atomic;
 mod boxes;
+mod cloud_file;
 mod error;
 mod folder;
 mod image;
@@ -47,6 +51,7 @@ mod lock;
 mod mat;
 mod pcd;
 mod ply;
+mod read_cloud;
 mod text;
 
 pub use atomic::{
@@ -54,6 +59,7 @@ pub use atomic::{
     write_bytes_atomic,
 };
 pub use boxes::{parse_boxes, read_boxes, write_boxes, write_boxes_with};
+pub use cloud_file::{CloudFile, CloudGrid, FileLabels};
 pub use error::IoError;
 pub use folder::{
     create_folder, discard_folder, image_files, publish_folder, require_folder, staging_folder,
@@ -65,6 +71,10 @@ pub use image::{
 pub use listing::{FolderEntry, list_folder};
 pub use lock::{FolderLock, LockError, lock_folder};
 pub use mat::{MatMatrix, read_mat_matrix, read_mat_variable_names};
-pub use pcd::{parse_pcd, read_pcd};
-pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};
+pub use pcd::{parse_pcd, parse_pcd_file, read_pcd};
+pub use ply::{
+    PlyColors, PlyFormat, PlyWriteOptions, parse_ply, parse_ply_file, ply_bytes, read_ply,
+    read_ply_file, write_ply,
+};
+pub use read_cloud::read_cloud_file;
 pub use text::{first_existing_file, read_bytes, read_text};

@@ -1,7 +1,7 @@
 //! PCL's point cloud files (`.pcd`, format version 0.7; 0.6 and 0.5 headers read too):
 //! `ascii`, `binary` and `binary_compressed` (LZF) data, organised or not.
 
-use crate::IoError;
+use crate::{CloudFile, CloudGrid, FileLabels, IoError};
 use bodyseg_core::{Label, LabeledCloud, PointOrigin};
 use std::path::Path;
 
@@ -34,11 +34,25 @@ struct Field {
 struct Header {
     fields: Vec<Field>,
     points: usize,
+    /// `WIDTH` and `HEIGHT` (1 when absent).
+    width: u64,
+    height: u64,
     data: String,
     /// Byte offset of the data (after the `DATA` line).
     data_start: usize,
     /// Lines in the header (for ASCII line numbers).
     lines: usize,
+}
+
+/// Parses a point cloud from the bytes of a PCD file whose labels, if any, must be
+/// bodyseg's class ids: [`parse_pcd_file`], then
+/// [`CloudFile::into_class_labels`](crate::CloudFile::into_class_labels). A cloud without
+/// a `label` field reads with every label unknown.
+///
+/// # Errors
+/// As [`parse_pcd_file`]; [`IoError::ForeignLabels`] for a label outside 0..=6 and 255.
+pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, IoError> {
+    parse_pcd_file(bytes, path_for_errors)?.into_class_labels("point", path_for_errors)
 }
 
 /// Parses a point cloud from the bytes of a PCD file; `path_for_errors` only names the
@@ -47,17 +61,19 @@ struct Header {
 /// Accepted: `DATA ascii`, `binary` and `binary_compressed` (PCL's LZF with the
 /// column-major layout); organised (`HEIGHT > 1`) and unorganised clouds; fields of any
 /// `SIZE`/`TYPE` PCL writes (`F` 4 or 8, `I` and `U` 1, 2, 4 or 8) and `COUNT`s, padding
-/// fields (`_`) included. Read into a [`LabeledCloud`]:
+/// fields (`_`) included. Read into a [`CloudFile`]:
 ///
 /// | field | required | stored as |
 /// |---|---|---|
 /// | `x`, `y`, `z` | yes | [`LabeledCloud::positions_m`] (metres, the file's frame) |
 /// | `rgb` or `rgba` | no | [`LabeledCloud::colors`]: the packed `0x00RRGGBB` bits, whether stored as `F` (PCL's float-packed rgb) or `U` |
-/// | `label` | no (absent: unknown) | [`LabeledCloud::labels`]: 0..=6, or 255 = unknown |
+/// | `label` | no | [`LabeledCloud::labels`] when every value is a class id 0..=6 or 255 (unknown): [`FileLabels::Classes`]; absent: all unknown, [`FileLabels::Absent`]; any other value (PCL's segment ids): all unknown, [`FileLabels::Foreign`] |
 ///
 /// Points with a NaN or infinite coordinate (PCL's invalid points of organised clouds)
 /// are skipped. A point's origin is camera 0 and its index in the file (row-major in an
-/// organised cloud, so the pixel), NaN points counted.
+/// organised cloud, so the pixel), NaN points counted. An organised cloud's
+/// [`CloudFile::grid`] holds `WIDTH`, `HEIGHT` and every point's colour, NaN points
+/// included.
 ///
 /// # Errors
 /// [`IoError::PcdHeader`] for a header line that is not understood or a missing one
@@ -65,9 +81,8 @@ struct Header {
 /// field; [`IoError::PcdDataKind`] for an unknown `DATA` kind;
 /// [`IoError::PcdPointCount`] when `WIDTH × HEIGHT ≠ POINTS`; [`IoError::PcdTruncated`]
 /// when the data holds fewer points than declared or compressed data is corrupt;
-/// [`IoError::BadValue`] for a label outside 0..=6 and 255 or an ASCII token that is not
-/// a number.
-pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, IoError> {
+/// [`IoError::BadValue`] for an ASCII token that is not a number.
+pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile, IoError> {
     let path = path_for_errors;
     let header = parse_header(bytes, path)?;
     let find = |name: &str| header.fields.iter().find(|f| f.name == name);
@@ -87,27 +102,30 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
         colors: frgb.map(|_| Vec::new()),
         ..Default::default()
     };
-    let mut push = |index: usize,
-                    xyz: [f64; 3],
-                    rgb: Option<u32>,
-                    label: Option<f64>|
-     -> Result<(), IoError> {
+    // An organised cloud keeps every cell's colour (NaN points included).
+    let organised = match (u32::try_from(header.width), u32::try_from(header.height)) {
+        (Ok(w), Ok(h)) if h > 1 => Some((w, h)),
+        _ => None,
+    };
+    let mut grid_colors: Option<Vec<[u8; 3]>> = organised.and(frgb).map(|_| Vec::new());
+    let mut foreign: Option<(usize, String)> = None;
+    let mut push = |index: usize, xyz: [f64; 3], rgb: Option<u32>, label: Option<f64>| {
+        let rgb = rgb.map(|c| [(c >> 16) as u8, (c >> 8) as u8, c as u8]);
+        if let (Some(all), Some(c)) = (grid_colors.as_mut(), rgb) {
+            all.push(c);
+        }
         if !xyz.iter().all(|v| v.is_finite()) {
-            return Ok(());
+            return;
         }
         let label = match label {
             None => Label::UNKNOWN,
             Some(v) => (v.fract() == 0.0 && (0.0..=255.0).contains(&v))
                 .then(|| Label::from_id(v as u8))
                 .flatten()
-                .ok_or_else(|| IoError::BadValue {
-                    element: "point".into(),
-                    index,
-                    property: "label".into(),
-                    value: v.to_string(),
-                    expected: "a class id 0..=6 or 255 (unknown)",
-                    path: path.to_path_buf(),
-                })?,
+                .unwrap_or_else(|| {
+                    foreign.get_or_insert_with(|| (index, v.to_string()));
+                    Label::UNKNOWN
+                }),
         };
         cloud
             .positions_m
@@ -118,9 +136,8 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
             pixel: index as u32,
         });
         if let (Some(colors), Some(c)) = (cloud.colors.as_mut(), rgb) {
-            colors.push([(c >> 16) as u8, (c >> 8) as u8, c as u8]);
+            colors.push(c);
         }
-        Ok(())
     };
     match header.data.as_str() {
         "ascii" => {
@@ -172,7 +189,7 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
                         None => None,
                     };
                 let label = flabel.map(value).transpose()?;
-                push(index, xyz, rgb, label)?;
+                push(index, xyz, rgb, label);
                 index += 1;
             }
             if index < n {
@@ -204,7 +221,7 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
                 ];
                 let rgb = frgb.map(|f| packed(at(f)));
                 let label = flabel.map(|f| scalar(at(f), f.kind));
-                push(index, xyz, rgb, label)?;
+                push(index, xyz, rgb, label);
             }
         }
         "binary_compressed" => {
@@ -240,7 +257,7 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
                 let label = clabel
                     .zip(flabel)
                     .map(|(c, f)| scalar(get(c, index, f.size), f.kind));
-                push(index, xyz, rgb, label)?;
+                push(index, xyz, rgb, label);
             }
         }
         other => {
@@ -250,7 +267,25 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
             });
         }
     }
-    Ok(cloud)
+    let labels = match (flabel, foreign) {
+        (None, _) => FileLabels::Absent,
+        (Some(_), None) => FileLabels::Classes,
+        (Some(_), Some((index, value))) => {
+            // Not our ids: none of them is a class (a segment id 3 is no upper arm).
+            cloud.labels.fill(Label::UNKNOWN);
+            FileLabels::Foreign { index, value }
+        }
+    };
+    let grid = organised.map(|(width, height)| CloudGrid {
+        width,
+        height,
+        colors: grid_colors,
+    });
+    Ok(CloudFile {
+        cloud,
+        labels,
+        grid,
+    })
 }
 
 /// An ASCII `rgb`/`rgba` token: PCL writes float-packed colours as floats (whose bits
@@ -526,6 +561,8 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError> {
                 return Ok(Header {
                     fields,
                     points,
+                    width,
+                    height,
                     data: kind,
                     data_start: pos,
                     lines: line_no,

@@ -21,6 +21,7 @@ fn sample() -> PersonBoxes {
                 yaw_rad: -std::f32::consts::PI,
             },
         ],
+        world_from_cloud: None,
     }
 }
 

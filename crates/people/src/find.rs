@@ -14,7 +14,7 @@
 mod candidates;
 mod color;
 mod geometry;
-mod ground;
+pub(crate) mod ground;
 mod heads;
 mod labels;
 mod split;
@@ -43,5 +43,6 @@ pub fn find_boxes(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Result<PersonBoxes
     Ok(PersonBoxes {
         frame: String::new(),
         boxes,
+        world_from_cloud: None,
     })
 }

@@ -53,12 +53,14 @@
 mod config;
 mod find;
 mod fit;
+pub mod floor;
 mod matching;
 mod voxel;
 
 pub use config::{BoxMode, BoxesConfig, PeopleError};
 pub use find::find_boxes;
 pub use fit::box_iou;
+pub use floor::{Floor, FloorHint, FloorHintError, FloorSource, Up, find_floor};
 pub use matching::{FrameMatch, MATCH_IOU, match_boxes};
 
 #[doc(no_inline)]

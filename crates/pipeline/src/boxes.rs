@@ -1,21 +1,31 @@
-//! `bodyseg boxes`: a cloud (PLY or PCD) or a recording frame → person boxes JSON
-//! (+ a top-view preview PNG).
+//! `bodyseg boxes`: a cloud (PLY or PCD, in any frame) or a recording frame → person
+//! boxes JSON (+ a top-view preview PNG).
+//!
+//! A cloud given as a file is taken in its own frame when that is z up (its floor, found
+//! in any orientation, is level: bodyseg's own clouds, whose boxes stay exactly what they
+//! were); otherwise (a camera's frame) it is moved into the frame of its floor (z up, the
+//! floor at z = 0) before boxes are found, the boxes are written in that frame and the
+//! JSON records the transform as `world_from_cloud`. A recording frame is in the world
+//! frame of its rig.toml (z up by definition): no floor search.
 
 use crate::config::PipelineConfig;
+use crate::floor::{cloud_frame, likely_cause, transformed};
 use crate::frame::read_and_project;
-use crate::outputs::{check_output_file, read_cloud, resolved_config_path, write_with_side_file};
+use crate::outputs::{check_output_file, read_cloud_file, resolved_config_path, write_with_side_file};
 use crate::recording::{Recording, check_stem};
 use crate::sanity::{boxes_warnings, cloud_scale_warning, warn_all};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_core::{Class, LabeledCloud, PersonBox, PersonBoxes};
-use bodyseg_people::BoxMode;
+use bodyseg_io::FileLabels;
+use bodyseg_people::{BoxMode, FloorHint};
 use std::path::PathBuf;
 
 /// Where [`boxes_file`] takes its cloud from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum BoxesInput {
-    /// A point cloud file: `.ply` (FORMATS.md) or `.pcd` (PCL; z up, metres).
+    /// A point cloud file: `.ply` or `.pcd` (PCL), metres, in any frame (its floor gives
+    /// up); labels mode needs bodyseg's class ids in it, geometry mode none.
     Cloud(PathBuf),
     /// One frame of a recording: projected as `bodyseg project` does (labels and
     /// geometry modes), or its `boxes/<frame>.json` read (file mode).
@@ -42,6 +52,9 @@ pub struct BoxesOptions {
     /// Also write the resolved configuration beside the output
     /// (`out.ply` → `out.config.resolved.toml`).
     pub write_resolved_config: bool,
+    /// The floor of a cloud given as a file, if the user knows it (`--ground`, `--up`);
+    /// default: found. Not used for a recording frame (its rig gives the world frame).
+    pub floor: FloorHint,
 }
 
 /// What [`boxes_file`] did.
@@ -49,17 +62,25 @@ pub struct BoxesOptions {
 pub struct BoxesSummary {
     /// The boxes written.
     pub boxes: PersonBoxes,
-    /// Per stage (read, project, boxes, write): time and a one-line summary.
+    /// Per stage (read, floor, project, boxes, write): time and a one-line summary.
     pub stages: Vec<Stage>,
+    /// What the user should know that is no error (a label field that is not ours,
+    /// ignored), one line each.
+    pub notes: Vec<String>,
 }
 
 /// Finds (or, in file mode, reads) the person boxes of one cloud or recording frame
 /// ([`bodyseg_people::find_boxes`]) and writes them as boxes JSON (FORMATS.md), with the
-/// resolved configuration beside them and, if asked, a top-view preview PNG.
+/// resolved configuration beside them and, if asked, a top-view preview PNG (in the
+/// boxes' frame). A cloud file in a frame that is not z up is moved into its floor's
+/// frame first (module docs); no floor found, or no person: a warning naming the likely
+/// cause (a camera's view without floor, a cloud in millimetres).
 ///
 /// # Errors
 /// File mode with `--cloud` (file boxes belong to a recording frame); the cloud cannot be
-/// read (unknown extension, malformed PLY or PCD: the error names the file); the frame's
+/// read (unknown extension, malformed PLY or PCD: the error names the file); labels mode
+/// on a cloud without bodyseg's class ids (no `label` field, or another tool's ids: the
+/// message names the fix, `--mode geometry`); `--ground` is not a plane; the frame's
 /// images or boxes file cannot be read; writing fails. Nothing is written unless every
 /// earlier step succeeded.
 pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
@@ -71,6 +92,9 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
     };
     check_output_file(&opts.out, &["json"], input.as_slice())?;
     let mut stages = Vec::new();
+    let mut notes = Vec::new();
+    let mut world_from_cloud = None;
+    let mut floor_found = true;
     let (cloud, frame) = match &opts.input {
         BoxesInput::Cloud(path) => {
             if mode == BoxMode::File {
@@ -79,16 +103,52 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
                      --frame instead of --cloud"
                 );
             }
-            let (cloud, took) = timed(|| read_cloud(path).context("input cloud (--cloud)"))?;
+            let (file, took) = timed(|| read_cloud_file(path).context("input cloud (--cloud)"))?;
             stages.push(Stage::new(
                 "read",
                 took,
                 format!(
                     "{}, {}",
-                    plural(cloud.len(), "point", "points"),
+                    plural(file.cloud.len(), "point", "points"),
                     path.display()
                 ),
             ));
+            let cloud = match (&file.labels, mode) {
+                (FileLabels::Absent, BoxMode::Labels) => bail!(
+                    "{}: the cloud has no 'label' field: labels mode needs bodyseg's class ids \
+                     (0..=6, 255 = unknown); find the boxes without labels with --mode geometry, \
+                     or label the cloud first (bodyseg project)",
+                    path.display()
+                ),
+                (FileLabels::Foreign { .. }, BoxMode::Labels) => {
+                    let element = if is_pcd(path) { "point" } else { "vertex" };
+                    file.into_class_labels(element, path)
+                        .context("labels mode (--mode labels)")?
+                }
+                (FileLabels::Foreign { index, value }, _) => {
+                    notes.push(format!(
+                        "{}: the label field holds ids that are not bodyseg's class ids \
+                         (point {index}: {value}; PCL's segment ids?): ignored, geometry \
+                         mode needs no labels",
+                        path.display()
+                    ));
+                    file.cloud
+                }
+                _ => file.cloud,
+            };
+            let found = cloud_frame(
+                &cloud.positions_m,
+                &opts.floor,
+                cfg.boxes.max_ground_tilt_deg,
+                &path.display().to_string(),
+            )?;
+            stages.push(found.stage);
+            floor_found = found.floor.is_some();
+            world_from_cloud = found.world_from_cloud;
+            let cloud = match &world_from_cloud {
+                Some(t) => transformed(&cloud, t),
+                None => cloud,
+            };
             let stem = path
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -123,15 +183,27 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
     if boxes.frame.is_empty() {
         boxes.frame = frame;
     }
+    boxes.world_from_cloud = world_from_cloud;
     if let Some(cloud) = &cloud {
         let what = match &opts.input {
             BoxesInput::Cloud(path) => {
                 warn_all(cloud_scale_warning(cloud, &path.display().to_string()));
                 path.display().to_string()
             }
-            BoxesInput::Recording { frame, .. } => format!("frame {frame}"),
+            BoxesInput::Recording { recording, frame } => {
+                format!("{} frame {frame}", recording.display())
+            }
         };
-        warn_all(boxes_warnings(&boxes.boxes, cloud, &what));
+        if boxes.boxes.is_empty() && mode != BoxMode::File {
+            // The cause is more useful than the bare fact: say what is likely wrong.
+            tracing::warn!(
+                "{what}: no person found (mode {}); likely cause: {}",
+                mode.name(),
+                likely_cause(&cloud.positions_m, floor_found)
+            );
+        } else {
+            warn_all(boxes_warnings(&boxes.boxes, cloud, &what));
+        }
     }
     stages.push(Stage::new(
         "boxes",
@@ -165,7 +237,17 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
         written.push_str(&format!(", {}", path.display()));
     }
     stages.push(Stage::new("write", took, written));
-    Ok(BoxesSummary { boxes, stages })
+    Ok(BoxesSummary {
+        boxes,
+        stages,
+        notes,
+    })
+}
+
+/// Whether `path` names a PCD file (by extension, any case).
+fn is_pcd(path: &std::path::Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pcd"))
 }
 
 /// Pixels per metre of the preview.

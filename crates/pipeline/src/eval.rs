@@ -1,6 +1,7 @@
 //! `bodyseg eval`: labelled PLY predictions + ground-truth PLY → metrics report; and the
 //! merge of shard reports.
 
+use crate::outputs::read_labelled_ply;
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_core::{LabeledCloud, PointOrigin};
@@ -67,13 +68,13 @@ pub fn eval_files(opts: &EvalOptions) -> Result<EvalSummary> {
         }
     }
     let (gt, mut read) =
-        timed(|| bodyseg_io::read_ply(&opts.gt).context("ground-truth cloud (--gt)"))?;
+        timed(|| read_labelled_ply(&opts.gt).context("ground-truth cloud (--gt)"))?;
     let mut report = Report::new();
     let mut matching = std::time::Duration::ZERO;
     let mut points = 0;
     for p in &opts.predictions {
         let (pred, took) = timed(|| {
-            bodyseg_io::read_ply(&p.path)
+            read_labelled_ply(&p.path)
                 .with_context(|| format!("predicted cloud {:?} (--pred)", p.name))
         })?;
         read += took;

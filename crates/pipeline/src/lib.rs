@@ -13,12 +13,13 @@
 //! synth_recording: scene + seed → a synthetic recording with ground truth (RecordingWriter)
 //! parse_file:      recording frame (colour images) → Segmenter → label PNGs + previews
 //! project_file:    recording frame (depth + parsing PNGs) → labelled world-frame PLY
-//! boxes_file:      cloud PLY/PCD or recording frame → bodyseg_people::find_boxes → boxes JSON (+ preview)
+//! boxes_file:      cloud PLY/PCD (any frame: its floor found) or recording frame → bodyseg_people::find_boxes → boxes JSON (+ preview)
 //! refine_file:     cloud PLY + boxes JSON → bodyseg_refine::refine → refined PLY
 //! eval_files:      predicted PLY(s) + ground-truth PLY → Report;  merge_reports: reports → Report
 //! run_recording:   a recording, every frame through every stage → clouds, boxes, label images, report
 //! convert_dataset: recordings or 3DPeople, resumable and sharded → clouds (+ reports)
 //! import_ros2:     a ROS 2 bag (MCAP) → bodyseg_ros2 (scan, plan, decode) → a recording
+//! import_cloud:    organised clouds (PCD, PLY) → a one-camera recording (grid-fitted intrinsics, floor-given world frame)
 //! import_rig, read_rig, describe_rig: calibration files (iai_kinect2, Azure Kinect, ROS, OpenCV;
 //!                  OpenPTrack poses) ⇄ rig.toml
 //! calibrate_*:     chessboard images → intrinsics, colour-from-depth, world poses (feature `opencv`)
@@ -54,7 +55,9 @@ mod config;
 mod convert;
 mod eval;
 mod figure;
+mod floor;
 mod frame;
+mod import_cloud;
 mod import_ros2;
 mod layers;
 mod model;
@@ -78,7 +81,7 @@ pub use batch::{
     Shard,
 };
 pub use bodyseg_calib::{AzureColorResolution, AzureDepthMode, AzureKinectMode, Board};
-pub use bodyseg_people::BoxMode;
+pub use bodyseg_people::{BoxMode, Floor, FloorHint, Up};
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, top_view};
 pub use calibrate::{
@@ -92,6 +95,9 @@ pub use eval::{
     merge_reports, render_report,
 };
 pub use frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
+pub use import_cloud::{
+    GridFit, ImportCloudOptions, ImportCloudSummary, MAX_GRID_RMS_PX, import_cloud,
+};
 pub use import_ros2::{Ros2ImportOptions, Ros2ImportSummary, import_ros2};
 pub use model::{FoundBy, ParserChoice, describe_parser_files};
 pub use outputs::{check_output_file, check_output_folder, write_text};

@@ -193,23 +193,32 @@ pub(crate) fn resolved_config_path(out: &Path) -> PathBuf {
     out.with_file_name(format!("{stem}.config.resolved.toml"))
 }
 
-/// Reads a cloud by its extension: `.pcd` with [`bodyseg_io::read_pcd`], `.ply` with
-/// [`bodyseg_io::read_ply`].
+/// Reads a cloud file by its extension (`.pcd`, `.ply`) as it is: labels of any kind or
+/// none, an organised cloud's grid ([`bodyseg_io::read_cloud_file`]); the caller decides
+/// what the labels must be.
 ///
 /// # Errors
 /// Another extension, or the reader's error (naming the file).
-pub(crate) fn read_cloud(path: &Path) -> Result<LabeledCloud> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    match ext.as_deref() {
-        Some("pcd") => Ok(bodyseg_io::read_pcd(path)?),
-        Some("ply") => Ok(bodyseg_io::read_ply(path)?),
-        _ => bail!(
-            "{}: unknown cloud format: give a .ply or .pcd file",
+pub(crate) fn read_cloud_file(path: &Path) -> Result<bodyseg_io::CloudFile> {
+    Ok(bodyseg_io::read_cloud_file(path)?)
+}
+
+/// Reads a PLY cloud whose labels must be bodyseg's class ids (`refine`, `eval`).
+///
+/// # Errors
+/// The reader's error; a cloud without a `label` field or with another tool's ids
+/// (PCL's segment ids): the message names the fix.
+pub(crate) fn read_labelled_ply(path: &Path) -> Result<LabeledCloud> {
+    let file = bodyseg_io::read_ply_file(path)?;
+    if file.labels == bodyseg_io::FileLabels::Absent {
+        bail!(
+            "{}: the cloud has no 'label' property: this command needs bodyseg's class ids \
+             (0..=6, 255 = unknown); label the cloud first (bodyseg project, or bodyseg run), \
+             or find person boxes without labels (bodyseg boxes --mode geometry)",
             path.display()
-        ),
+        );
     }
+    Ok(file.into_class_labels("vertex", path)?)
 }
 
 /// Binary little-endian PLY, or ASCII when `ascii` (the commands' `--ascii`).
@@ -230,7 +239,7 @@ mod tests {
 
     #[test]
     fn resolved_config_sits_beside_the_output_and_clouds_are_read_by_extension() {
-        assert!(read_cloud(Path::new("x.xyz")).is_err());
+        assert!(read_cloud_file(Path::new("x.xyz")).is_err());
         assert_eq!(
             resolved_config_path(Path::new("out/refined.ply")),
             Path::new("out/refined.config.resolved.toml")

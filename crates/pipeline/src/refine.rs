@@ -1,7 +1,10 @@
 //! `bodyseg refine`: labelled PLY + person boxes JSON → refined labelled PLY.
 
 use crate::config::PipelineConfig;
-use crate::outputs::{check_output_file, ply_options, resolved_config_path, write_with_side_file};
+use crate::floor::transformed;
+use crate::outputs::{
+    check_output_file, ply_options, read_labelled_ply, resolved_config_path, write_with_side_file,
+};
 use crate::sanity::{boxes_warnings, cloud_scale_warning, warn_all};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
@@ -56,7 +59,7 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
         &[("--cloud", &opts.cloud), ("--boxes", &opts.boxes)],
     )?;
     let ((cloud, boxes), read) = timed(|| -> Result<_> {
-        let cloud = bodyseg_io::read_ply(&opts.cloud).context("input cloud (--cloud)")?;
+        let cloud = read_labelled_ply(&opts.cloud).context("input cloud (--cloud)")?;
         let boxes = bodyseg_io::read_boxes(&opts.boxes).context("person boxes (--boxes)")?;
         Ok((cloud, boxes))
     })?;
@@ -72,7 +75,15 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
     tracing::info!(cloud = %opts.cloud.display(), points = cloud.len(), "read cloud");
     let what = opts.cloud.display().to_string();
     warn_all(cloud_scale_warning(&cloud, &what));
-    warn_all(boxes_warnings(&boxes.boxes, &cloud, &what));
+    // Boxes found in the floor's frame of a cloud that is not z up (`boxes --cloud` on a
+    // camera's cloud) are compared with the cloud moved into that frame; the output keeps
+    // the input's positions (only labels change).
+    let in_world = boxes.world_from_cloud.map(|t| transformed(&cloud, &t));
+    warn_all(boxes_warnings(
+        &boxes.boxes,
+        in_world.as_ref().unwrap_or(&cloud),
+        &what,
+    ));
     if cfg.noise == bodyseg_refine::NoiseMode::Probability {
         // A cloud file carries no parser probabilities (FORMATS.md's PLY has labels only).
         tracing::warn!(
@@ -81,8 +92,13 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
     }
 
     let (refined, took) = timed(|| {
-        bodyseg_refine::refine(&cloud, &boxes.boxes, cfg)
-            .with_context(|| format!("{}: cannot refine", opts.cloud.display()))
+        let mut refined =
+            bodyseg_refine::refine(in_world.as_ref().unwrap_or(&cloud), &boxes.boxes, cfg)
+                .with_context(|| format!("{}: cannot refine", opts.cloud.display()))?;
+        if in_world.is_some() {
+            refined.cloud.positions_m.clone_from(&cloud.positions_m);
+        }
+        anyhow::Ok(refined)
     })?;
     let labels_changed = cloud
         .labels

@@ -18,12 +18,13 @@ use std::path::{Path, PathBuf};
 
 /// bodyseg-pipeline's command modules (one per `bodyseg` command), which must not use one
 /// another.
-const PIPELINE_COMMANDS: [&str; 11] = [
+const PIPELINE_COMMANDS: [&str; 12] = [
     "boxes",
     "calibrate",
     "convert",
     "eval",
     "import_ros2",
+    "import_cloud",
     "parse",
     "project",
     "refine",

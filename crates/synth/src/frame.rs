@@ -331,6 +331,7 @@ impl Synth {
             boxes: PersonBoxes {
                 frame: frame_stem(index),
                 boxes: self.true_boxes(t),
+                world_from_cloud: None,
             },
         }
     }

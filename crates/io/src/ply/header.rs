@@ -146,6 +146,9 @@ pub(crate) struct Header {
     /// A comment says the colours are the class palette ([`PALETTE_COMMENT`]), not the
     /// camera's.
     pub(crate) palette_colours: bool,
+    /// `obj_info num_cols W` and `obj_info num_rows H` (PCL's writer, for an organised
+    /// cloud): the grid's columns and rows.
+    pub(crate) grid: (Option<u32>, Option<u32>),
 }
 
 /// What bodyseg's PLY comment says when red, green and blue are the class palette.
@@ -165,6 +168,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
     };
     let mut encoding = None;
     let mut palette_colours = false;
+    let mut grid = (None, None);
     let mut elements: Vec<Element> = Vec::new();
     let mut pos = 0;
     let mut line_no = 0;
@@ -189,7 +193,12 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         let rest: Vec<&str> = words.collect();
         match keyword {
             "comment" => palette_colours |= text.contains(PALETTE_COMMENT),
-            "obj_info" => {}
+            // Other obj_info lines, and numbers that are not a u32, are of no use here.
+            "obj_info" => match rest[..] {
+                ["num_cols", w] => grid.0 = w.parse().ok(),
+                ["num_rows", h] => grid.1 = h.parse().ok(),
+                _ => {}
+            },
             "end_header" => break,
             "format" => {
                 let [fmt, _version] = rest[..] else {
@@ -283,6 +292,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         data_offset: pos,
         lines: line_no,
         palette_colours,
+        grid,
     })
 }
 

@@ -4,5 +4,5 @@ mod header;
 mod read;
 mod write;
 
-pub use read::{parse_ply, read_ply};
+pub use read::{parse_ply, parse_ply_file, read_ply, read_ply_file};
 pub use write::{PlyColors, PlyFormat, PlyWriteOptions, ply_bytes, write_ply};

@@ -2,7 +2,7 @@
 //! line per entry (ASCII). Other elements are walked past, never decoded.
 
 use super::header::{Element, Encoding, PropKind, Scalar, parse_header};
-use crate::IoError;
+use crate::{CloudFile, CloudGrid, FileLabels, IoError};
 use bodyseg_core::{Label, LabeledCloud, PointOrigin};
 use std::path::Path;
 
@@ -22,7 +22,9 @@ const BLUE: usize = 6;
 const CAMERA: usize = 7;
 const PIXEL: usize = 8;
 /// Roles without which a file is rejected.
-const REQUIRED: [usize; 4] = [X, Y, Z, LABEL];
+const REQUIRED: [usize; 3] = [X, Y, Z];
+/// Roles that must be scalars when present (a list there is a malformed file).
+const SCALAR_ONLY: [usize; 4] = [X, Y, Z, LABEL];
 
 /// Reads a labelled point cloud from a PLY file (ASCII or binary, either byte order).
 ///
@@ -39,8 +41,39 @@ pub fn read_ply(path: &Path) -> Result<LabeledCloud, IoError> {
     parse_ply(&bytes, path)
 }
 
-/// Parses a labelled point cloud from the bytes of a PLY file; `path_for_errors` only
-/// names the file in error messages.
+/// Reads a PLY file as it is ([`parse_ply_file`]): labels of any kind or none.
+///
+/// # Errors
+/// [`IoError::Read`] when the file cannot be read, otherwise as [`parse_ply_file`].
+pub fn read_ply_file(path: &Path) -> Result<CloudFile, IoError> {
+    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
+        cause,
+        path: path.to_path_buf(),
+    })?;
+    parse_ply_file(&bytes, path)
+}
+
+/// Parses a labelled point cloud from the bytes of a PLY file whose vertices must carry
+/// bodyseg's class ids: [`parse_ply_file`], refusing a file without `label` or with a
+/// label that is no class id.
+///
+/// # Errors
+/// As [`parse_ply_file`]; [`IoError::MissingProperty`] when `label` is not declared;
+/// [`IoError::ForeignLabels`] for a label outside 0..=6 and 255 (naming the vertex).
+pub fn parse_ply(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, IoError> {
+    let file = parse_ply_file(bytes, path_for_errors)?;
+    if file.labels == FileLabels::Absent {
+        return Err(IoError::MissingProperty {
+            element: "vertex".into(),
+            property: "label".into(),
+            path: path_for_errors.to_path_buf(),
+        });
+    }
+    file.into_class_labels("vertex", path_for_errors)
+}
+
+/// Parses a point cloud from the bytes of a PLY file; `path_for_errors` only names the
+/// file in error messages.
 ///
 /// Accepted: formats `ascii`, `binary_little_endian`, `binary_big_endian`; every PLY
 /// scalar type under either spelling (`uchar`/`uint8`, `float`/`float32`, ...); any
@@ -50,13 +83,19 @@ pub fn read_ply(path: &Path) -> Result<LabeledCloud, IoError> {
 /// | property | required | stored as | accepted values |
 /// |---|---|---|---|
 /// | `x`, `y`, `z` | yes | [`LabeledCloud::positions_m`] (`f32`, metres) | finite in `f32` |
-/// | `label` | yes | [`LabeledCloud::labels`] | 0..=6, or 255 = unknown |
+/// | `label` | no | [`LabeledCloud::labels`]; [`FileLabels::Classes`] | 0..=6, or 255 = unknown; absent: all unknown, [`FileLabels::Absent`]; any other value (another tool's ids): all unknown, [`FileLabels::Foreign`] |
 /// | `red`, `green`, `blue` | no (all three or ignored) | [`LabeledCloud::colors`] (none when a comment says `red green blue = class palette`, as bodyseg writes by default) | integer types 0..=255; float types 0..=1, scaled by 255 and rounded |
 /// | `camera` | no (absent: 0) | [`PointOrigin::camera`] | 0..=255 |
-/// | `pixel` | no (absent: the vertex index) | [`PointOrigin::pixel`] | 0..=2³²−1 |
+/// | `pixel` | no (absent: the vertex index, or its grid cell) | [`PointOrigin::pixel`] | 0..=2³²−1 |
 ///
 /// Integer-valued properties may be stored in any type, floats included, as long as the
 /// value is a whole number in range. Other vertex properties are ignored.
+///
+/// An organised cloud as PCL writes it (`obj_info num_cols W`, `obj_info num_rows H`,
+/// only the valid points as vertices and an element `range_grid` of `W × H` lists that
+/// hold each cell's vertex, if any) reads with [`CloudFile::grid`] set and each vertex's
+/// pixel its cell (unless a `pixel` property says otherwise); so does one with
+/// `num_cols`/`num_rows` and exactly `W × H` vertices in row-major order.
 ///
 /// ASCII data is read one entry per line (blank lines skipped); every entry line must end
 /// with a newline, since a file cut inside its last number would otherwise read as a
@@ -65,11 +104,11 @@ pub fn read_ply(path: &Path) -> Result<LabeledCloud, IoError> {
 /// # Errors
 /// [`IoError::NotPly`], [`IoError::UnterminatedHeader`], [`IoError::UnsupportedFormat`],
 /// [`IoError::BadHeader`] for the header; [`IoError::MissingElement`] and
-/// [`IoError::MissingProperty`] when `vertex`, `x`, `y`, `z` or `label` is not declared;
+/// [`IoError::MissingProperty`] when `vertex`, `x`, `y` or `z` is not declared;
 /// [`IoError::Truncated`] when any element has fewer entries than declared;
 /// [`IoError::BadValue`] for a value outside the table above (naming the vertex);
 /// [`IoError::BadAsciiLine`] for an ASCII line with too few or too many values.
-pub fn parse_ply(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, IoError> {
+pub fn parse_ply_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile, IoError> {
     let path = path_for_errors;
     let header = parse_header(bytes, path)?;
     let vi = header
@@ -84,7 +123,8 @@ pub fn parse_ply(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
     let data = &bytes[header.data_offset..];
     let (before, rest) = header.elements.split_at(vi);
     let (vertex, after) = (&rest[0], &rest[1..]);
-    let mut cloud = match header.encoding {
+    let organised = matches!(header.grid, (Some(w), Some(h)) if w > 0 && h > 0);
+    let (mut vertices, range_grid) = match header.encoding {
         Encoding::Ascii => {
             let mut lines = AsciiLines {
                 data,
@@ -94,20 +134,110 @@ pub fn parse_ply(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
             for e in before {
                 skip_ascii(&mut lines, e, path)?;
             }
-            let cloud = vertices_ascii(&mut lines, vertex, &plan, path)?;
+            let vertices = vertices_ascii(&mut lines, vertex, &plan, path)?;
+            let mut range_grid = None;
             for e in after {
-                skip_ascii(&mut lines, e, path)?;
+                if organised && is_range_grid(e) {
+                    range_grid = Some(range_grid_ascii(&mut lines, e, path)?);
+                } else {
+                    skip_ascii(&mut lines, e, path)?;
+                }
             }
-            cloud
+            (vertices, range_grid)
         }
-        Encoding::BinaryLittleEndian => binary::<false>(data, before, vertex, after, &plan, path)?,
-        Encoding::BinaryBigEndian => binary::<true>(data, before, vertex, after, &plan, path)?,
+        Encoding::BinaryLittleEndian => {
+            binary::<false>(data, before, vertex, after, &plan, organised, path)?
+        }
+        Encoding::BinaryBigEndian => {
+            binary::<true>(data, before, vertex, after, &plan, organised, path)?
+        }
     };
     // bodyseg's own files may colour the points by class: that is no camera colour.
     if header.palette_colours {
-        cloud.colors = None;
+        vertices.cloud.colors = None;
     }
-    Ok(cloud)
+    let labels = match (plan.has(LABEL), vertices.foreign) {
+        (false, _) => FileLabels::Absent,
+        (true, None) => FileLabels::Classes,
+        (true, Some((index, value))) => {
+            // Not our ids: none of them is a class (a segment id 3 is no upper arm).
+            vertices.cloud.labels.fill(Label::UNKNOWN);
+            FileLabels::Foreign { index, value }
+        }
+    };
+    let mut cloud = vertices.cloud;
+    let grid = match header.grid {
+        (Some(width), Some(height)) if organised => {
+            place_on_grid(&mut cloud, width, height, range_grid, plan.has(PIXEL))
+        }
+        _ => None,
+    };
+    Ok(CloudFile {
+        cloud,
+        labels,
+        grid,
+    })
+}
+
+/// PCL's element of an organised cloud's cells: one list property, each cell's vertex.
+fn is_range_grid(e: &Element) -> bool {
+    e.name == "range_grid"
+        && matches!(e.props[..], [ref p] if matches!(p.kind, PropKind::List { .. }))
+}
+
+/// The grid of an organised PLY: each vertex's pixel set to its cell (from `range_grid`,
+/// else the vertex index when there are exactly `width × height` vertices; a `pixel`
+/// property is kept), every cell's colour. `None` when the vertices
+/// cannot be placed: no `range_grid` of `width × height` cells and another vertex count,
+/// or a `range_grid` that names a vertex twice or one that does not exist.
+fn place_on_grid(
+    cloud: &mut LabeledCloud,
+    width: u32,
+    height: u32,
+    range_grid: Option<RangeGrid>,
+    has_pixel: bool,
+) -> Option<CloudGrid> {
+    let cells = (width as usize).checked_mul(height as usize)?;
+    let n = cloud.len();
+    // Bounded by the data: the range grid was decoded from it, the vertices too.
+    let cell_of: Vec<u32> = match range_grid {
+        Some(range) if range.len() == cells => {
+            let mut cell_of = vec![u32::MAX; n];
+            for (cell, v) in range.iter().enumerate() {
+                if let Some(v) = *v {
+                    match cell_of.get_mut(v as usize) {
+                        Some(c) if *c == u32::MAX => *c = cell as u32,
+                        // A vertex out of range, or named twice.
+                        _ => return None,
+                    }
+                }
+            }
+            if cell_of.contains(&u32::MAX) {
+                return None; // a vertex without a cell
+            }
+            cell_of
+        }
+        None if n == cells => (0..n as u32).collect(),
+        // num_cols/num_rows without a range_grid of as many cells, or as many vertices.
+        _ => return None,
+    };
+    if !has_pixel {
+        for (o, &c) in cloud.origins.iter_mut().zip(&cell_of) {
+            o.pixel = c;
+        }
+    }
+    let colors = cloud.colors.as_ref().map(|colors| {
+        let mut all = vec![[0u8; 3]; cells];
+        for (&c, &rgb) in cell_of.iter().zip(colors) {
+            all[c as usize] = rgb;
+        }
+        all
+    });
+    Some(CloudGrid {
+        width,
+        height,
+        colors,
+    })
 }
 
 /// Which vertex property feeds each role, and its type.
@@ -138,7 +268,7 @@ impl Plan {
                     plan.prop[role] = Some(k);
                     plan.ty[role] = s;
                 }
-                PropKind::List { .. } if REQUIRED.contains(&role) => {
+                PropKind::List { .. } if SCALAR_ONLY.contains(&role) => {
                     return Err(IoError::BadHeader {
                         line: p.line,
                         reason: format!("vertex property '{name}' is a list, expected a scalar"),
@@ -181,9 +311,19 @@ impl Plan {
     }
 }
 
+/// PCL's `range_grid` of an organised PLY: each cell's first vertex index, if any.
+type RangeGrid = Vec<Option<u32>>;
+
+/// The vertices read, and the first label that is no class id (vertex, value).
+struct Vertices {
+    cloud: LabeledCloud,
+    foreign: Option<(usize, String)>,
+}
+
 /// Collects validated vertices into a cloud.
 struct Sink<'a> {
     cloud: LabeledCloud,
+    foreign: Option<(usize, String)>,
     plan: &'a Plan,
     path: &'a Path,
 }
@@ -199,8 +339,16 @@ impl<'a> Sink<'a> {
                 colors: has_colors.then(|| Vec::with_capacity(capacity)),
                 origins: Vec::with_capacity(capacity),
             },
+            foreign: None,
             plan,
             path,
+        }
+    }
+
+    fn finish(self) -> Vertices {
+        Vertices {
+            cloud: self.cloud,
+            foreign: self.foreign,
         }
     }
 
@@ -212,9 +360,17 @@ impl<'a> Sink<'a> {
             let role = (X..=Z).find(|&r| !(v[r] as f32).is_finite()).unwrap_or(X);
             return Err(self.bad(index, role, v, "a finite number (within float range)"));
         }
-        let label = whole(v[LABEL], 255.0)
-            .and_then(|id| Label::from_id(id as u8))
-            .ok_or_else(|| self.bad(index, LABEL, v, "0..=6 or 255 (unknown)"))?;
+        let label = if self.plan.has(LABEL) {
+            let class = whole(v[LABEL], 255.0).and_then(|id| Label::from_id(id as u8));
+            class.unwrap_or_else(|| {
+                // Another tool's ids; the caller decides (FileLabels::Foreign).
+                self.foreign
+                    .get_or_insert_with(|| (index, v[LABEL].to_string()));
+                Label::UNKNOWN
+            })
+        } else {
+            Label::UNKNOWN
+        };
         if let Some(colors) = &mut self.cloud.colors {
             let mut rgb = [0u8; 3];
             for (c, role) in rgb.iter_mut().zip([RED, GREEN, BLUE]) {
@@ -329,26 +485,66 @@ fn read_scalar<const BIG_ENDIAN: bool>(b: &[u8], off: usize, ty: Scalar) -> f64 
     }
 }
 
+/// The vertices, and with `organised` the `range_grid` element's cells (each one's first
+/// vertex index, if any) when the file has one after the vertices.
 fn binary<const BIG_ENDIAN: bool>(
     data: &[u8],
     before: &[Element],
     vertex: &Element,
     after: &[Element],
     plan: &Plan,
+    organised: bool,
     path: &Path,
-) -> Result<LabeledCloud, IoError> {
+) -> Result<(Vertices, Option<RangeGrid>), IoError> {
     let mut pos = 0;
     for e in before {
         skip_binary::<BIG_ENDIAN>(data, &mut pos, e, path)?;
     }
-    let cloud = match vertex.fixed_stride() {
+    let vertices = match vertex.fixed_stride() {
         Some(stride) => vertices_fixed::<BIG_ENDIAN>(data, &mut pos, stride, vertex, plan, path)?,
         None => vertices_walked::<BIG_ENDIAN>(data, &mut pos, vertex, plan, path)?,
     };
+    let mut range_grid = None;
     for e in after {
-        skip_binary::<BIG_ENDIAN>(data, &mut pos, e, path)?;
+        if organised && is_range_grid(e) {
+            range_grid = Some(range_grid_binary::<BIG_ENDIAN>(data, &mut pos, e, path)?);
+        } else {
+            skip_binary::<BIG_ENDIAN>(data, &mut pos, e, path)?;
+        }
     }
-    Ok(cloud)
+    Ok((vertices, range_grid))
+}
+
+/// Decodes PCL's `range_grid` (one list per cell) in binary: each cell's first vertex
+/// index, `None` for an empty list (or an index that is no `u32`).
+fn range_grid_binary<const BIG_ENDIAN: bool>(
+    data: &[u8],
+    pos: &mut usize,
+    element: &Element,
+    path: &Path,
+) -> Result<Vec<Option<u32>>, IoError> {
+    let PropKind::List { count, item } = element.props[0].kind else {
+        return Err(truncated(element, 0, path)); // is_range_grid checked the kind
+    };
+    let fits = |p: usize, len: usize| p.checked_add(len).is_some_and(|end| end <= data.len());
+    // Each cell takes at least one byte, which bounds the capacity.
+    let mut out = Vec::with_capacity(element.count.min(data.len() - *pos));
+    for i in 0..element.count {
+        let p = *pos;
+        if !fits(p, count.size()) {
+            return Err(truncated(element, i, path));
+        }
+        let n = read_scalar::<BIG_ENDIAN>(data, p, count);
+        let items = p + count.size();
+        let len = whole(n, f64::from(u32::MAX)).and_then(|n| (n as usize).checked_mul(item.size()));
+        let Some(len) = len.filter(|&len| fits(items, len)) else {
+            return Err(truncated(element, i, path));
+        };
+        let first = (len > 0).then(|| read_scalar::<BIG_ENDIAN>(data, items, item));
+        out.push(first.and_then(|v| whole(v, f64::from(u32::MAX))));
+        *pos = items + len;
+    }
+    Ok(out)
 }
 
 /// The common case: every vertex property is a scalar, so vertex `i` starts at
@@ -360,7 +556,7 @@ fn vertices_fixed<const BIG_ENDIAN: bool>(
     vertex: &Element,
     plan: &Plan,
     path: &Path,
-) -> Result<LabeledCloud, IoError> {
+) -> Result<Vertices, IoError> {
     let rest = &data[*pos..];
     // stride > 0: the vertex element has at least x, y, z.
     let need = stride
@@ -381,8 +577,8 @@ fn vertices_fixed<const BIG_ENDIAN: bool>(
         .collect();
     let block = &rest[..need];
     *pos += need;
-    if let Some(cloud) = vertices_common::<BIG_ENDIAN>(block, stride, &fields, plan) {
-        return Ok(cloud);
+    if let Some(vertices) = vertices_common::<BIG_ENDIAN>(block, stride, &fields, plan) {
+        return Ok(vertices);
     }
     // Other types, or a bad value somewhere: the general path (which names the vertex).
     let mut sink = Sink::new(plan, vertex.count, path);
@@ -393,7 +589,7 @@ fn vertices_fixed<const BIG_ENDIAN: bool>(
         }
         sink.push(i, &v)?;
     }
-    Ok(sink.cloud)
+    Ok(sink.finish())
 }
 
 #[inline(always)]
@@ -428,7 +624,7 @@ fn vertices_common<const BIG_ENDIAN: bool>(
     stride: usize,
     fields: &[(usize, usize, Scalar)],
     plan: &Plan,
-) -> Option<LabeledCloud> {
+) -> Option<Vertices> {
     let mut off: [Option<usize>; NROLES] = [None; NROLES];
     for &(role, o, ty) in fields {
         let want = match role {
@@ -442,7 +638,7 @@ fn vertices_common<const BIG_ENDIAN: bool>(
         off[role] = Some(o);
     }
     let n = block.len() / stride;
-    let (ox, oy, oz, ol) = (off[X]?, off[Y]?, off[Z]?, off[LABEL]?);
+    let (ox, oy, oz, ol) = (off[X]?, off[Y]?, off[Z]?, off[LABEL]);
     let rgb = match (off[RED], off[GREEN], off[BLUE]) {
         (Some(r), Some(g), Some(b)) => Some((r, g, b)),
         _ => None,
@@ -466,13 +662,26 @@ fn vertices_common<const BIG_ENDIAN: bool>(
             p
         })
         .collect();
-    let labels: Vec<_> = records()
-        .map(|rec| {
-            let label = Label::from_id(rec[ol]);
-            ok &= label.is_some();
-            label.unwrap_or(Label::UNKNOWN)
-        })
-        .collect();
+    let mut labels_ok = true;
+    let mut labels: Vec<_> = match ol {
+        Some(ol) => records()
+            .map(|rec| {
+                let label = Label::from_id(rec[ol]);
+                labels_ok &= label.is_some();
+                label.unwrap_or(Label::UNKNOWN)
+            })
+            .collect(),
+        None => vec![Label::UNKNOWN; n],
+    };
+    // Another tool's ids: the first one, and every label unknown.
+    let foreign = match ol {
+        Some(ol) if !labels_ok => {
+            let index = records().position(|rec| Label::from_id(rec[ol]).is_none())?;
+            labels.fill(Label::UNKNOWN);
+            Some((index, block[index * stride + ol].to_string()))
+        }
+        _ => None,
+    };
     let colors = rgb.map(|(r, g, b)| records().map(|rec| [rec[r], rec[g], rec[b]]).collect());
     let origins = records()
         .enumerate()
@@ -483,11 +692,14 @@ fn vertices_common<const BIG_ENDIAN: bool>(
         })
         .collect();
     debug_assert_eq!(plan.has(RED), colors.is_some());
-    ok.then_some(LabeledCloud {
-        positions_m,
-        labels,
-        colors,
-        origins,
+    ok.then_some(Vertices {
+        cloud: LabeledCloud {
+            positions_m,
+            labels,
+            colors,
+            origins,
+        },
+        foreign,
     })
 }
 
@@ -498,7 +710,7 @@ fn vertices_walked<const BIG_ENDIAN: bool>(
     vertex: &Element,
     plan: &Plan,
     path: &Path,
-) -> Result<LabeledCloud, IoError> {
+) -> Result<Vertices, IoError> {
     let roles = plan.role_of_prop(vertex);
     // Each entry takes at least one byte (x is a scalar), which bounds the capacity.
     let mut sink = Sink::new(plan, vertex.count.min(data.len() - *pos), path);
@@ -514,7 +726,7 @@ fn vertices_walked<const BIG_ENDIAN: bool>(
         }
         sink.push(i, &v)?;
     }
-    Ok(sink.cloud)
+    Ok(sink.finish())
 }
 
 /// Moves `pos` past every entry of an element we do not read.
@@ -688,6 +900,43 @@ fn ascii_entry(
     Ok(())
 }
 
+/// Decodes PCL's `range_grid` (one list per cell, one line each) in ASCII: each cell's
+/// first vertex index, `None` for an empty list.
+fn range_grid_ascii(
+    lines: &mut AsciiLines<'_>,
+    element: &Element,
+    path: &Path,
+) -> Result<Vec<Option<u32>>, IoError> {
+    let PropKind::List { count, item } = element.props[0].kind else {
+        return Err(truncated(element, 0, path)); // is_range_grid checked the kind
+    };
+    // A line takes at least 2 bytes ("0\n"), which bounds the capacity.
+    let mut out = Vec::with_capacity(element.count.min(lines.data.len() / 2));
+    for i in 0..element.count {
+        let (line_no, line) = lines
+            .next_entry()
+            .ok_or_else(|| truncated(element, i, path))?;
+        let toks: Vec<&[u8]> = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|t| !t.is_empty())
+            .collect();
+        let n = toks.first().and_then(|t| parse_token(t, count));
+        let items = &toks[1.min(toks.len())..];
+        if n != Some(items.len() as f64) {
+            return Err(IoError::BadAsciiLine {
+                line: line_no,
+                element: element.name.clone(),
+                index: i,
+                reason: "the list's length is not the number of values after it".into(),
+                path: path.to_path_buf(),
+            });
+        }
+        let first = items.first().and_then(|t| parse_token(t, item));
+        out.push(first.and_then(|v| whole(v, f64::from(u32::MAX))));
+    }
+    Ok(out)
+}
+
 fn skip_ascii(lines: &mut AsciiLines<'_>, element: &Element, path: &Path) -> Result<(), IoError> {
     let mut unused = [0.0; NROLES];
     for i in 0..element.count {
@@ -704,7 +953,7 @@ fn vertices_ascii(
     vertex: &Element,
     plan: &Plan,
     path: &Path,
-) -> Result<LabeledCloud, IoError> {
+) -> Result<Vertices, IoError> {
     let roles = plan.role_of_prop(vertex);
     // An entry line takes at least 2 bytes ("0\n"), which bounds the capacity.
     let capacity = vertex.count.min(lines.data.len() / 2);
@@ -717,7 +966,7 @@ fn vertices_ascii(
         ascii_entry(line, vertex, i, &roles, &mut v, path)?;
         sink.push(i, &v)?;
     }
-    Ok(sink.cloud)
+    Ok(sink.finish())
 }
 
 #[cfg(test)]

@@ -46,11 +46,12 @@ pub(crate) fn xy_dist(a: Vec3, b: Vec3) -> f32 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
-/// splitmix64: a small deterministic generator for RANSAC.
-struct SplitMix(u64);
+/// splitmix64: a small deterministic generator for RANSAC (here and in the floor search).
+pub(crate) struct SplitMix(pub(crate) u64);
 
 impl SplitMix {
-    fn below(&mut self, n: usize) -> usize {
+    /// A number in `0..n` (`n` > 0).
+    pub(crate) fn below(&mut self, n: usize) -> usize {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
