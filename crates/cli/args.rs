@@ -992,7 +992,6 @@ fn split_named(value: &str) -> (Option<String>, PathBuf) {
     }
 }
 
-
 const IMPORT_CLOUD_LONG_ABOUT: &str = "\
 Turn organised point clouds of one depth camera into a bodyseg recording (shared/FORMATS.md) \
 that `bodyseg run` reads: one frame per cloud, in the order given (a folder: its .pcd and \

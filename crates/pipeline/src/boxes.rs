@@ -11,7 +11,9 @@
 use crate::config::PipelineConfig;
 use crate::floor::{cloud_frame, likely_cause, transformed};
 use crate::frame::read_and_project;
-use crate::outputs::{check_output_file, read_cloud_file, resolved_config_path, write_with_side_file};
+use crate::outputs::{
+    check_output_file, read_cloud_file, resolved_config_path, write_with_side_file,
+};
 use crate::recording::{Recording, check_stem};
 use crate::sanity::{boxes_warnings, cloud_scale_warning, warn_all};
 use crate::stage::{Stage, plural, timed};
