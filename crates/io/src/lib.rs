@@ -10,7 +10,8 @@
 //! ([`read_label_png`], [`write_label_png`]); colour PNG/JPEG → [`RgbImage`](bodyseg_core::RgbImage)
 //! ([`read_rgb_image`]). ONNX models are read as bytes ([`read_bytes`]). 2-D numeric
 //! matrices of MATLAB MAT v5 files (plain or compressed; datasets' depth maps) read as
-//! [`MatMatrix`] ([`read_mat_matrix`], [`read_mat_variable_names`]).
+//! [`MatMatrix`] ([`read_mat_matrix`], [`read_mat_variable_names`]). Each reader has a
+//! `parse_*` twin that takes the file's bytes (as fuzzing does).
 //! Other crates' text files (configurations, reports) go through [`read_text`] and
 //! [`write_bytes_atomic`].
 //! Layouts are those of FORMATS.md. Readers are tolerant (unknown PLY properties and
@@ -36,12 +37,17 @@
 //! - Errors are [`IoError`]; each message starts with the file's path and includes the
 //!   underlying cause (an OS or JSON error), which is not repeated by `source()`: an
 //!   error chain prints each cause once. Bad input is an error, never a panic.
+//! - Sizes declared in headers are checked before they size an allocation: overflow-checked
+//!   arithmetic, compared with the file's length, and held to a memory budget
+//!   ([`MAX_DECLARED_POINTS`], [`MAX_DECLARED_BYTES`], [`MAX_IMAGE_SIDE_PX`],
+//!   [`MAX_IMAGE_DECODE_BYTES`]).
 
 mod atomic;
 mod boxes;
 mod error;
 mod folder;
 mod image;
+mod limits;
 mod listing;
 mod mat;
 mod pcd;
@@ -57,11 +63,17 @@ pub use folder::{
     create_folder, discard_folder, image_files, publish_folder, require_folder, staging_folder,
 };
 pub use image::{
-    DepthImage, read_depth_png, read_label_png, read_rgb_image, write_depth_png, write_gray8_png,
-    write_label_png, write_label_png_with, write_rgb_png,
+    DepthImage, parse_depth_png, parse_label_png, parse_rgb_image, read_depth_png, read_label_png,
+    read_rgb_image, write_depth_png, write_gray8_png, write_label_png, write_label_png_with,
+    write_rgb_png,
+};
+pub use limits::{
+    MAX_DECLARED_BYTES, MAX_DECLARED_POINTS, MAX_IMAGE_DECODE_BYTES, MAX_IMAGE_SIDE_PX,
 };
 pub use listing::{FolderEntry, list_folder};
-pub use mat::{MatMatrix, read_mat_matrix, read_mat_variable_names};
+pub use mat::{
+    MatMatrix, parse_mat_matrix, parse_mat_variable_names, read_mat_matrix, read_mat_variable_names,
+};
 pub use pcd::{parse_pcd, read_pcd};
 pub use ply::{PlyColors, PlyFormat, PlyWriteOptions, parse_ply, ply_bytes, read_ply, write_ply};
 pub use text::{first_existing_file, read_bytes, read_text};
