@@ -81,8 +81,8 @@ struct Header {
 /// when the data holds fewer points than declared or compressed data is corrupt (its
 /// declared sizes are checked against the file's length and LZF's largest expansion
 /// before the output is allocated);
-/// [`IoError::BadValue`] for a label outside 0..=6 and 255 or an ASCII token that is not
-/// a number.
+/// [`IoError::BadValue`] for a label outside 0..=6 and 255, an ASCII token that is not
+/// a number, or a finite coordinate beyond `f32`'s range.
 pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, IoError> {
     let path = path_for_errors;
     let header = parse_header(bytes, path)?;
@@ -111,6 +111,19 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
         if !xyz.iter().all(|v| v.is_finite()) {
             return Ok(());
         }
+        // A finite coordinate beyond f32's range (an `F 8`, `I 8` or `U 8` field, or ASCII
+        // text) would become infinite in the cloud: an error, not a point at infinity.
+        let xyz_f32 = xyz.map(|v| v as f32);
+        if let Some(k) = xyz_f32.iter().position(|v| !v.is_finite()) {
+            return Err(IoError::BadValue {
+                element: "point".into(),
+                index,
+                property: ["x", "y", "z"][k].into(),
+                value: xyz[k].to_string(),
+                expected: "a coordinate within f32's range (±3.4e38)",
+                path: path.to_path_buf(),
+            });
+        }
         let label = match label {
             None => Label::UNKNOWN,
             Some(v) => (v.fract() == 0.0 && (0.0..=255.0).contains(&v))
@@ -125,9 +138,7 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
                     path: path.to_path_buf(),
                 })?,
         };
-        cloud
-            .positions_m
-            .push([xyz[0] as f32, xyz[1] as f32, xyz[2] as f32]);
+        cloud.positions_m.push(xyz_f32);
         cloud.labels.push(label);
         cloud.origins.push(PointOrigin {
             camera: 0,
