@@ -116,34 +116,29 @@ fn pcd_134_byte_binary_compressed_reserves_nothing_large() {
 /// the file, and one that claims to expand beyond what LZF can.
 #[test]
 fn pcd_compressed_sizes_are_checked_against_the_file() {
-    let mut bytes = pcd_header(
-        "x y z",
-        "4 4 4",
-        "F F F",
-        "1 1 1",
-        "1000",
-        "binary_compressed",
-    );
-    bytes.extend_from_slice(&u32::MAX.to_le_bytes());
-    bytes.extend_from_slice(&12_000u32.to_le_bytes());
-    bytes.extend_from_slice(&[0; 16]);
+    // 1000 points of 12 bytes, then the sizes prefix (compressed, uncompressed) and data.
+    let file = |compressed: u32, uncompressed: u32, data: &[u8]| {
+        let mut bytes = pcd_header(
+            "x y z",
+            "4 4 4",
+            "F F F",
+            "1 1 1",
+            "1000",
+            "binary_compressed",
+        );
+        bytes.extend_from_slice(&compressed.to_le_bytes());
+        bytes.extend_from_slice(&uncompressed.to_le_bytes());
+        bytes.extend_from_slice(data);
+        bytes
+    };
+    let long = file(u32::MAX, 12_000, &[0; 16]);
     assert_refused(
-        || parse_pcd(&bytes, Path::new("long.pcd")),
+        || parse_pcd(&long, Path::new("long.pcd")),
         "compressed block of 4294967295 bytes, file holds 16",
     );
-    let mut bytes = pcd_header(
-        "x y z",
-        "4 4 4",
-        "F F F",
-        "1 1 1",
-        "1000",
-        "binary_compressed",
-    );
-    bytes.extend_from_slice(&2u32.to_le_bytes());
-    bytes.extend_from_slice(&12_000u32.to_le_bytes());
-    bytes.extend_from_slice(&[0, 0]);
+    let bomb = file(2, 12_000, &[0, 0]);
     assert_refused(
-        || parse_pcd(&bytes, Path::new("bomb.pcd")),
+        || parse_pcd(&bomb, Path::new("bomb.pcd")),
         "compressed block of 2 bytes cannot hold 12000 bytes",
     );
 }
