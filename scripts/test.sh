@@ -84,6 +84,13 @@ if grep -rqs '#\[ignore' crates tests; then
     cargo test --workspace --all-features --release -- --ignored 2>&1 | tee -a "$log"
 fi
 
+# Every fuzz target (fuzz/README.md) for a few seconds: libFuzzer on stable Rust, from the
+# committed seeds and crash regressions; a crash, hang or memory failure fails the check.
+# Its own instrumented build in fuzz/target/ (the workspace again, a few minutes on a
+# fresh machine), then 12 targets x 5 s.
+step "scripts/fuzz.sh 5 (each fuzz target for 5 s)"
+scripts/fuzz.sh 5
+
 step "all checks passed"
 # One closing line with the totals of every test binary above.
 awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }

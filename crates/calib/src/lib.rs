@@ -118,7 +118,7 @@ pub use iai_kinect2::{
     KINECT2_COLOR_SIZE, KINECT2_DEPTH_SIZE, import_iai_kinect2, read_iai_kinect2, write_iai_kinect2,
 };
 pub use intrinsics::Intrinsics;
-pub use opencv_yaml::read_opencv_yaml_intrinsics;
+pub use opencv_yaml::{parse_opencv_yaml_intrinsics, read_opencv_yaml_intrinsics};
 pub use openptrack::{
     openptrack_poses_to_string, parse_openptrack_poses, read_openptrack_poses,
     write_openptrack_poses,

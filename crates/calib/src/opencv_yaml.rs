@@ -238,7 +238,25 @@ pub fn read_opencv_yaml_intrinsics(
     path: &Path,
     default_size: Option<[u32; 2]>,
 ) -> Result<Intrinsics, CalibError> {
-    let fs = FileStorage::read(path)?;
+    intrinsics_of(&FileStorage::read(path)?, path, default_size)
+}
+
+/// [`read_opencv_yaml_intrinsics`] on the text of a file; `path` is used in error
+/// messages only.
+pub fn parse_opencv_yaml_intrinsics(
+    text: &str,
+    path: &Path,
+    default_size: Option<[u32; 2]>,
+) -> Result<Intrinsics, CalibError> {
+    intrinsics_of(&FileStorage::parse(text, path)?, path, default_size)
+}
+
+/// The intrinsics in a parsed FileStorage document (see [`read_opencv_yaml_intrinsics`]).
+fn intrinsics_of(
+    fs: &FileStorage,
+    path: &Path,
+    default_size: Option<[u32; 2]>,
+) -> Result<Intrinsics, CalibError> {
     let either = |a: &'static str, b: &'static str| -> Result<&'static str, CalibError> {
         match (fs.has(a), fs.has(b)) {
             (true, _) => Ok(a),

@@ -4,10 +4,11 @@
 //! 255 = not labelled). Colour images `<camera>/color/<stem>.png|.jpg` (8-bit RGB) are read
 //! with [`read_rgb_image`].
 
+use crate::limits::{MAX_IMAGE_DECODE_BYTES, MAX_IMAGE_SIDE_PX};
 use crate::{Durability, IoError, write_atomic_with};
 use bodyseg_core::{Label, LabelImage, RgbImage};
 use image::codecs::png::PngEncoder;
-use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
+use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat, ImageReader, Limits};
 use std::io::Cursor;
 use std::path::Path;
 
@@ -36,13 +37,30 @@ const DEPTH_EXPECTED: &str = "16-bit millimetres";
 /// What a label PNG must hold.
 const LABEL_EXPECTED: &str = "8-bit grayscale class ids";
 
-/// Reads and decodes a PNG file.
-fn decode_png(path: &Path) -> Result<DynamicImage, IoError> {
-    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
+/// Reads a whole file.
+fn read_file(path: &Path) -> Result<Vec<u8>, IoError> {
+    std::fs::read(path).map_err(|cause| IoError::Read {
         cause,
         path: path.to_path_buf(),
-    })?;
-    image::load(Cursor::new(bytes), ImageFormat::Png).map_err(|e| IoError::Png {
+    })
+}
+
+/// Decodes an image of `format` within the size limits ([`MAX_IMAGE_SIDE_PX`],
+/// [`MAX_IMAGE_DECODE_BYTES`]), which the decoder checks against the header before it
+/// allocates the pixels.
+fn decode(bytes: &[u8], format: ImageFormat) -> image::ImageResult<DynamicImage> {
+    let mut limits = Limits::no_limits();
+    limits.max_image_width = Some(MAX_IMAGE_SIDE_PX);
+    limits.max_image_height = Some(MAX_IMAGE_SIDE_PX);
+    limits.max_alloc = Some(MAX_IMAGE_DECODE_BYTES);
+    let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
+    reader.limits(limits);
+    reader.decode()
+}
+
+/// Decodes the bytes of a PNG file.
+fn decode_png(bytes: &[u8], path: &Path) -> Result<DynamicImage, IoError> {
+    decode(bytes, ImageFormat::Png).map_err(|e| IoError::Png {
         cause: e.to_string(),
         path: path.to_path_buf(),
     })
@@ -67,9 +85,20 @@ fn describe_format(image: &DynamicImage) -> String {
 /// # Errors
 /// [`IoError::Read`] when the file cannot be read; [`IoError::Png`] when it is not a
 /// valid PNG; [`IoError::PixelFormat`] when it is not 16-bit grayscale (an 8-bit PNG reads
-/// `x.png: depth PNG is 8-bit, expected 16-bit millimetres`).
+/// `x.png: depth PNG is 8-bit, expected 16-bit millimetres`). An image wider or higher
+/// than [`MAX_IMAGE_SIDE_PX`](crate::MAX_IMAGE_SIDE_PX) is an [`IoError::Png`].
 pub fn read_depth_png(path: &Path) -> Result<DepthImage, IoError> {
-    let image = decode_png(path)?;
+    parse_depth_png(&read_file(path)?, path)
+}
+
+/// [`read_depth_png`] on the bytes of a PNG file; `path_for_errors` only names the file in
+/// error messages.
+///
+/// # Errors
+/// As [`read_depth_png`], without the read.
+pub fn parse_depth_png(bytes: &[u8], path_for_errors: &Path) -> Result<DepthImage, IoError> {
+    let path = path_for_errors;
+    let image = decode_png(bytes, path)?;
     let (width, height) = (image.width(), image.height());
     match image {
         DynamicImage::ImageLuma16(buf) => Ok(DepthImage {
@@ -94,7 +123,17 @@ pub fn read_depth_png(path: &Path) -> Result<DepthImage, IoError> {
 /// when it is not 8-bit grayscale; [`IoError::BadLabelPixel`] naming the first pixel (row
 /// by row) whose id is 7..=254.
 pub fn read_label_png(path: &Path) -> Result<LabelImage, IoError> {
-    let image = decode_png(path)?;
+    parse_label_png(&read_file(path)?, path)
+}
+
+/// [`read_label_png`] on the bytes of a PNG file; `path_for_errors` only names the file in
+/// error messages.
+///
+/// # Errors
+/// As [`read_label_png`], without the read.
+pub fn parse_label_png(bytes: &[u8], path_for_errors: &Path) -> Result<LabelImage, IoError> {
+    let path = path_for_errors;
+    let image = decode_png(bytes, path)?;
     let (width, height) = (image.width(), image.height());
     let DynamicImage::ImageLuma8(buf) = image else {
         return Err(IoError::PixelFormat {
@@ -131,23 +170,30 @@ pub fn read_label_png(path: &Path) -> Result<LabelImage, IoError> {
 ///
 /// # Errors
 /// [`IoError::Read`] when the file cannot be read; [`IoError::Decode`] when it is not a
-/// decodable PNG or JPEG (`x.jpg: cannot decode colour image: ...`).
+/// decodable PNG or JPEG (`x.jpg: cannot decode colour image: ...`), or is larger than
+/// [`MAX_IMAGE_SIDE_PX`](crate::MAX_IMAGE_SIDE_PX) on a side.
 pub fn read_rgb_image(path: &Path) -> Result<RgbImage, IoError> {
-    let bytes = std::fs::read(path).map_err(|cause| IoError::Read {
-        cause,
-        path: path.to_path_buf(),
-    })?;
+    parse_rgb_image(&read_file(path)?, path)
+}
+
+/// [`read_rgb_image`] on the bytes of a PNG or JPEG file; `path_for_errors` only names the
+/// file in error messages.
+///
+/// # Errors
+/// As [`read_rgb_image`], without the read.
+pub fn parse_rgb_image(bytes: &[u8], path_for_errors: &Path) -> Result<RgbImage, IoError> {
+    let path = path_for_errors;
     let decode_err = |cause: String| IoError::Decode {
         cause,
         path: path.to_path_buf(),
     };
-    let format = image::guess_format(&bytes).map_err(|e| decode_err(e.to_string()))?;
+    let format = image::guess_format(bytes).map_err(|e| decode_err(e.to_string()))?;
     if !matches!(format, ImageFormat::Png | ImageFormat::Jpeg) {
         return Err(decode_err(format!(
             "{format:?} images are not supported (PNG or JPEG)"
         )));
     }
-    let decoded = image::load(Cursor::new(bytes), format).map_err(|e| decode_err(e.to_string()))?;
+    let decoded = decode(bytes, format).map_err(|e| decode_err(e.to_string()))?;
     let rgb = decoded.into_rgb8();
     let (width, height) = (rgb.width(), rgb.height());
     RgbImage::new(width, height, rgb.into_raw()).map_err(|e| decode_err(e.to_string()))

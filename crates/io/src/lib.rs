@@ -13,7 +13,8 @@
 //! ([`read_label_png`], [`write_label_png`]); colour PNG/JPEG → [`RgbImage`](bodyseg_core::RgbImage)
 //! ([`read_rgb_image`]). ONNX models are read as bytes ([`read_bytes`]). 2-D numeric
 //! matrices of MATLAB MAT v5 files (plain or compressed; datasets' depth maps) read as
-//! [`MatMatrix`] ([`read_mat_matrix`], [`read_mat_variable_names`]).
+//! [`MatMatrix`] ([`read_mat_matrix`], [`read_mat_variable_names`]). Each reader has a
+//! `parse_*` twin that takes the file's bytes (as fuzzing does).
 //! Other crates' text files (configurations, reports) go through [`read_text`] and
 //! [`write_bytes_atomic`].
 //! Layouts are those of FORMATS.md. Readers are tolerant (unknown PLY properties and
@@ -39,6 +40,10 @@
 //! - Errors are [`IoError`]; each message starts with the file's path and includes the
 //!   underlying cause (an OS or JSON error), which is not repeated by `source()`: an
 //!   error chain prints each cause once. Bad input is an error, never a panic.
+//! - Sizes declared in headers are checked before they size an allocation: overflow-checked
+//!   arithmetic, compared with the file's length, and held to a memory budget
+//!   ([`MAX_DECLARED_POINTS`], [`MAX_DECLARED_BYTES`], [`MAX_IMAGE_SIDE_PX`],
+//!   [`MAX_IMAGE_DECODE_BYTES`]).
 
 mod atomic;
 mod boxes;
@@ -46,6 +51,7 @@ mod cloud_file;
 mod error;
 mod folder;
 mod image;
+mod limits;
 mod listing;
 mod lock;
 mod mat;
@@ -65,12 +71,18 @@ pub use folder::{
     create_folder, discard_folder, image_files, publish_folder, require_folder, staging_folder,
 };
 pub use image::{
-    DepthImage, read_depth_png, read_label_png, read_rgb_image, write_depth_png, write_gray8_png,
-    write_label_png, write_label_png_with, write_rgb_png,
+    DepthImage, parse_depth_png, parse_label_png, parse_rgb_image, read_depth_png, read_label_png,
+    read_rgb_image, write_depth_png, write_gray8_png, write_label_png, write_label_png_with,
+    write_rgb_png,
+};
+pub use limits::{
+    MAX_DECLARED_BYTES, MAX_DECLARED_POINTS, MAX_IMAGE_DECODE_BYTES, MAX_IMAGE_SIDE_PX,
 };
 pub use listing::{FolderEntry, list_folder};
 pub use lock::{FolderLock, LockError, lock_folder};
-pub use mat::{MatMatrix, read_mat_matrix, read_mat_variable_names};
+pub use mat::{
+    MatMatrix, parse_mat_matrix, parse_mat_variable_names, read_mat_matrix, read_mat_variable_names,
+};
 pub use pcd::{parse_pcd, parse_pcd_file, read_pcd};
 pub use ply::{
     PlyColors, PlyFormat, PlyWriteOptions, parse_ply, parse_ply_file, ply_bytes, read_ply,

@@ -16,9 +16,10 @@
 //! sequence reads little more than that frame.
 
 use crate::IoError;
+use crate::limits::MAX_DECLARED_BYTES;
 use flate2::read::ZlibDecoder;
 use std::fs::File;
-use std::io::{BufReader, ErrorKind, Read, Seek, SeekFrom};
+use std::io::{BufReader, Cursor, ErrorKind, Read, Seek, SeekFrom};
 use std::path::Path;
 
 /// Length of the Level 5 file header (text, subsystem offset, version, endian indicator).
@@ -33,6 +34,10 @@ const MI_MATRIX: u32 = 14;
 const MI_COMPRESSED: u32 = 15;
 /// How many variable names an error lists before "…".
 const NAMES_IN_ERRORS: usize = 6;
+/// Largest array flags, dimensions or name sub-element read, bytes: 64 KiB. MATLAB names
+/// are at most 63 characters and 64 KiB of dimensions are 8192 of them; the limit keeps a
+/// compressed element that inflates a huge "name" from allocating it.
+const MAX_ARRAY_HEADER_BYTES: u64 = 64 << 10;
 
 /// A 2-D numeric matrix read from a MAT file, converted to `f64`.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,8 +64,24 @@ impl MatMatrix {
 /// [`IoError::Read`] when the file cannot be opened; [`IoError::Mat`] when it is not a
 /// Level 5 MAT file (v7.3/HDF5 and v4 files are named as such) or is truncated.
 pub fn read_mat_variable_names(path: &Path) -> Result<Vec<String>, IoError> {
+    variable_names(&mut open(path)?, path)
+}
+
+/// [`read_mat_variable_names`] on the bytes of a MAT file; `path_for_errors` only names
+/// the file in error messages.
+///
+/// # Errors
+/// As [`read_mat_variable_names`], without the read.
+pub fn parse_mat_variable_names(
+    bytes: &[u8],
+    path_for_errors: &Path,
+) -> Result<Vec<String>, IoError> {
+    variable_names(&mut Cursor::new(bytes), path_for_errors)
+}
+
+fn variable_names<R: Read + Seek>(file: &mut R, path: &Path) -> Result<Vec<String>, IoError> {
     let mut names = Vec::new();
-    scan(path, |header| {
+    scan(file, path, |header| {
         names.push(header.name.clone());
         Visit::Skip
     })?;
@@ -72,10 +93,29 @@ pub fn read_mat_variable_names(path: &Path) -> Result<Vec<String>, IoError> {
 /// # Errors
 /// [`IoError::Read`] when the file cannot be opened; [`IoError::Mat`] when it is not a
 /// Level 5 MAT file, is truncated, has no variable `name` (the message lists the ones it
-/// has), or the variable is not a real 2-D numeric matrix.
+/// has), or the variable is not a real 2-D numeric matrix, or holds more than
+/// [`MAX_DECLARED_BYTES`](crate::MAX_DECLARED_BYTES) of values as `f64` (its declared
+/// sizes are checked against each other and that budget before its data is read).
 pub fn read_mat_matrix(path: &Path, name: &str) -> Result<MatMatrix, IoError> {
+    matrix(&mut open(path)?, name, path)
+}
+
+/// [`read_mat_matrix`] on the bytes of a MAT file; `path_for_errors` only names the file
+/// in error messages.
+///
+/// # Errors
+/// As [`read_mat_matrix`], without the read.
+pub fn parse_mat_matrix(
+    bytes: &[u8],
+    name: &str,
+    path_for_errors: &Path,
+) -> Result<MatMatrix, IoError> {
+    matrix(&mut Cursor::new(bytes), name, path_for_errors)
+}
+
+fn matrix<R: Read + Seek>(file: &mut R, name: &str, path: &Path) -> Result<MatMatrix, IoError> {
     let mut names = Vec::new();
-    let found = scan(path, |header| {
+    let found = scan(file, path, |header| {
         names.push(header.name.clone());
         if header.name == name {
             Visit::Read
@@ -181,18 +221,24 @@ enum Visit {
     Read,
 }
 
-/// Walks the file's top-level elements, calling `visit` with each array's header; returns
-/// the first array `visit` asks to read, or `None` when the file ends.
-fn scan(
-    path: &Path,
-    mut visit: impl FnMut(&ArrayHeader) -> Visit,
-) -> Result<Option<MatMatrix>, IoError> {
+/// Opens a MAT file for [`scan`].
+fn open(path: &Path) -> Result<BufReader<File>, IoError> {
     let file = File::open(path).map_err(|cause| IoError::Read {
         cause,
         path: path.to_path_buf(),
     })?;
-    let mut file = BufReader::new(file);
-    scan_reader(&mut file, &mut visit).map_err(|e| match e {
+    Ok(BufReader::new(file))
+}
+
+/// Walks the file's top-level elements, calling `visit` with each array's header; returns
+/// the first array `visit` asks to read, or `None` when the file ends. `path` names the
+/// file in errors.
+fn scan<R: Read + Seek>(
+    file: &mut R,
+    path: &Path,
+    mut visit: impl FnMut(&ArrayHeader) -> Visit,
+) -> Result<Option<MatMatrix>, IoError> {
+    scan_reader(file, &mut visit).map_err(|e| match e {
         Bad::Io(cause) => IoError::Read {
             cause,
             path: path.to_path_buf(),
@@ -325,9 +371,24 @@ fn read_tag<R: Read>(r: &mut R, endian: Endian) -> Result<(u32, u64, Option<[u8;
     Ok((first, u64::from(len), None))
 }
 
-/// Reads one sub-element (tag, data, padding to 8 bytes): `(type, data)`.
-fn read_sub<R: Read>(r: &mut R, endian: Endian) -> Result<(u32, Vec<u8>), Bad> {
+/// Reads one array header sub-element (flags, dimensions, name; at most
+/// [`MAX_ARRAY_HEADER_BYTES`]): `(type, data)`.
+fn read_header_sub<R: Read>(r: &mut R, endian: Endian, what: &str) -> Result<(u32, Vec<u8>), Bad> {
     let (ty, len, small) = read_tag(r, endian)?;
+    if len > MAX_ARRAY_HEADER_BYTES {
+        return Err(bad(format!(
+            "array {what} element of {len} bytes (at most {MAX_ARRAY_HEADER_BYTES})"
+        )));
+    }
+    read_sub_data(r, (ty, len, small))
+}
+
+/// Reads the data of one sub-element whose tag is read (data, padding to 8 bytes):
+/// `(type, data)`. The caller has bounded `len`.
+fn read_sub_data<R: Read>(
+    r: &mut R,
+    (ty, len, small): (u32, u64, Option<[u8; 4]>),
+) -> Result<(u32, Vec<u8>), Bad> {
     if let Some(small) = small {
         return Ok((ty, small[..len as usize].to_vec()));
     }
@@ -352,20 +413,20 @@ fn visit_array<R: Read>(
     endian: Endian,
     visit: &mut impl FnMut(&ArrayHeader) -> Visit,
 ) -> Result<Option<MatMatrix>, Bad> {
-    let (_, flags) = read_sub(r, endian)?;
+    let (_, flags) = read_header_sub(r, endian, "flags")?;
     if flags.len() < 4 {
         return Err(bad("array flags element is too short"));
     }
     let word = endian.u32([flags[0], flags[1], flags[2], flags[3]]);
     let class = (word & 0xff) as u8;
     let complex = word & 0x0800 != 0;
-    let (dims_ty, dims_raw) = read_sub(r, endian)?;
+    let (dims_ty, dims_raw) = read_header_sub(r, endian, "dimensions")?;
     let dims = decode_numbers(dims_ty, &dims_raw, endian)
         .ok_or_else(|| bad(format!("array dimensions have data type {dims_ty}")))?
         .into_iter()
         .map(|d| d as i64)
         .collect();
-    let (_, name_raw) = read_sub(r, endian)?;
+    let (_, name_raw) = read_header_sub(r, endian, "name")?;
     let header = ArrayHeader {
         name: String::from_utf8_lossy(&name_raw).into_owned(),
         class,
@@ -436,10 +497,31 @@ fn read_matrix_data<R: Read>(
             )));
         }
     };
+    // Checked before the data is read: the values as f64 fit the budget.
     let count = rows
         .checked_mul(cols)
-        .ok_or_else(|| bad(format!("variable '{name}' is too large ({})", dims_text())))?;
-    let (ty, raw) = read_sub(r, endian)?;
+        .filter(|&count| (count as u64).saturating_mul(8) <= MAX_DECLARED_BYTES)
+        .ok_or_else(|| {
+            bad(format!(
+                "variable '{name}' is too large ({}: more than {MAX_DECLARED_BYTES} bytes as f64)",
+                dims_text()
+            ))
+        })?;
+    let (ty, len, small) = read_tag(r, endian)?;
+    let item = number_size(ty).ok_or_else(|| {
+        bad(format!(
+            "variable '{name}' stores its values with unsupported data type {ty}"
+        ))
+    })?;
+    // The declared data length must match the dimensions before it is read.
+    if len != count as u64 * item {
+        return Err(bad(format!(
+            "variable '{name}' is {} ({count} values) but holds {} values",
+            dims_text(),
+            len / item
+        )));
+    }
+    let (_, raw) = read_sub_data(r, (ty, len, small))?;
     let column_major = decode_numbers(ty, &raw, endian).ok_or_else(|| {
         bad(format!(
             "variable '{name}' stores its values with unsupported data type {ty}"
@@ -453,12 +535,27 @@ fn read_matrix_data<R: Read>(
         )));
     }
     let mut values = vec![0.0; count];
-    for c in 0..cols {
-        for row in 0..rows {
-            values[row * cols + c] = column_major[c * rows + row];
+    // count > 0 here means rows > 0: a 0×n matrix has nothing to transpose (and n may be
+    // huge).
+    if count > 0 {
+        for (c, column) in column_major.chunks_exact(rows).enumerate() {
+            for (row, &v) in column.iter().enumerate() {
+                values[row * cols + c] = v;
+            }
         }
     }
     Ok(MatMatrix { rows, cols, values })
+}
+
+/// Bytes per number of a numeric data type; `None` for a non-numeric type.
+fn number_size(ty: u32) -> Option<u64> {
+    Some(match ty {
+        1 | 2 => 1,
+        3 | 4 => 2,
+        5..=7 => 4,
+        9 | 12 | 13 => 8,
+        _ => return None,
+    })
 }
 
 /// Decodes the numbers of a numeric data element as `f64`; `None` for a non-numeric type.

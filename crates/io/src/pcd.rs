@@ -1,9 +1,15 @@
 //! PCL's point cloud files (`.pcd`, format version 0.7; 0.6 and 0.5 headers read too):
 //! `ascii`, `binary` and `binary_compressed` (LZF) data, organised or not.
 
+use crate::limits::{MAX_DECLARED_BYTES, MAX_DECLARED_POINTS};
 use crate::{CloudFile, CloudGrid, FileLabels, IoError};
 use bodyseg_core::{Label, LabeledCloud, PointOrigin};
 use std::path::Path;
+
+/// Most bytes LZF can produce from one byte of input: a back reference of the longest
+/// length (264 bytes) takes three bytes, `264 / 3 = 88`. A `binary_compressed` block that
+/// declares a larger uncompressed size is corrupt, and is refused before any allocation.
+const LZF_MAX_EXPANSION: usize = 88;
 
 /// Reads a point cloud from a PCD file; see [`parse_pcd`].
 ///
@@ -37,6 +43,12 @@ struct Header {
     /// `WIDTH` and `HEIGHT` (1 when absent).
     width: u64,
     height: u64,
+    /// Bytes per point in binary data: the sum of `SIZE × COUNT`.
+    stride: usize,
+    /// Values per point in ASCII data: the sum of `COUNT`.
+    columns: usize,
+    /// Bytes of binary point data, `stride × points` (at most [`MAX_DECLARED_BYTES`]).
+    data_bytes: usize,
     data: String,
     /// Byte offset of the data (after the `DATA` line).
     data_start: usize,
@@ -79,9 +91,14 @@ pub fn parse_pcd(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
 /// [`IoError::PcdHeader`] for a header line that is not understood or a missing one
 /// (`FIELDS`, `SIZE`, `TYPE`, `WIDTH`, `POINTS`, `DATA`), a missing `x`, `y` or `z`
 /// field; [`IoError::PcdDataKind`] for an unknown `DATA` kind;
-/// [`IoError::PcdPointCount`] when `WIDTH × HEIGHT ≠ POINTS`; [`IoError::PcdTruncated`]
-/// when the data holds fewer points than declared or compressed data is corrupt;
-/// [`IoError::BadValue`] for an ASCII token that is not a number.
+/// [`IoError::PcdPointCount`] when `WIDTH × HEIGHT ≠ POINTS`; [`IoError::PcdHeader`]
+/// also when the declared points exceed [`MAX_DECLARED_POINTS`] or their data
+/// [`MAX_DECLARED_BYTES`] (checked before anything is allocated); [`IoError::PcdTruncated`]
+/// when the data holds fewer points than declared or compressed data is corrupt (its
+/// declared sizes are checked against the file's length and LZF's largest expansion
+/// before the output is allocated);
+/// [`IoError::BadValue`] for an ASCII token that is not a number, or a finite coordinate
+/// beyond `f32`'s range.
 pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile, IoError> {
     let path = path_for_errors;
     let header = parse_header(bytes, path)?;
@@ -109,13 +126,30 @@ pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile,
     };
     let mut grid_colors: Option<Vec<[u8; 3]>> = organised.and(frgb).map(|_| Vec::new());
     let mut foreign: Option<(usize, String)> = None;
-    let mut push = |index: usize, xyz: [f64; 3], rgb: Option<u32>, label: Option<f64>| {
+    let mut push = |index: usize,
+                    xyz: [f64; 3],
+                    rgb: Option<u32>,
+                    label: Option<f64>|
+     -> Result<(), IoError> {
         let rgb = rgb.map(|c| [(c >> 16) as u8, (c >> 8) as u8, c as u8]);
         if let (Some(all), Some(c)) = (grid_colors.as_mut(), rgb) {
             all.push(c);
         }
         if !xyz.iter().all(|v| v.is_finite()) {
-            return;
+            return Ok(());
+        }
+        // A finite coordinate beyond f32's range (an `F 8`, `I 8` or `U 8` field, or ASCII
+        // text) would become infinite in the cloud: an error, not a point at infinity.
+        let xyz_f32 = xyz.map(|v| v as f32);
+        if let Some(k) = xyz_f32.iter().position(|v| !v.is_finite()) {
+            return Err(IoError::BadValue {
+                element: "point".into(),
+                index,
+                property: ["x", "y", "z"][k].into(),
+                value: xyz[k].to_string(),
+                expected: "a coordinate within f32's range (±3.4e38)",
+                path: path.to_path_buf(),
+            });
         }
         let label = match label {
             None => Label::UNKNOWN,
@@ -127,9 +161,7 @@ pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile,
                     Label::UNKNOWN
                 }),
         };
-        cloud
-            .positions_m
-            .push([xyz[0] as f32, xyz[1] as f32, xyz[2] as f32]);
+        cloud.positions_m.push(xyz_f32);
         cloud.labels.push(label);
         cloud.origins.push(PointOrigin {
             camera: 0,
@@ -138,11 +170,12 @@ pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile,
         if let (Some(colors), Some(c)) = (cloud.colors.as_mut(), rgb) {
             colors.push(c);
         }
+        Ok(())
     };
     match header.data.as_str() {
         "ascii" => {
             let text = String::from_utf8_lossy(data);
-            let columns: usize = header.fields.iter().map(|f| f.count).sum();
+            let columns = header.columns;
             let mut index = 0;
             for (k, line) in text.lines().enumerate() {
                 if index == n {
@@ -189,7 +222,7 @@ pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile,
                         None => None,
                     };
                 let label = flabel.map(value).transpose()?;
-                push(index, xyz, rgb, label);
+                push(index, xyz, rgb, label)?;
                 index += 1;
             }
             if index < n {
@@ -200,8 +233,7 @@ pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile,
             }
         }
         "binary" => {
-            let stride: usize = header.fields.iter().map(|f| f.size * f.count).sum();
-            let want = stride * n;
+            let (stride, want) = (header.stride, header.data_bytes);
             if data.len() < want {
                 return Err(IoError::PcdTruncated {
                     reason: format!(
@@ -221,12 +253,13 @@ pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile,
                 ];
                 let rgb = frgb.map(|f| packed(at(f)));
                 let label = flabel.map(|f| scalar(at(f), f.kind));
-                push(index, xyz, rgb, label);
+                push(index, xyz, rgb, label)?;
             }
         }
         "binary_compressed" => {
             let raw = decompress_columns(data, &header, path)?;
-            // Column-major: field k's values for all points, one after the other.
+            // Column-major: field k's values for all points, one after the other. No
+            // overflow: the columns add up to `data_bytes`, checked in the header.
             let mut starts = Vec::with_capacity(header.fields.len());
             let mut at = 0;
             for f in &header.fields {
@@ -257,7 +290,7 @@ pub fn parse_pcd_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile,
                 let label = clabel
                     .zip(flabel)
                     .map(|(c, f)| scalar(get(c, index, f.size), f.kind));
-                push(index, xyz, rgb, label);
+                push(index, xyz, rgb, label)?;
             }
         }
         other => {
@@ -330,12 +363,7 @@ fn decompress_columns(data: &[u8], header: &Header, path: &Path) -> Result<Vec<u
         reason,
         path: path.to_path_buf(),
     };
-    let want: usize = header
-        .fields
-        .iter()
-        .map(|f| f.size * f.count)
-        .sum::<usize>()
-        * header.points;
+    let want = header.data_bytes;
     let (Some(c), Some(u)) = (data.get(0..4), data.get(4..8)) else {
         return Err(truncated(format!(
             "binary_compressed data needs an 8-byte size prefix, file holds {} bytes",
@@ -350,12 +378,17 @@ fn decompress_columns(data: &[u8], header: &Header, path: &Path) -> Result<Vec<u
             header.points
         )));
     }
-    let Some(block) = data.get(8..8 + compressed) else {
+    let Some(block) = data.get(8..).and_then(|rest| rest.get(..compressed)) else {
         return Err(truncated(format!(
             "compressed block of {compressed} bytes, file holds {}",
             data.len().saturating_sub(8)
         )));
     };
+    if uncompressed > compressed.saturating_mul(LZF_MAX_EXPANSION) {
+        return Err(truncated(format!(
+            "compressed block of {compressed} bytes cannot hold {uncompressed} bytes (LZF expands at most {LZF_MAX_EXPANSION}x)"
+        )));
+    }
     let out = lzf_decompress(block, uncompressed)
         .map_err(|e| truncated(format!("corrupt LZF block: {e}")))?;
     if out.len() != uncompressed {
@@ -534,11 +567,27 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError> {
                     });
                 }
                 let mut fields = Vec::with_capacity(names.len());
-                let (mut offset, mut column) = (0, 0);
+                let (mut offset, mut column) = (0usize, 0usize);
                 for (k, name) in names.into_iter().enumerate() {
                     if counts[k] == 0 {
                         return Err(bad(line_no, format!("field '{name}' has COUNT 0")));
                     }
+                    // A COUNT so large that one point's size overflows: no real file.
+                    let (Some(next_offset), Some(next_column)) = (
+                        sizes[k]
+                            .checked_mul(counts[k])
+                            .and_then(|bytes| offset.checked_add(bytes)),
+                        column.checked_add(counts[k]),
+                    ) else {
+                        return Err(bad(
+                            line_no,
+                            format!(
+                                "field '{name}' has COUNT {}: a point would exceed {} bytes",
+                                counts[k],
+                                usize::MAX
+                            ),
+                        ));
+                    };
                     fields.push(Field {
                         name,
                         size: sizes[k],
@@ -547,8 +596,7 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError> {
                         offset,
                         column,
                     });
-                    offset += sizes[k] * counts[k];
-                    column += counts[k];
+                    (offset, column) = (next_offset, next_column);
                 }
                 if !matches!(kind.as_str(), "ascii" | "binary" | "binary_compressed") {
                     return Err(IoError::PcdDataKind {
@@ -556,6 +604,27 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError> {
                         path: path.to_path_buf(),
                     });
                 }
+                if points > MAX_DECLARED_POINTS {
+                    return Err(bad(
+                        line_no,
+                        format!(
+                            "POINTS {points} is more than bodyseg reads ({MAX_DECLARED_POINTS})"
+                        ),
+                    ));
+                }
+                let data_bytes = u64::try_from(offset)
+                    .ok()
+                    .and_then(|stride| stride.checked_mul(points))
+                    .filter(|&bytes| bytes <= MAX_DECLARED_BYTES)
+                    .and_then(|bytes| usize::try_from(bytes).ok())
+                    .ok_or_else(|| {
+                        bad(
+                            line_no,
+                            format!(
+                                "{points} points of {offset} bytes are more data than bodyseg reads ({MAX_DECLARED_BYTES} bytes)"
+                            ),
+                        )
+                    })?;
                 let points = usize::try_from(points)
                     .map_err(|_| bad(line_no, format!("POINTS {points} is too large")))?;
                 return Ok(Header {
@@ -563,6 +632,9 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError> {
                     points,
                     width,
                     height,
+                    stride: offset,
+                    columns: column,
+                    data_bytes,
                     data: kind,
                     data_start: pos,
                     lines: line_no,
