@@ -36,8 +36,8 @@ mod segmenter;
 mod spec;
 pub mod transform;
 
-pub use config::ParsingConfig;
+pub use config::{ParsingConfig, SegmenterKind};
 pub use error::ParsingError;
 pub use onnx::{OnnxOptions, OnnxSegmenter, load_runtime};
-pub use segmenter::{ParsedView, RecordedSegmenter, Segmenter, ViewInput};
+pub use segmenter::{ParsedView, PersonRegion, PixelBox, RecordedSegmenter, Segmenter, ViewInput};
 pub use spec::{ChannelOrder, MAX_INPUT_SIZE, ModelSpec, sidecar_path};
