@@ -22,9 +22,6 @@
 pub use crate::segmenter::PixelBox;
 use bodyseg_core::{Label, LabelImage, RgbImage};
 
-mod segmenter;
-pub use segmenter::{BlazePoseOptions, BlazePoseSegmenter, Variant};
-
 /// Side of the landmark model's square input, pixels.
 pub const INPUT: usize = 256;
 /// Side of the landmark heatmaps, cells (a cell is 4 input pixels).

@@ -1,6 +1,6 @@
 //! [`ParsingConfig`]: the `[parsing]` section of the pipeline configuration.
 
-use crate::blazepose::{BlazePoseOptions, Variant};
+use crate::blazepose_segmenter::{BlazePoseOptions, BlazePoseVariant};
 use serde::{Deserialize, Serialize};
 
 /// Which 2D parser runs on colour images.
@@ -27,7 +27,7 @@ pub struct ParsingConfig {
     /// BlazePose landmark model (`segmenter = "blazepose"`): `lite`, `full` (default) or
     /// `heavy` (`models/blazepose_<variant>.onnx`; heavy is made by
     /// `scripts/convert_blazepose.py`).
-    pub blazepose_variant: Variant,
+    pub blazepose_variant: BlazePoseVariant,
     /// ONNX model file (`segmenter = "onnx"`); its sidecar is the same path with `.json`.
     /// Empty (default) = the bundled model, `models/bodyseg_parser_small.onnx`.
     pub model: String,
@@ -43,7 +43,7 @@ impl Default for ParsingConfig {
     fn default() -> Self {
         ParsingConfig {
             segmenter: SegmenterKind::Blazepose,
-            blazepose_variant: Variant::Full,
+            blazepose_variant: BlazePoseVariant::Full,
             model: String::new(),
             runtime_library: String::new(),
             threads: 2,

@@ -6,7 +6,7 @@
 //! or `ORT_DYLIB_PATH`.
 
 use bodyseg_core::{Label, RgbImage};
-use bodyseg_parsing::blazepose::{BlazePoseOptions, BlazePoseSegmenter};
+use bodyseg_parsing::{BlazePoseOptions, BlazePoseSegmenter};
 use bodyseg_parsing::{ParsingError, PersonRegion, PixelBox, Segmenter, ViewInput};
 use std::path::{Path, PathBuf};
 

@@ -62,6 +62,7 @@ mod processor;
 mod project;
 mod recording;
 mod refine;
+pub mod regions;
 mod report;
 mod rig;
 mod run;
@@ -75,6 +76,7 @@ pub use batch::{
     Shard,
 };
 pub use bodyseg_calib::{AzureColorResolution, AzureDepthMode, AzureKinectMode, Board};
+pub use bodyseg_parsing::SegmenterKind;
 pub use bodyseg_people::BoxMode;
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, top_view};

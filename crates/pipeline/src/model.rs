@@ -1,15 +1,26 @@
-//! Where the 2D parser comes from: the ONNX model and the ONNX Runtime library (found
-//! beside the executable, in the current folder or in the checkout), or a recording's own
-//! predictions; [`open_segmenter`] makes the [`Segmenter`] of `bodyseg run` and `convert`.
+//! Where the 2D parser comes from: BlazePose's landmark model (`parsing.segmenter =
+//! "blazepose"`, the default) or an SCHP-contract ONNX model (`"onnx"`), and the ONNX
+//! Runtime library (found beside the executable, in the current folder or in the
+//! checkout), or a recording's own predictions; [`open_segmenter`] makes the
+//! [`Segmenter`] of `bodyseg run` and `convert`.
 
 use crate::config::PipelineConfig;
 use crate::recording::{Layer, Recording};
 use anyhow::{Context, Result, bail};
-use bodyseg_parsing::{ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, sidecar_path};
+use bodyseg_parsing::{BlazePoseSegmenter, BlazePoseVariant};
+use bodyseg_parsing::{
+    ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, SegmenterKind, sidecar_path,
+};
 use std::path::{Path, PathBuf};
 
-/// The bundled model, relative to the project root (its sidecar: the same with `.json`).
+/// The bundled SCHP-contract model, relative to the project root (its sidecar: the same
+/// with `.json`).
 pub(crate) const BUNDLED_MODEL: &str = "models/bodyseg_parser_small.onnx";
+
+/// BlazePose's landmark model of a variant, relative to the project root.
+pub(crate) fn blazepose_model(variant: BlazePoseVariant) -> String {
+    format!("models/blazepose_{}.onnx", variant.name())
+}
 
 /// Where `scripts/setup_onnxruntime.sh` puts the ONNX Runtime library, relative to the
 /// project root.
@@ -24,7 +35,8 @@ pub enum ParserChoice {
     /// Recorded predictions when the recording has `parsing/` folders, else the model.
     #[default]
     Auto,
-    /// The ONNX model (`parsing.model`, or the bundled one) on the colour images.
+    /// The configured parser (`parsing.segmenter`: BlazePose, or the ONNX model) on the
+    /// colour images.
     Model,
     /// The recording's `<camera>/parsing/<frame>.png`.
     Recorded,
@@ -66,25 +78,47 @@ pub(crate) fn resolve_runtime_library(config: &PipelineConfig) -> Result<PathBuf
     })
 }
 
-/// The model file: `parsing.model`, else the bundled model.
+/// The model file of the configured parser: for `parsing.segmenter = "onnx"`,
+/// `parsing.model`, else the bundled model; for `"blazepose"`,
+/// `models/blazepose_<parsing.blazepose_variant>.onnx`.
 ///
 /// # Errors
-/// The bundled model is not found (neither beside the executable, in the current folder,
-/// nor in the checkout the binary was built from).
+/// The model is not found (neither beside the executable, in the current folder, nor in
+/// the checkout the binary was built from); for the heavy BlazePose model the message
+/// says how to make it.
 pub(crate) fn resolve_model(config: &PipelineConfig) -> Result<PathBuf> {
-    if !config.parsing.model.is_empty() {
-        return Ok(PathBuf::from(&config.parsing.model));
+    match config.parsing.segmenter {
+        SegmenterKind::Onnx => {
+            if !config.parsing.model.is_empty() {
+                return Ok(PathBuf::from(&config.parsing.model));
+            }
+            bodyseg_io::first_existing_file(&project_candidates(BUNDLED_MODEL)).with_context(|| {
+                format!("bundled model {BUNDLED_MODEL} not found: pass --model FILE.onnx")
+            })
+        }
+        SegmenterKind::Blazepose => {
+            let variant = config.parsing.blazepose_variant;
+            let relative = blazepose_model(variant);
+            bodyseg_io::first_existing_file(&project_candidates(&relative)).with_context(|| {
+                let how = if variant == BlazePoseVariant::Heavy {
+                    "make it with scripts/convert_blazepose.py (see its header), or use \
+                     parsing.blazepose_variant = \"full\""
+                } else {
+                    "it is part of the checkout (models/)"
+                };
+                format!("BlazePose model {relative} not found: {how}")
+            })
+        }
     }
-    bodyseg_io::first_existing_file(&project_candidates(BUNDLED_MODEL))
-        .with_context(|| format!("bundled model {BUNDLED_MODEL} not found: pass --model FILE.onnx"))
 }
 
-/// Loads an ONNX model and its sidecar (`model.json`) into an [`OnnxSegmenter`].
+/// Loads an SCHP-contract ONNX model and its sidecar (`model.json`) into an
+/// [`OnnxSegmenter`].
 ///
 /// # Errors
 /// The model or sidecar cannot be read, the sidecar is invalid, the runtime library is
 /// missing, or the model does not follow the contract; each names the file.
-pub(crate) fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
+pub(crate) fn load_onnx_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
     let sidecar = sidecar_path(model);
     let text = bodyseg_io::read_text(&sidecar)
         .context("model sidecar (the model's .json: input_size, channel_order, mean, std, ...)")?;
@@ -99,6 +133,31 @@ pub(crate) fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<On
         &config.parsing.onnx_options(),
     )?;
     Ok(segmenter)
+}
+
+/// Loads the configured parser's model `model` ([`resolve_model`]): a
+/// [`BlazePoseSegmenter`] for `parsing.segmenter = "blazepose"`, an [`OnnxSegmenter`] (with
+/// its sidecar) for `"onnx"`.
+///
+/// # Errors
+/// As [`load_onnx_segmenter`]; a BlazePose model that is not BlazePose-shaped.
+pub(crate) fn load_segmenter(
+    config: &PipelineConfig,
+    model: &Path,
+) -> Result<Box<dyn Segmenter + Send>> {
+    Ok(match config.parsing.segmenter {
+        SegmenterKind::Onnx => Box::new(load_onnx_segmenter(config, model)?),
+        SegmenterKind::Blazepose => {
+            let library = resolve_runtime_library(config)?;
+            let bytes = bodyseg_io::read_bytes(model).context("BlazePose landmark model")?;
+            Box::new(BlazePoseSegmenter::new(
+                &library,
+                &bytes,
+                model,
+                &config.parsing.blazepose_options(),
+            )?)
+        }
+    })
 }
 
 /// The segmenter `choice` asks for on `rec`, and whether it is the model:
@@ -130,7 +189,7 @@ pub(crate) fn open_segmenter(
     };
     let segmenter: Box<dyn Segmenter + Send> = if use_model {
         let model = resolve_model(config)?;
-        Box::new(load_segmenter(config, &model)?)
+        load_segmenter(config, &model)?
     } else {
         Box::new(RecordedSegmenter::new())
     };
@@ -146,6 +205,7 @@ mod tests {
         let mut cfg = PipelineConfig::default();
         cfg.parsing.runtime_library = "/x/libonnxruntime.so".into();
         cfg.parsing.model = "m.onnx".into();
+        cfg.parsing.segmenter = SegmenterKind::Onnx;
         assert_eq!(
             resolve_runtime_library(&cfg).expect("configured"),
             Path::new("/x/libonnxruntime.so")
@@ -154,5 +214,9 @@ mod tests {
             resolve_model(&cfg).expect("configured"),
             Path::new("m.onnx")
         );
+        // BlazePose: the variant's model in the checkout.
+        cfg.parsing.segmenter = SegmenterKind::Blazepose;
+        let full = resolve_model(&cfg).expect("models/blazepose_full.onnx is in git");
+        assert!(full.ends_with("models/blazepose_full.onnx"), "{full:?}");
     }
 }

@@ -1,12 +1,12 @@
 //! [`BlazePoseSegmenter`]: the BlazePose landmark model run on person regions (one ROI per
 //! person, from boxes found in 3D), its landmarks and mask turned into the 7 classes by
-//! the rule of the parent module.
+//! the rule of [`crate::blazepose`].
 
-use super::{
+use crate::ParsingError;
+use crate::blazepose::{
     INPUT, NUM_LANDMARKS, Pose, Roi, RuleConfig, crop_into, decode, label_person, landmark,
     merge_people,
 };
-use crate::ParsingError;
 use crate::onnx::load_runtime;
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
 use bodyseg_core::{LabelImage, RgbImage};
@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 /// Which of BlazePose's landmark models runs (the sizes MediaPipe ships).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Variant {
+pub enum BlazePoseVariant {
     /// `pose_landmark_lite` (2.8 MB): fastest, least accurate.
     Lite,
     /// `pose_landmark_full` (6.4 MB): the default.
@@ -29,13 +29,13 @@ pub enum Variant {
     Heavy,
 }
 
-impl Variant {
+impl BlazePoseVariant {
     /// `lite`, `full` or `heavy`.
     pub fn name(self) -> &'static str {
         match self {
-            Variant::Lite => "lite",
-            Variant::Full => "full",
-            Variant::Heavy => "heavy",
+            BlazePoseVariant::Lite => "lite",
+            BlazePoseVariant::Full => "full",
+            BlazePoseVariant::Heavy => "heavy",
         }
     }
 }
@@ -89,6 +89,27 @@ const MIN_FLAG_RATIO: f64 = 0.8;
 const MIN_FLAG_TO_REFINE: f64 = 0.5;
 /// MediaPipe's scale of the box around the alignment points.
 const ALIGNMENT_ROI_SCALE: f64 = 1.5;
+/// A pose belongs to its region when its body centre lies within the region widened by
+/// this fraction of the region's width and height on each side.
+pub const REGION_SLACK: f64 = 0.1;
+/// The ROI's side, × the region's longer side, of the second try when the first pose's
+/// centre left the region (a tighter crop holds fewer neighbours: on PCL's five_people
+/// frame it finds the three people in the middle whom the 2.0 crop lost to neighbours).
+pub const RETRY_ROI_SCALE: f64 = 1.25;
+
+/// Whether `pose`'s body centre (alignment centre) lies in `bounds` widened by
+/// [`REGION_SLACK`].
+fn centre_inside(pose: &Pose, bounds: &PixelBox) -> bool {
+    let Some(c) = pose.xy.get(landmark::ALIGN_CENTRE) else {
+        return false;
+    };
+    let (sx, sy) = (
+        REGION_SLACK * (bounds.x1 - bounds.x0).max(1.0),
+        REGION_SLACK * (bounds.y1 - bounds.y0).max(1.0),
+    );
+    (bounds.x0 - sx..=bounds.x1 + sx).contains(&c[0])
+        && (bounds.y0 - sy..=bounds.y1 + sy).contains(&c[1])
+}
 
 /// BlazePose (MediaPipe Pose's landmark model, converted to ONNX) as a [`Segmenter`]: for
 /// each person region of a view, the model runs on a square ROI around it (and once more
@@ -265,12 +286,31 @@ impl BlazePoseSegmenter {
     /// The pose of the person in `bounds` (image px): a run on the ROI around it
     /// ([`BlazePoseOptions::roi_scale`]), then up to
     /// [`BlazePoseOptions::refine_passes`] runs on the ROI of the previous run's alignment
-    /// points, each kept only while the pose flag holds.
+    /// points, each kept only while the pose flag holds and the pose stays in the region.
+    ///
+    /// A crowded crop may lock onto a neighbour: a pose whose body centre (MediaPipe's
+    /// alignment centre, the mid-hip point) lies outside `bounds` widened by
+    /// [`REGION_SLACK`] of its size is not this person's. Then (and when the first pose's
+    /// flag is below [`BlazePoseOptions::min_pose_flag`]) one run on the tighter ROI of
+    /// [`RETRY_ROI_SCALE`] × the region is tried, and kept when its centre is in the region
+    /// (and its flag higher); when neither pose is in the region the result has flag 0 (no
+    /// person).
     ///
     /// # Errors
     /// [`ParsingError::Inference`].
     pub fn pose_in(&mut self, image: &RgbImage, bounds: &PixelBox) -> Result<Pose, ParsingError> {
         let mut pose = self.run(image, &Roi::from_box(bounds, self.options.roi_scale))?;
+        let inside = centre_inside(&pose, bounds);
+        if !inside || pose.flag < self.options.min_pose_flag {
+            let retry = self.run(image, &Roi::from_box(bounds, RETRY_ROI_SCALE))?;
+            if centre_inside(&retry, bounds) && (!inside || retry.flag > pose.flag) {
+                return Ok(retry);
+            }
+            if !inside {
+                pose.flag = 0.0;
+            }
+            return Ok(pose);
+        }
         for _ in 0..self.options.refine_passes {
             if pose.flag < MIN_FLAG_TO_REFINE || pose.xy.len() < NUM_LANDMARKS {
                 break;
@@ -288,7 +328,7 @@ impl BlazePoseSegmenter {
                 break;
             }
             let next = self.run(image, &roi)?;
-            if next.flag < pose.flag * MIN_FLAG_RATIO {
+            if next.flag < pose.flag * MIN_FLAG_RATIO || !centre_inside(&next, bounds) {
                 break;
             }
             pose = next;
@@ -373,5 +413,53 @@ impl Segmenter for BlazePoseSegmenter {
             });
         }
         Ok(parsed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose_centred_at(c: [f64; 2]) -> Pose {
+        let mut xy = vec![[0.0, 0.0]; NUM_LANDMARKS];
+        xy[landmark::ALIGN_CENTRE] = c;
+        Pose {
+            roi: Roi {
+                centre_px: c,
+                side_px: 100.0,
+                angle_rad: 0.0,
+            },
+            flag: 1.0,
+            xy,
+            visibility: vec![1.0; NUM_LANDMARKS],
+            presence: vec![1.0; NUM_LANDMARKS],
+            mask: Vec::new(),
+        }
+    }
+
+    /// A pose drifted onto a neighbour (centre beyond the region's 10 % slack) is not the
+    /// region's person; one at the edge of the slack still is.
+    #[test]
+    fn a_pose_belongs_to_the_region_holding_its_centre() {
+        let region = PixelBox {
+            x0: 100.0,
+            y0: 50.0,
+            x1: 200.0,
+            y1: 450.0,
+        };
+        assert!(centre_inside(&pose_centred_at([150.0, 250.0]), &region));
+        assert!(
+            centre_inside(&pose_centred_at([209.0, 250.0]), &region),
+            "slack"
+        );
+        assert!(
+            !centre_inside(&pose_centred_at([211.0, 250.0]), &region),
+            "neighbour"
+        );
+        assert!(!centre_inside(&pose_centred_at([150.0, 500.0]), &region));
+        assert!(!centre_inside(&pose_centred_at([f64::NAN, 250.0]), &region));
+        let mut short = pose_centred_at([150.0, 250.0]);
+        short.xy.truncate(10);
+        assert!(!centre_inside(&short, &region), "no alignment point");
     }
 }
