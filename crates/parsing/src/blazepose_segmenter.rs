@@ -7,11 +7,10 @@ use crate::blazepose::{
     INPUT, NUM_LANDMARKS, Pose, Roi, RuleConfig, crop_into, decode, label_person, landmark,
     merge_people,
 };
-use crate::onnx::load_runtime;
+use crate::onnx::load_session;
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
 use bodyseg_core::{LabelImage, RgbImage};
 use ort::session::Session;
-use ort::session::builder::GraphOptimizationLevel;
 use ort::value::{TensorRef, ValueType};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -168,24 +167,14 @@ impl BlazePoseSegmenter {
         model_path: &Path,
         options: &BlazePoseOptions,
     ) -> Result<BlazePoseSegmenter, ParsingError> {
-        let env = load_runtime(runtime_library)?;
-        let load_err = |cause: String| ParsingError::ModelLoad {
-            cause,
-            path: model_path.to_path_buf(),
-        };
-        let session = Session::builder(&env)
-            .map_err(|e| load_err(e.to_string()))?
-            .with_optimization_level(GraphOptimizationLevel::Level3)
-            .map_err(|e| load_err(e.to_string()))?
-            .with_intra_threads(options.threads)
-            .map_err(|e| load_err(e.to_string()))?
-            .with_inter_threads(1)
-            .map_err(|e| load_err(e.to_string()))?
-            // A spinning pool is several times slower on a shared 2-core machine.
-            .with_intra_op_spinning(false)
-            .map_err(|e| load_err(e.to_string()))?
-            .commit_from_memory(model_bytes)
-            .map_err(|e| load_err(e.to_string()))?;
+        // A spinning pool is several times slower on a shared 2-core machine.
+        let session = load_session(
+            runtime_library,
+            model_bytes,
+            model_path,
+            options.threads,
+            false,
+        )?;
         let not_blazepose = |reason: String| ParsingError::NotBlazePose {
             reason,
             path: model_path.to_path_buf(),
