@@ -2,11 +2,14 @@
 # The main job on the embedded default, in a few minutes: installs what is missing (ONNX
 # Runtime from PyPI), builds the release binary, renders a synthetic recording (two people
 # handing over an object, three Kinect v2 cameras, exact ground truth) and runs the whole
-# pipeline on it with the bundled 2D parsing model: parse -> DSA projection -> person boxes
-# -> clustering refinement -> evaluation. Prints the paper-style table (Reference, M, N,
+# pipeline on it with the default 2D parser (BlazePose full, models/blazepose_full.onnx, on
+# the people found from depth; --set parsing.segmenter=onnx for the synthetic-trained model):
+# people from depth -> parse -> DSA projection -> person boxes -> clustering refinement ->
+# evaluation. Prints the paper-style table (Reference, M, N,
 # M-N, M-R-N against the ground truth) and the path of the Figure-5-style picture.
 #
-#   scripts/demo.sh [OUT_DIR] [FRAMES]      (default: demo_out/ in the repository, 24 frames)
+#   scripts/demo.sh [OUT_DIR] [FRAMES] [RUN ARGS...]   (default: demo_out/ in the repository,
+#                                                   24 frames; e.g. --set parsing.segmenter=onnx)
 #
 # Files in OUT_DIR: rec/ (the recording), run/ (clouds/ refined PLY per frame, boxes/,
 # labels/ per camera, figures/, report.md, report.json, config.resolved.toml, run.json).
@@ -36,8 +39,8 @@ if [ ! -f "$out/rec/rig.toml" ] || [ "$(ls "$out/rec/cam0/depth" | wc -l)" -ne "
     "$bodyseg" synth --preset handover --frames "$frames" --seed 1 --force --out "$out/rec"
 fi
 
-echo "==> bodyseg run: bundled model, DSA projection, boxes, refinement, evaluation"
-"$bodyseg" run --recording "$out/rec" --parser model --out "$out/run" | tee "$out/table.md"
+echo "==> bodyseg run: people from depth, BlazePose, DSA projection, boxes, refinement, evaluation"
+"$bodyseg" run --recording "$out/rec" --parser model --out "$out/run" "${@:3}" | tee "$out/table.md"
 
 echo
 echo "The table: $out/run/report.md (also $out/run/report.json)"

@@ -58,16 +58,22 @@ convert() {
     # Only the reports are read: the clouds and label images (~2 GB per run) go.
     find "$work/runs/$out" \( -name '*.ply' -o -path '*/labels/*.png' \) -delete
 }
+# "model" is the bundled synthetic-trained model (parsing.segmenter = "onnx"), not the
+# default parser (BlazePose).
 for source in recorded model; do
+    parser=(--parser "$source")
+    if [ "$source" = model ]; then
+        parser+=(--set parsing.segmenter=onnx)
+    fi
     for mode in naive dsa; do
-        convert "${source}_${mode}" --parser "$source" --mode "$mode"
+        convert "${source}_${mode}" "${parser[@]}" --mode "$mode"
     done
     for mode in naive dsa; do
-        convert "${source}_${mode}_improved" --parser "$source" --mode "$mode" --config configs/benchmarks/improved.toml
-        convert "${source}_${mode}_vote" --parser "$source" --mode "$mode" --config configs/benchmarks/improved_vote.toml
+        convert "${source}_${mode}_improved" "${parser[@]}" --mode "$mode" --config configs/benchmarks/improved.toml
+        convert "${source}_${mode}_vote" "${parser[@]}" --mode "$mode" --config configs/benchmarks/improved_vote.toml
         if [ "$source" = model ]; then
             # What the parser's probabilities add (recorded label images carry none).
-            convert "${source}_${mode}_weighted" --parser "$source" --mode "$mode" --config configs/benchmarks/improved_weighted.toml
+            convert "${source}_${mode}_weighted" "${parser[@]}" --mode "$mode" --config configs/benchmarks/improved_weighted.toml
         fi
     done
 done

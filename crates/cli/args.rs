@@ -388,8 +388,10 @@ image, where each pixel takes the most probable class (shared/ALGORITHM.md §2).
 
 Model: --model FILE.onnx with its sidecar FILE.json (input_size, channel_order, mean, std, \
 class_names, output_stride, align_corners), or parsing.model of the configuration; default \
-the bundled models/bodyseg_parser_small.onnx (trained on bodyseg synth data by \
-scripts/train_parser.py). SCHP checkpoints convert with scripts/export_schp_onnx.py. \
+BlazePose (parsing.segmenter = blazepose, models/blazepose_full.onnx) on the people \
+found from depth; parsing.segmenter = onnx without a model runs the bundled \
+models/bodyseg_parser_small.onnx (trained on bodyseg synth data by scripts/train_parser.py). \
+SCHP checkpoints convert with scripts/export_schp_onnx.py. \
 --recorded uses the recording's own parsing/ images instead (e.g. synth's simulated \
 predictions), to preview them the same way.
 
@@ -428,8 +430,8 @@ pub struct ParseArgs {
     #[arg(long, value_name = "STEM")]
     pub frame: String,
 
-    /// ONNX model (its sidecar: the same path with .json) [default: parsing.model of the
-    /// configuration, else models/bodyseg_parser_small.onnx]
+    /// SCHP-contract ONNX model (its sidecar: the same path with .json); selects
+    /// parsing.segmenter = "onnx" [default: parsing.segmenter, "blazepose"]
     #[arg(long, value_name = "FILE.onnx", conflicts_with = "recorded")]
     pub model: Option<PathBuf>,
 
@@ -456,6 +458,7 @@ impl ParseArgs {
         let mut config = self.config.load()?;
         if let Some(model) = &self.model {
             config.parsing.model = model.display().to_string();
+            config.parsing.segmenter = bodyseg_pipeline::SegmenterKind::Onnx;
         }
         if let Some(threads) = self.threads {
             config.parsing.threads = threads;
@@ -1928,8 +1931,8 @@ pub struct BatchArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub parser: ParserArg,
 
-    /// ONNX model for --parser model (sidecar: same path with .json) [default:
-    /// parsing.model, else the bundled model]
+    /// SCHP-contract ONNX model for --parser model (sidecar: same path with .json);
+    /// selects parsing.segmenter = "onnx" [default: parsing.segmenter, "blazepose"]
     #[arg(long, value_name = "FILE.onnx")]
     pub model: Option<PathBuf>,
 
@@ -1958,6 +1961,7 @@ impl BatchArgs {
         })?;
         if let Some(model) = &self.model {
             config.parsing.model = model.display().to_string();
+            config.parsing.segmenter = bodyseg_pipeline::SegmenterKind::Onnx;
         }
         Ok(config)
     }

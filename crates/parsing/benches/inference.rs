@@ -90,6 +90,7 @@ fn inference(c: &mut Criterion) {
                 frame: "000000",
                 image: Some(image),
                 recorded: None,
+                regions: None,
             })
             .collect();
         group.throughput(Throughput::Elements(views as u64));

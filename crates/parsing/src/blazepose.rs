@@ -19,6 +19,7 @@
 //! - A ROI's `angle_rad` rotates its axes: right = (cos a, sin a), down = (−sin a, cos a)
 //!   in image pixels; 0 = upright.
 
+pub use crate::segmenter::PixelBox;
 use bodyseg_core::{Label, LabelImage, RgbImage};
 
 /// Side of the landmark model's square input, pixels.
@@ -105,19 +106,6 @@ fn mid(a: P2, b: P2) -> P2 {
     [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0]
 }
 
-/// A person box in image pixels: inclusive pixel-centre bounds.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PixelBox {
-    /// Left, px.
-    pub x0: f64,
-    /// Top, px.
-    pub y0: f64,
-    /// Right, px.
-    pub x1: f64,
-    /// Bottom, px.
-    pub y1: f64,
-}
-
 /// A square, rotated region of interest in the image (MediaPipe's `NormalizedRect` in
 /// pixels).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -184,17 +172,41 @@ impl Roi {
 /// (j + 0.5)·256/size), bilinear, coordinates clamped to the image (MediaPipe's
 /// BORDER_REPLICATE). An empty image gives zeros.
 pub fn crop(image: &RgbImage, roi: &Roi, size: usize) -> Vec<f32> {
-    let mut out = vec![0.0f32; size * size * 3];
+    let mut out = Vec::new();
+    crop_into(image, roi, size, &mut out);
+    out
+}
+
+/// [`crop`] into `out` (its allocation reused).
+pub fn crop_into(image: &RgbImage, roi: &Roi, size: usize, out: &mut Vec<f32>) {
+    out.clear();
+    out.resize(size * size * 3, 0.0);
     let (w, h) = (image.width as usize, image.height as usize);
     if w == 0 || h == 0 || image.rgb.len() < w * h * 3 {
-        return out;
+        return;
     }
     let step = INPUT as f64 / size as f64;
+    // tensor_to_image, with the axes computed once: p = origin + tx·ex + ty·ey.
+    let (right, down) = roi.axes();
+    let k = roi.side_px / INPUT as f64;
+    let ex = scale(right, k);
+    let ey = scale(down, k);
+    let origin = sub(
+        roi.centre_px,
+        add(
+            scale(right, roi.side_px / 2.0),
+            scale(down, roi.side_px / 2.0),
+        ),
+    );
+    let (wmax, hmax) = ((w - 1) as f64, (h - 1) as f64);
     for j in 0..size {
+        let ty = (j as f64 + 0.5) * step;
+        let row = add(origin, scale(ey, ty));
         for i in 0..size {
-            let p = roi.tensor_to_image([(i as f64 + 0.5) * step, (j as f64 + 0.5) * step]);
-            let x = p[0].clamp(0.0, (w - 1) as f64);
-            let y = p[1].clamp(0.0, (h - 1) as f64);
+            let tx = (i as f64 + 0.5) * step;
+            let p = add(row, scale(ex, tx));
+            let x = p[0].clamp(0.0, wmax);
+            let y = p[1].clamp(0.0, hmax);
             // clamped to [0, w-1]: the casts cannot leave the image
             let x0 = x.floor() as usize;
             let y0 = y.floor() as usize;
@@ -202,15 +214,21 @@ pub fn crop(image: &RgbImage, roi: &Roi, size: usize) -> Vec<f32> {
             let y1 = (y0 + 1).min(h - 1);
             let fx = x - x0 as f64;
             let fy = y - y0 as f64;
-            for c in 0..3 {
-                let at = |xx: usize, yy: usize| f64::from(image.rgb[(yy * w + xx) * 3 + c]);
-                let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
-                let bot = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
-                out[(j * size + i) * 3 + c] = ((top * (1.0 - fy) + bot * fy) / 255.0) as f32;
+            let (a, b, c, d) = (
+                (y0 * w + x0) * 3,
+                (y0 * w + x1) * 3,
+                (y1 * w + x0) * 3,
+                (y1 * w + x1) * 3,
+            );
+            let o = (j * size + i) * 3;
+            for ch in 0..3 {
+                let at = |k: usize| f64::from(image.rgb[k + ch]);
+                let top = at(a) * (1.0 - fx) + at(b) * fx;
+                let bot = at(c) * (1.0 - fx) + at(d) * fx;
+                out[o + ch] = ((top * (1.0 - fy) + bot * fy) / 255.0) as f32;
             }
         }
     }
-    out
 }
 
 fn sigmoid(x: f64) -> f64 {
@@ -585,10 +603,14 @@ pub struct PersonLabels {
     pub v1: usize,
     /// Class id per window pixel, row-major; 0 where not this person's.
     pub class: Vec<u8>,
-    /// Probability of that class, [0, 1]; 0 where not this person's.
+    /// Probability of that class, [0, 1]: on the person's pixels the mask value × the
+    /// bone-margin confidence; elsewhere the background's, 1 − the mask value.
     pub prob: Vec<f32>,
     /// The best bone score (smaller = nearer); +∞ where not this person's.
     pub score: Vec<f32>,
+    /// The person's depth from the camera, metres, when known (from its region): the
+    /// person in front wins where two overlap ([`merge_people`]).
+    pub depth_m: Option<f64>,
 }
 
 /// The mask at image point `q`, bilinear on the ROI grid (tensor pixel centres), 0 outside
@@ -612,8 +634,58 @@ fn mask_at(pose: &Pose, axes: (P2, P2), q: P2) -> f64 {
         + (m(ix, iy + 1) * (1.0 - fx) + m(ix + 1, iy + 1) * fx) * fy
 }
 
+/// The window of the image a pose's ROI covers: its bounding box, clipped; `None` when it
+/// misses the image.
+fn roi_window(roi: &Roi, width: usize, height: usize) -> Option<(usize, usize, usize, usize)> {
+    let corners =
+        [[0.0, 0.0], [256.0, 0.0], [0.0, 256.0], [256.0, 256.0]].map(|t| roi.tensor_to_image(t));
+    let lo = |k: usize| corners.iter().map(|c| c[k]).fold(f64::INFINITY, f64::min);
+    let hi = |k: usize| {
+        corners
+            .iter()
+            .map(|c| c[k])
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    if !(lo(0).is_finite() && lo(1).is_finite() && hi(0).is_finite() && hi(1).is_finite()) {
+        return None;
+    }
+    let u0 = lo(0).floor().max(0.0) as usize;
+    let v0 = lo(1).floor().max(0.0) as usize;
+    let u1 = ((hi(0).ceil() + 1.0).max(0.0) as usize).min(width);
+    let v1 = ((hi(1).ceil() + 1.0).max(0.0) as usize).min(height);
+    (u1 > u0 && v1 > v0).then_some((u0, u1, v0, v1))
+}
+
+/// Side of the pixel blocks in which [`label_person`] culls bones, px.
+const BLOCK: usize = 8;
+
+/// The class of a pixel from its per-class scores: (class, e1, e2) with e1 ≤ e2 the two
+/// smallest scores (e2 = e1 + 10 with one class).
+fn best_two(per_class: &[f64; 7]) -> (usize, f64, f64) {
+    let (mut c1, mut e1, mut e2) = (0usize, f64::INFINITY, f64::INFINITY);
+    for (c, &e) in per_class.iter().enumerate() {
+        if e < e1 {
+            e2 = e1;
+            e1 = e;
+            c1 = c;
+        } else if e < e2 {
+            e2 = e;
+        }
+    }
+    if !e2.is_finite() {
+        e2 = e1 + 10.0;
+    }
+    (c1, e1, e2)
+}
+
 /// Labels one person over the bounding box of its ROI in an image of `width`×`height`
 /// (§4 of the note). `None` when the ROI misses the image or the pose has no bone.
+///
+/// Every pixel is scored against the bones that can be nearest or second nearest there:
+/// the window is cut into 8×8 blocks, and a bone whose score at the block centre minus
+/// the block's half-diagonal (a score moves by at most distance / body scale) exceeds the
+/// second-smallest class upper bound of the block is skipped. The result equals scoring
+/// every bone (a property test checks it against that reference).
 pub fn label_person(
     pose: &Pose,
     cfg: &RuleConfig,
@@ -623,65 +695,84 @@ pub fn label_person(
     if pose.mask.len() < INPUT * INPUT {
         return None;
     }
-    let corners = [[0.0, 0.0], [256.0, 0.0], [0.0, 256.0], [256.0, 256.0]]
-        .map(|t| pose.roi.tensor_to_image(t));
-    let lo = |k: usize| corners.iter().map(|c| c[k]).fold(f64::INFINITY, f64::min);
-    let hi = |k: usize| {
-        corners
-            .iter()
-            .map(|c| c[k])
-            .fold(f64::NEG_INFINITY, f64::max)
-    };
-    let u0 = lo(0).floor().max(0.0) as usize;
-    let v0 = lo(1).floor().max(0.0) as usize;
-    let u1 = ((hi(0).ceil() + 1.0).max(0.0) as usize).min(width);
-    let v1 = ((hi(1).ceil() + 1.0).max(0.0) as usize).min(height);
-    if u1 <= u0 || v1 <= v0 {
-        return None;
-    }
+    let (u0, u1, v0, v1) = roi_window(&pose.roi, width, height)?;
     let bl = bones(pose, cfg);
     if bl.is_empty() {
         return None;
     }
-    let n = (u1 - u0) * (v1 - v0);
+    let ww = u1 - u0;
+    let n = ww * (v1 - v0);
     let mut class = vec![0u8; n];
-    let mut prob = vec![0.0f32; n];
+    let mut prob = vec![1.0f32; n];
     let mut score = vec![f32::INFINITY; n];
     let axes = pose.roi.axes();
-    for v in v0..v1 {
-        for u in u0..u1 {
-            let q = [u as f64, v as f64];
-            let m = mask_at(pose, axes, q);
-            if m < cfg.mask_threshold {
-                continue;
-            }
-            let mut per_class = [f64::INFINITY; 7];
-            for b in &bl {
-                let s = b.score(q, cfg.torso_bias);
-                let c = usize::from(b.class);
-                per_class[c] = per_class[c].min(s);
-            }
-            let (mut c1, mut e1, mut e2) = (0usize, f64::INFINITY, f64::INFINITY);
-            for (c, &e) in per_class.iter().enumerate() {
-                if e < e1 {
-                    e2 = e1;
-                    e1 = e;
-                    c1 = c;
-                } else if e < e2 {
-                    e2 = e;
+    let mut mask = vec![0.0f64; BLOCK * BLOCK];
+    let mut keep: Vec<usize> = Vec::with_capacity(bl.len());
+    for bv in (v0..v1).step_by(BLOCK) {
+        let bv1 = (bv + BLOCK).min(v1);
+        for bu in (u0..u1).step_by(BLOCK) {
+            let bu1 = (bu + BLOCK).min(u1);
+            // The mask first: most of a window is not the person's.
+            let mut any = false;
+            for v in bv..bv1 {
+                for u in bu..bu1 {
+                    let m = mask_at(pose, axes, [u as f64, v as f64]);
+                    mask[(v - bv) * BLOCK + (u - bu)] = m;
+                    prob[(v - v0) * ww + (u - u0)] = (1.0 - m).clamp(0.0, 1.0) as f32;
+                    any |= m >= cfg.mask_threshold;
                 }
             }
-            if e1 > cfg.max_score {
+            if !any {
                 continue;
             }
-            if !e2.is_finite() {
-                e2 = e1 + 10.0;
+            // Bounds of every bone's score over the block.
+            let centre = [(bu + bu1 - 1) as f64 / 2.0, (bv + bv1 - 1) as f64 / 2.0];
+            let half_diag = ((bu1 - bu) as f64).hypot((bv1 - bv) as f64) / 2.0;
+            let mut upper = [f64::INFINITY; 7];
+            let mut lower_of = Vec::with_capacity(bl.len());
+            for b in &bl {
+                let s = b.score(centre, cfg.torso_bias);
+                let slack = half_diag / b.scale_px;
+                let c = usize::from(b.class);
+                upper[c] = upper[c].min(s + slack);
+                lower_of.push(s - slack);
             }
-            let conf = 1.0 - 0.5 * (-(e2 - e1) / cfg.margin_scale).exp();
-            let k = (v - v0) * (u1 - u0) + (u - u0);
-            class[k] = c1 as u8;
-            prob[k] = (m * conf).clamp(0.0, 1.0) as f32;
-            score[k] = e1 as f32;
+            if lower_of.iter().all(|&l| l > cfg.max_score) {
+                continue; // no pixel of the block is near enough to a bone
+            }
+            let (_, _, u_second) = best_two(&upper);
+            let bound = if upper.iter().filter(|u| u.is_finite()).count() >= 2 {
+                u_second
+            } else {
+                f64::INFINITY
+            };
+            keep.clear();
+            keep.extend((0..bl.len()).filter(|&k| lower_of[k] <= bound));
+            for v in bv..bv1 {
+                for u in bu..bu1 {
+                    let m = mask[(v - bv) * BLOCK + (u - bu)];
+                    if m < cfg.mask_threshold {
+                        continue;
+                    }
+                    let q = [u as f64, v as f64];
+                    let mut per_class = [f64::INFINITY; 7];
+                    for &k in &keep {
+                        let b = &bl[k];
+                        let s = b.score(q, cfg.torso_bias);
+                        let c = usize::from(b.class);
+                        per_class[c] = per_class[c].min(s);
+                    }
+                    let (c1, e1, e2) = best_two(&per_class);
+                    if e1 > cfg.max_score {
+                        continue;
+                    }
+                    let conf = 1.0 - 0.5 * (-(e2 - e1) / cfg.margin_scale).exp();
+                    let k = (v - v0) * ww + (u - u0);
+                    class[k] = c1 as u8;
+                    prob[k] = (m * conf).clamp(0.0, 1.0) as f32;
+                    score[k] = e1 as f32;
+                }
+            }
         }
     }
     Some(PersonLabels {
@@ -692,26 +783,56 @@ pub fn label_person(
         class,
         prob,
         score,
+        depth_m: None,
     })
 }
 
-/// The people of one view merged into a label image with probabilities: a pixel takes the
-/// person with the smallest score there (the nearer bone); ties go to the earlier person.
-/// Pixels of no person are background with probability 0.
+/// Two people whose depths differ by at most this are "side by side": where they overlap
+/// in the image, the nearer bone decides, not the depth, metres. A person's depth is its
+/// box centre's, and the bodies of two people one behind the other are more than a torso
+/// apart (≈ 0.3 m), while a hand-over brings two box centres within ≈ 0.6 m.
+pub const SIDE_BY_SIDE_M: f64 = 0.3;
+
+/// The people of one view merged into a label image with probabilities. Where two people
+/// overlap, the one in front wins (depths known and more than [`SIDE_BY_SIDE_M`] apart),
+/// else the one with the smaller score (the nearer bone); ties go to the earlier person.
+/// Pixels of no person are background, with probability 1 − the largest mask value there
+/// (1 outside every window).
 pub fn merge_people(width: usize, height: usize, people: &[PersonLabels]) -> LabelImage {
     let mut labels = vec![Label::BACKGROUND; width * height];
-    let mut probs = vec![0.0f32; width * height];
+    let mut probs = vec![1.0f32; width * height];
     let mut best = vec![f32::INFINITY; width * height];
-    for p in people {
+    // Who won each pixel (index into `people`), for the depth test.
+    let mut owner = vec![usize::MAX; width * height];
+    // Front to back (unknown depths last), stable: ties keep the given order.
+    let mut order: Vec<usize> = (0..people.len()).collect();
+    order.sort_by(|&a, &b| {
+        let key = |p: &PersonLabels| p.depth_m.unwrap_or(f64::INFINITY);
+        key(&people[a]).total_cmp(&key(&people[b]))
+    });
+    for &index in &order {
+        let p = &people[index];
         let pw = p.u1 - p.u0;
         for v in p.v0..p.v1.min(height) {
             for u in p.u0..p.u1.min(width) {
                 let k = (v - p.v0) * pw + (u - p.u0);
                 let i = v * width + u;
-                if p.score[k] < best[i] {
+                if !p.score[k].is_finite() {
+                    if owner[i] == usize::MAX {
+                        probs[i] = probs[i].min(p.prob[k]);
+                    }
+                    continue;
+                }
+                let behind = owner[i] != usize::MAX
+                    && match (people[owner[i]].depth_m, p.depth_m) {
+                        (Some(front), Some(me)) => me - front > SIDE_BY_SIDE_M,
+                        _ => false,
+                    };
+                if !behind && p.score[k] < best[i] {
                     best[i] = p.score[k];
                     labels[i] = Label::from_id_or_unknown(p.class[k]);
                     probs[i] = p.prob[k];
+                    owner[i] = index;
                 }
             }
         }
@@ -907,7 +1028,9 @@ mod tests {
             want.len()
         );
         for k in 0..want.len() {
-            if want[k] == p.class[k] {
+            // On the person's pixels; elsewhere the prototype writes 0 where this gives
+            // the background's probability (1 − mask).
+            if want[k] == p.class[k] && want[k] != 0 {
                 // golden probabilities are rounded to 5 decimals
                 assert!((probs[k] - f64::from(p.prob[k])).abs() < 1e-4, "pixel {k}");
             }
@@ -944,6 +1067,7 @@ mod tests {
             class: vec![1, 2],
             prob: vec![0.9, 0.8],
             score: vec![0.5, 2.0],
+            depth_m: None,
         };
         let b = PersonLabels {
             u0: 1,
@@ -953,10 +1077,88 @@ mod tests {
             class: vec![3, 4],
             prob: vec![0.7, 0.6],
             score: vec![1.0, 1.0],
+            depth_m: None,
         };
-        let img = merge_people(4, 1, &[a, b]);
+        let img = merge_people(4, 1, &[a.clone(), b.clone()]);
         let ids: Vec<u8> = img.labels.iter().map(|l| l.id()).collect();
         assert_eq!(ids, vec![1, 3, 4, 0]);
-        assert_eq!(img.probs, Some(vec![0.9, 0.7, 0.6, 0.0]));
+        // Outside every person: background, certain.
+        assert_eq!(img.probs, Some(vec![0.9, 0.7, 0.6, 1.0]));
+
+        // The person in front wins the overlap even with the farther bone...
+        let front = PersonLabels {
+            depth_m: Some(2.0),
+            ..b.clone()
+        };
+        let behind = PersonLabels {
+            depth_m: Some(3.0),
+            ..a.clone()
+        };
+        let img = merge_people(4, 1, &[behind.clone(), front.clone()]);
+        let ids: Vec<u8> = img.labels.iter().map(|l| l.id()).collect();
+        assert_eq!(ids, vec![1, 3, 4, 0], "pixel 1: b is in front");
+        // ...also with a smaller bone score behind it.
+        let close_behind = PersonLabels {
+            score: vec![0.1, 0.1],
+            ..behind.clone()
+        };
+        let img = merge_people(4, 1, &[close_behind, front.clone()]);
+        assert_eq!(img.labels[1].id(), 3);
+        // Side by side (depths within SIDE_BY_SIDE_M): the nearer bone decides.
+        let beside = PersonLabels {
+            depth_m: Some(2.0 + SIDE_BY_SIDE_M / 2.0),
+            score: vec![0.1, 0.1],
+            ..a
+        };
+        let img = merge_people(4, 1, &[beside, front]);
+        assert_eq!(img.labels[1].id(), 2);
+    }
+
+    /// [`label_person`]'s block culling gives what scoring every bone at every pixel
+    /// gives (the reference below), on figures with graded masks and in several poses.
+    #[test]
+    fn block_culling_equals_scoring_every_bone() {
+        let cfg = RuleConfig::default();
+        for (angle, arm_dx) in [(0.0, 0.0), (0.3, 12.0), (-0.7, -20.0)] {
+            let mut pose = figure();
+            pose.roi.angle_rad = angle;
+            pose.xy[landmark::LEFT_WRIST][0] += arm_dx;
+            for j in 0..INPUT {
+                for i in 0..INPUT {
+                    let (tx, ty) = (i as f64 + 0.5, j as f64 + 0.5);
+                    let m = 1.3 - ((tx - 128.0) / 60.0).hypot((ty - 128.0) / 110.0);
+                    pose.mask[j * INPUT + i] = m.clamp(0.0, 1.0) as f32;
+                }
+            }
+            let got = label_person(&pose, &cfg, 100, 160).expect("in the image");
+            let bl = bones(&pose, &cfg);
+            let axes = pose.roi.axes();
+            let ww = got.u1 - got.u0;
+            let mut labelled = 0;
+            for v in got.v0..got.v1 {
+                for u in got.u0..got.u1 {
+                    let k = (v - got.v0) * ww + (u - got.u0);
+                    let q = [u as f64, v as f64];
+                    let m = mask_at(&pose, axes, q);
+                    let mut per_class = [f64::INFINITY; 7];
+                    for b in &bl {
+                        let c = usize::from(b.class);
+                        per_class[c] = per_class[c].min(b.score(q, cfg.torso_bias));
+                    }
+                    let (c1, e1, e2) = best_two(&per_class);
+                    if m < cfg.mask_threshold || e1 > cfg.max_score {
+                        assert_eq!(got.class[k], 0, "({u}, {v}) is not the person's");
+                        assert!(got.score[k].is_infinite());
+                        continue;
+                    }
+                    labelled += 1;
+                    assert_eq!(usize::from(got.class[k]), c1, "({u}, {v})");
+                    let conf = 1.0 - 0.5 * (-(e2 - e1) / cfg.margin_scale).exp();
+                    // f32 storage of an f64 value
+                    assert!((f64::from(got.prob[k]) - m * conf).abs() < 1e-6);
+                }
+            }
+            assert!(labelled > 1000, "the figure is labelled: {labelled} px");
+        }
     }
 }

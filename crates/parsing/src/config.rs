@@ -1,13 +1,35 @@
 //! [`ParsingConfig`]: the `[parsing]` section of the pipeline configuration.
 
+use crate::blazepose_segmenter::{BlazePoseOptions, BlazePoseVariant};
 use serde::{Deserialize, Serialize};
+
+/// Which 2D parser runs on colour images.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SegmenterKind {
+    /// BlazePose's landmark model on the people found from depth, its landmarks and mask
+    /// turned into the 7 classes ([`crate::blazepose`]): the default, for real images on a
+    /// CPU.
+    #[default]
+    Blazepose,
+    /// A network following the SCHP contract (ALGORITHM.md §2) in ONNX: `parsing.model`,
+    /// else the bundled synthetic-trained `models/bodyseg_parser_small.onnx`
+    /// ([`crate::OnnxSegmenter`]).
+    Onnx,
+}
 
 /// How 2D parsing runs (`[parsing]` in the pipeline configuration).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ParsingConfig {
-    /// ONNX model file; its sidecar is the same path with `.json`. Empty (default) = the
-    /// bundled model, `models/bodyseg_parser_small.onnx`.
+    /// Which parser runs on colour images: `blazepose` (default) or `onnx`.
+    pub segmenter: SegmenterKind,
+    /// BlazePose landmark model (`segmenter = "blazepose"`): `lite`, `full` (default) or
+    /// `heavy` (`models/blazepose_<variant>.onnx`; heavy is made by
+    /// `scripts/convert_blazepose.py`).
+    pub blazepose_variant: BlazePoseVariant,
+    /// ONNX model file (`segmenter = "onnx"`); its sidecar is the same path with `.json`.
+    /// Empty (default) = the bundled model, `models/bodyseg_parser_small.onnx`.
     pub model: String,
     /// ONNX Runtime shared library (`libonnxruntime.so.1.x`). Empty (default) = the
     /// `ORT_DYLIB_PATH` environment variable, else the project-local copy that
@@ -20,6 +42,8 @@ pub struct ParsingConfig {
 impl Default for ParsingConfig {
     fn default() -> Self {
         ParsingConfig {
+            segmenter: SegmenterKind::Blazepose,
+            blazepose_variant: BlazePoseVariant::Full,
             model: String::new(),
             runtime_library: String::new(),
             threads: 2,
@@ -35,6 +59,14 @@ impl ParsingConfig {
         crate::OnnxOptions {
             threads: self.threads as usize,
             keep_class_probs: false,
+        }
+    }
+
+    /// The [`BlazePoseOptions`] of these values (the rule's tuned defaults).
+    pub fn blazepose_options(&self) -> BlazePoseOptions {
+        BlazePoseOptions {
+            threads: self.threads as usize,
+            ..BlazePoseOptions::default()
         }
     }
 }

@@ -54,6 +54,19 @@ pub enum ParsingError {
         /// The model file.
         path: PathBuf,
     },
+    /// A model given as BlazePose's landmark model is not one (other inputs or outputs).
+    #[error(
+        "{}: not a BlazePose landmark model: {reason} (expected the conversion of \
+         scripts/convert_blazepose.py: input input_1 [1,256,256,3], outputs Identity [1,195], \
+         Identity_1 [1,1], Identity_2 [1,256,256,1], Identity_3 [1,64,64,39])",
+        .path.display()
+    )]
+    NotBlazePose {
+        /// What differs.
+        reason: String,
+        /// The model file.
+        path: PathBuf,
+    },
     /// The model's output has a number of channels other than 7 (one per class).
     #[error(
         "{}: model output has {got} channels, expected 7 (one logit per class: background, \

@@ -29,6 +29,7 @@
 //! - Probabilities are softmax values in `[0, 1]`.
 
 pub mod blazepose;
+mod blazepose_segmenter;
 mod config;
 mod error;
 mod onnx;
@@ -36,8 +37,9 @@ mod segmenter;
 mod spec;
 pub mod transform;
 
-pub use config::ParsingConfig;
+pub use blazepose_segmenter::{BlazePoseOptions, BlazePoseSegmenter, BlazePoseVariant};
+pub use config::{ParsingConfig, SegmenterKind};
 pub use error::ParsingError;
 pub use onnx::{OnnxOptions, OnnxSegmenter, load_runtime};
-pub use segmenter::{ParsedView, RecordedSegmenter, Segmenter, ViewInput};
+pub use segmenter::{ParsedView, PersonRegion, PixelBox, RecordedSegmenter, Segmenter, ViewInput};
 pub use spec::{ChannelOrder, MAX_INPUT_SIZE, ModelSpec, sidecar_path};

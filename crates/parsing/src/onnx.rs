@@ -36,6 +36,38 @@ impl Default for OnnxOptions {
 /// allows one environment per process; it is created by the first [`load_runtime`].
 static RUNTIME: Mutex<Option<(Environment, PathBuf)>> = Mutex::new(None);
 
+/// A session of `model_bytes` (`model_path` names it in errors) in the ONNX Runtime of
+/// `runtime_library`: full graph optimisation, `threads` intra-op threads (0 lets ONNX
+/// Runtime choose), one inter-op thread, the intra-op pool spinning or not (`spin`).
+///
+/// # Errors
+/// [`ParsingError::RuntimeLibrary`], [`ParsingError::ModelLoad`].
+pub(crate) fn load_session(
+    runtime_library: &Path,
+    model_bytes: &[u8],
+    model_path: &Path,
+    threads: usize,
+    spin: bool,
+) -> Result<Session, ParsingError> {
+    let env = load_runtime(runtime_library)?;
+    let load_err = |cause: String| ParsingError::ModelLoad {
+        cause,
+        path: model_path.to_path_buf(),
+    };
+    Session::builder(&env)
+        .map_err(|e| load_err(e.to_string()))?
+        .with_optimization_level(GraphOptimizationLevel::Level3)
+        .map_err(|e| load_err(e.to_string()))?
+        .with_intra_threads(threads)
+        .map_err(|e| load_err(e.to_string()))?
+        .with_inter_threads(1)
+        .map_err(|e| load_err(e.to_string()))?
+        .with_intra_op_spinning(spin)
+        .map_err(|e| load_err(e.to_string()))?
+        .commit_from_memory(model_bytes)
+        .map_err(|e| load_err(e.to_string()))
+}
+
 /// Loads the ONNX Runtime shared library `library` (once per process) and returns the
 /// environment sessions are created in. Later calls return the first environment, even
 /// with another path (ONNX Runtime cannot be unloaded); that is logged at debug level.
@@ -123,21 +155,13 @@ impl OnnxSegmenter {
         spec: ModelSpec,
         options: &OnnxOptions,
     ) -> Result<OnnxSegmenter, ParsingError> {
-        let env = load_runtime(runtime_library)?;
-        let load_err = |cause: String| ParsingError::ModelLoad {
-            cause,
-            path: model_path.to_path_buf(),
-        };
-        let session = Session::builder(&env)
-            .map_err(|e| load_err(e.to_string()))?
-            .with_optimization_level(GraphOptimizationLevel::Level3)
-            .map_err(|e| load_err(e.to_string()))?
-            .with_intra_threads(options.threads)
-            .map_err(|e| load_err(e.to_string()))?
-            .with_inter_threads(1)
-            .map_err(|e| load_err(e.to_string()))?
-            .commit_from_memory(model_bytes)
-            .map_err(|e| load_err(e.to_string()))?;
+        let session = load_session(
+            runtime_library,
+            model_bytes,
+            model_path,
+            options.threads,
+            true,
+        )?;
         let contract = |reason: String| ParsingError::ModelContract {
             reason,
             path: model_path.to_path_buf(),

@@ -1,7 +1,33 @@
-//! The [`Segmenter`] trait and [`RecordedSegmenter`].
+//! The [`Segmenter`] trait, what it is handed per view ([`ViewInput`], [`PersonRegion`]),
+//! and [`RecordedSegmenter`].
 
 use crate::ParsingError;
 use bodyseg_core::{LabelImage, NUM_CLASSES, RgbImage};
+
+/// A box in image pixels: inclusive pixel-centre bounds (u = column, v = row).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelBox {
+    /// Left, px.
+    pub x0: f64,
+    /// Top, px.
+    pub y0: f64,
+    /// Right, px.
+    pub x1: f64,
+    /// Bottom, px.
+    pub y1: f64,
+}
+
+/// Where one person is in one colour image: the person's box found in 3D (from depth)
+/// projected into the camera, for segmenters that look at one person at a time
+/// ([`Segmenter::needs_regions`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PersonRegion {
+    /// The projected box's extent in the colour image, clipped to it, px.
+    pub bounds: PixelBox,
+    /// The box centre's depth along the colour camera's optical axis, metres (> 0): who
+    /// is in front where two people overlap in the image.
+    pub depth_m: f64,
+}
 
 /// One camera's view of a frame, as handed to a [`Segmenter`].
 #[derive(Clone, Copy, Debug)]
@@ -16,6 +42,11 @@ pub struct ViewInput<'a> {
     /// Labels computed earlier for this view (a recording's `parsing/` image, read by the
     /// caller); `None` unless the segmenter needs them ([`Segmenter::needs_recorded`]).
     pub recorded: Option<&'a LabelImage>,
+    /// The people in this view, from person boxes found in 3D ([`PersonRegion`]); an empty
+    /// slice when nobody was found. `None` when the segmenter does not need them
+    /// ([`Segmenter::needs_regions`]) or the caller has no depth to find people in (a
+    /// segmenter then falls back to what it can do on the image alone).
+    pub regions: Option<&'a [PersonRegion]>,
 }
 
 /// The parser's output for one view.
@@ -56,6 +87,12 @@ pub trait Segmenter {
     /// Whether [`Segmenter::segment`] needs [`ViewInput::recorded`] (labels computed
     /// earlier); when false the caller need not read them.
     fn needs_recorded(&self) -> bool {
+        false
+    }
+
+    /// Whether [`Segmenter::segment`] wants [`ViewInput::regions`] (people found in 3D
+    /// before parsing); when true the caller finds the frame's people from depth first.
+    fn needs_regions(&self) -> bool {
         false
     }
 
@@ -140,6 +177,7 @@ mod tests {
             frame: "000001",
             image: None,
             recorded,
+            regions: None,
         };
         let out = seg
             .segment(&[view("cam1", Some(&background)), view("cam0", Some(&head))])

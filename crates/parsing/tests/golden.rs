@@ -176,6 +176,7 @@ fn whole_chain_matches_python_and_batches_views() {
         frame: "000000",
         image: Some(image),
         recorded: None,
+        regions: None,
     };
     // Two views of different sizes in one batch: each comes back at its own size.
     let out = seg.segment(&[view(&image), view(&other)]).expect("segment");

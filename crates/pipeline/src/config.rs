@@ -510,6 +510,8 @@ mod tests {
                 ..Default::default()
             },
             parsing: bodyseg_parsing::ParsingConfig {
+                segmenter: bodyseg_parsing::SegmenterKind::Onnx,
+                blazepose_variant: bodyseg_parsing::BlazePoseVariant::Lite,
                 model: "m.onnx".into(),
                 threads: 4,
                 ..Default::default()

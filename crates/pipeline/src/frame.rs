@@ -7,8 +7,10 @@
 //! Recording ─ Frame::read ─→ Frame ─ parse_frame (Segmenter) ─→ ParsedFrame ─ project ─→ LabeledCloud
 //! ```
 //!
-//! A segmenter that needs more than the images (person regions, say) gets them through
-//! [`ViewInput`], filled here.
+//! A segmenter that needs more than the images gets them through [`ViewInput`], filled
+//! here: for one that needs person regions (BlazePose), [`parse_frame`] first finds the
+//! frame's people from depth and projects their boxes into every camera
+//! ([`crate::regions`]), so the order is depth → people → parse.
 
 use crate::batch::InputFile;
 use crate::config::PipelineConfig;
@@ -16,7 +18,7 @@ use crate::recording::{Layer, Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
-use bodyseg_core::{LabelImage, LabeledCloud, RgbImage};
+use bodyseg_core::{LabelImage, LabeledCloud, PersonBoxes, RgbImage};
 use bodyseg_io::DepthImage;
 use bodyseg_parsing::{RecordedSegmenter, Segmenter, ViewInput};
 use bodyseg_project::{CameraImages, FrameProjector, ProjectMode};
@@ -37,10 +39,12 @@ pub struct FrameNeeds {
 }
 
 impl FrameNeeds {
-    /// What `segmenter` needs to run: the colour images and/or the recorded predictions
-    /// (no depth: add what the later stages need).
+    /// What `segmenter` needs to run: the colour images and/or the recorded predictions,
+    /// and the depth images when it takes person regions (found from depth); add what the
+    /// later stages need.
     pub fn of(segmenter: &dyn Segmenter) -> FrameNeeds {
         FrameNeeds {
+            depth: segmenter.needs_regions(),
             colour: segmenter.needs_images(),
             parsing: segmenter.needs_recorded(),
             ..FrameNeeds::default()
@@ -125,16 +129,28 @@ pub struct ParsedFrame {
     pub frame: Frame,
     /// The labels per camera.
     pub labels: Vec<LabelImage>,
+    /// The people found from depth before parsing (geometry-mode boxes), when the
+    /// segmenter took person regions.
+    pub people: Option<PersonBoxes>,
 }
 
 /// Runs `segmenter` on every camera of `frame` (one call, the views batched): the one call
 /// site of [`Segmenter::segment`] in the pipeline. The frame must hold what the segmenter
-/// needs ([`FrameNeeds::of`]); camera names come from `rig`.
+/// needs ([`FrameNeeds::of`]); camera names come from `rig`. A segmenter that takes person
+/// regions gets them from the people found in the frame's depth images
+/// ([`crate::regions::find_people`], with `config`'s `[backproject]` and `[boxes]` values)
+/// projected into each camera; a frame read without depth gives it none (it falls back to
+/// the images alone).
 ///
 /// # Errors
-/// The frame lacks the images the segmenter needs, or the segmenter fails (the error
-/// names the view).
-pub fn parse_frame(frame: Frame, rig: &Rig, segmenter: &mut dyn Segmenter) -> Result<ParsedFrame> {
+/// The frame lacks the images the segmenter needs, finding the people fails, or the
+/// segmenter fails (the error names the view).
+pub fn parse_frame(
+    frame: Frame,
+    rig: &Rig,
+    segmenter: &mut dyn Segmenter,
+    config: &PipelineConfig,
+) -> Result<ParsedFrame> {
     let cameras = rig.cameras.len();
     let lengths = [
         frame.colour.as_ref().map(Vec::len),
@@ -156,6 +172,20 @@ pub fn parse_frame(frame: Frame, rig: &Rig, segmenter: &mut dyn Segmenter) -> Re
             missing("recorded parsing/ images")
         );
     }
+    let people = if segmenter.needs_regions() && !frame.depth.is_empty() {
+        Some(crate::regions::find_people(
+            &frame.stem,
+            &frame.depth,
+            frame.colour.as_deref(),
+            rig,
+            config,
+        )?)
+    } else {
+        None
+    };
+    let regions = people
+        .as_ref()
+        .map(|p| crate::regions::person_regions(rig, &p.boxes));
     let views: Vec<ViewInput<'_>> = rig
         .cameras
         .iter()
@@ -165,6 +195,7 @@ pub fn parse_frame(frame: Frame, rig: &Rig, segmenter: &mut dyn Segmenter) -> Re
             frame: &frame.stem,
             image: frame.colour.as_ref().and_then(|c| c.get(i)),
             recorded: frame.parsing.as_ref().and_then(|p| p.get(i)),
+            regions: regions.as_ref().and_then(|r| r.get(i)).map(Vec::as_slice),
         })
         .collect();
     let parsed = segmenter.segment(&views)?;
@@ -177,7 +208,11 @@ pub fn parse_frame(frame: Frame, rig: &Rig, segmenter: &mut dyn Segmenter) -> Re
         );
     }
     let labels = parsed.into_iter().map(|p| p.labels).collect();
-    Ok(ParsedFrame { frame, labels })
+    Ok(ParsedFrame {
+        frame,
+        labels,
+        people,
+    })
 }
 
 /// Projects a parsed frame's labels onto its depth points
@@ -265,7 +300,7 @@ pub(crate) fn read_and_project(
 
     let context = || format!("{}: frame {stem}", recording.display());
     let (cloud, took) = timed(|| {
-        let parsed = parse_frame(frame, rig, &mut segmenter).with_context(context)?;
+        let parsed = parse_frame(frame, rig, &mut segmenter, config).with_context(context)?;
         // Geometry-mode boxes split people from what is nobody's by colour too.
         project_parsed(&parsed, rig, config, colour).with_context(context)
     })?;
@@ -332,6 +367,7 @@ mod tests {
     #[test]
     fn recorded_predictions_go_through_the_segmenter_in_camera_order() {
         let rig = rig();
+        let cfg = PipelineConfig::default();
         let recorded: Vec<LabelImage> = (0..rig.cameras.len())
             .map(|i| LabelImage::filled(2, 1, Label::from_id(i as u8).expect("class id")))
             .collect();
@@ -344,24 +380,29 @@ mod tests {
             }
         );
         let parsed =
-            parse_frame(frame(Some(recorded.clone())), &rig, &mut segmenter).expect("parsed");
+            parse_frame(frame(Some(recorded.clone())), &rig, &mut segmenter, &cfg).expect("parsed");
         assert_eq!(parsed.labels, recorded);
         assert_eq!(parsed.frame.stem, "000001");
 
         let e = format!(
             "{:#}",
-            parse_frame(frame(None), &rig, &mut segmenter).expect_err("not read")
+            parse_frame(frame(None), &rig, &mut segmenter, &cfg).expect_err("not read")
         );
         assert!(e.contains("needs the recorded parsing/ images"), "{e}");
         let e = format!(
             "{:#}",
-            parse_frame(frame(Some(recorded[..1].to_vec())), &rig, &mut segmenter)
-                .expect_err("one camera")
+            parse_frame(
+                frame(Some(recorded[..1].to_vec())),
+                &rig,
+                &mut segmenter,
+                &cfg
+            )
+            .expect_err("one camera")
         );
         assert!(e.contains("another number of cameras"), "{e}");
         let e = format!(
             "{:#}",
-            parse_frame(frame(None), &rig, &mut Short).expect_err("short")
+            parse_frame(frame(None), &rig, &mut Short, &cfg).expect_err("short")
         );
         assert!(e.contains("gave 2 label images for 3 cameras"), "{e}");
     }

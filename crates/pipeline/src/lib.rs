@@ -67,6 +67,7 @@ mod processor;
 mod project;
 mod recording;
 mod refine;
+pub mod regions;
 mod report;
 mod rig;
 mod run;
@@ -81,6 +82,7 @@ pub use batch::{
     Shard,
 };
 pub use bodyseg_calib::{AzureColorResolution, AzureDepthMode, AzureKinectMode, Board};
+pub use bodyseg_parsing::SegmenterKind;
 pub use bodyseg_people::{BoxMode, Floor, FloorHint, Up};
 pub use bodyseg_project::ProjectMode;
 pub use boxes::{BoxesInput, BoxesOptions, BoxesSummary, boxes_file, top_view};

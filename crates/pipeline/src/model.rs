@@ -1,5 +1,6 @@
-//! Where the 2D parser comes from: the ONNX model and the ONNX Runtime library, or a
-//! recording's own predictions; [`open_segmenter`] makes the [`Segmenter`] of `bodyseg run`
+//! Where the 2D parser comes from: BlazePose's landmark model (`parsing.segmenter =
+//! "blazepose"`, the default) or an SCHP-contract ONNX model (`"onnx"`), the ONNX Runtime
+//! library, or a recording's own predictions; [`open_segmenter`] makes the [`Segmenter`] of `bodyseg run`
 //! and `convert`.
 //!
 //! # Where the library and the model are looked for
@@ -16,23 +17,33 @@
 //! 4. the checkout the binary was built from (a path fixed at build time):
 //!    `.deps/onnxruntime/libonnxruntime.so`, where `scripts/setup_onnxruntime.sh` puts it.
 //!
-//! The bundled model follows the same rule (a model is data, but a planted one would
-//! mislead): `parsing.model`, else `<prefix>/share/bodyseg/models/…`, else the checkout's
-//! `models/bodyseg_parser_small.onnx`. [`describe_parser_files`] says what would be
+//! The bundled models follow the same rule (a model is data, but a planted one would
+//! mislead): `parsing.model` (for `"onnx"`), else `<prefix>/share/bodyseg/models/…`, else
+//! the checkout's `models/` (`bodyseg_parser_small.onnx`, `blazepose_<variant>.onnx`). [`describe_parser_files`] says what would be
 //! loaded (`bodyseg version -v`).
 
 use crate::config::PipelineConfig;
 use crate::recording::{Layer, Recording};
 use anyhow::{Context, Result, bail};
-use bodyseg_parsing::{ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, sidecar_path};
+use bodyseg_parsing::{BlazePoseSegmenter, BlazePoseVariant};
+use bodyseg_parsing::{
+    ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, SegmenterKind, sidecar_path,
+};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// The bundled model, relative to the checkout (its sidecar: the same with `.json`).
+/// The bundled SCHP-contract model, relative to the checkout (its sidecar: the same with
+/// `.json`).
 pub(crate) const BUNDLED_MODEL: &str = "models/bodyseg_parser_small.onnx";
 
 /// The bundled model, relative to an install prefix.
 pub(crate) const PREFIX_MODEL: &str = "share/bodyseg/models/bodyseg_parser_small.onnx";
+
+/// BlazePose's landmark model of a variant, relative to the checkout (the same under
+/// `<prefix>/share/bodyseg/` for an install).
+pub(crate) fn blazepose_model(variant: BlazePoseVariant) -> String {
+    format!("models/blazepose_{}.onnx", variant.name())
+}
 
 /// Where `scripts/setup_onnxruntime.sh` puts the ONNX Runtime library, relative to the
 /// checkout.
@@ -149,11 +160,13 @@ fn runtime_library_from(
     })
 }
 
-/// The model file and the rule that found it: `parsing.model`, else the bundled model of
-/// the install prefix or the checkout.
+/// The model file of the configured parser and the rule that found it: for
+/// `parsing.segmenter = "onnx"`, `parsing.model`, else the bundled model of the install
+/// prefix or the checkout; for `"blazepose"`, `blazepose_<parsing.blazepose_variant>.onnx`
+/// there.
 ///
 /// # Errors
-/// The bundled model is not found.
+/// The model is not found; for the heavy BlazePose model the message says how to make it.
 pub(crate) fn resolve_model(config: &PipelineConfig) -> Result<(PathBuf, FoundBy)> {
     let exe = std::env::current_exe().ok();
     model_from(config, exe.as_deref())
@@ -161,15 +174,33 @@ pub(crate) fn resolve_model(config: &PipelineConfig) -> Result<(PathBuf, FoundBy
 
 /// [`resolve_model`] with the executable's path given.
 fn model_from(config: &PipelineConfig, exe: Option<&Path>) -> Result<(PathBuf, FoundBy)> {
-    if !config.parsing.model.is_empty() {
-        return Ok((PathBuf::from(&config.parsing.model), FoundBy::Config));
+    match config.parsing.segmenter {
+        SegmenterKind::Onnx => {
+            if !config.parsing.model.is_empty() {
+                return Ok((PathBuf::from(&config.parsing.model), FoundBy::Config));
+            }
+            first_file(bundled_candidates(exe, PREFIX_MODEL, BUNDLED_MODEL)).with_context(|| {
+                format!(
+                    "bundled model not found ({BUNDLED_MODEL} of the checkout, \
+                     <prefix>/{PREFIX_MODEL}): pass --model FILE.onnx"
+                )
+            })
+        }
+        SegmenterKind::Blazepose => {
+            let variant = config.parsing.blazepose_variant;
+            let relative = blazepose_model(variant);
+            let prefix_relative = format!("share/bodyseg/{relative}");
+            first_file(bundled_candidates(exe, &prefix_relative, &relative)).with_context(|| {
+                let how = if variant == BlazePoseVariant::Heavy {
+                    "make it with scripts/convert_blazepose.py (see its header), or use \
+                     parsing.blazepose_variant = \"full\""
+                } else {
+                    "it is part of the checkout (models/)"
+                };
+                format!("BlazePose model {relative} not found (checkout or <prefix>/{prefix_relative}): {how}")
+            })
+        }
     }
-    first_file(bundled_candidates(exe, PREFIX_MODEL, BUNDLED_MODEL)).with_context(|| {
-        format!(
-            "bundled model not found ({BUNDLED_MODEL} of the checkout, \
-             <prefix>/{PREFIX_MODEL}): pass --model FILE.onnx"
-        )
-    })
 }
 
 /// What `bodyseg version -v` prints about the parser's files, one line each: the ONNX
@@ -186,12 +217,13 @@ pub fn describe_parser_files(config: &PipelineConfig) -> Vec<String> {
     ]
 }
 
-/// Loads an ONNX model and its sidecar (`model.json`) into an [`OnnxSegmenter`].
+/// Loads an SCHP-contract ONNX model and its sidecar (`model.json`) into an
+/// [`OnnxSegmenter`].
 ///
 /// # Errors
 /// The model or sidecar cannot be read, the sidecar is invalid, the runtime library is
 /// missing, or the model does not follow the contract; each names the file.
-pub(crate) fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
+pub(crate) fn load_onnx_segmenter(config: &PipelineConfig, model: &Path) -> Result<OnnxSegmenter> {
     let sidecar = sidecar_path(model);
     let text = bodyseg_io::read_text(&sidecar)
         .context("model sidecar (the model's .json: input_size, channel_order, mean, std, ...)")?;
@@ -206,6 +238,31 @@ pub(crate) fn load_segmenter(config: &PipelineConfig, model: &Path) -> Result<On
         &config.parsing.onnx_options(),
     )?;
     Ok(segmenter)
+}
+
+/// Loads the configured parser's model `model` ([`resolve_model`]): a
+/// [`BlazePoseSegmenter`] for `parsing.segmenter = "blazepose"`, an [`OnnxSegmenter`] (with
+/// its sidecar) for `"onnx"`.
+///
+/// # Errors
+/// As [`load_onnx_segmenter`]; a BlazePose model that is not BlazePose-shaped.
+pub(crate) fn load_segmenter(
+    config: &PipelineConfig,
+    model: &Path,
+) -> Result<Box<dyn Segmenter + Send>> {
+    Ok(match config.parsing.segmenter {
+        SegmenterKind::Onnx => Box::new(load_onnx_segmenter(config, model)?),
+        SegmenterKind::Blazepose => {
+            let (library, _) = resolve_runtime_library(config)?;
+            let bytes = bodyseg_io::read_bytes(model).context("BlazePose landmark model")?;
+            Box::new(BlazePoseSegmenter::new(
+                &library,
+                &bytes,
+                model,
+                &config.parsing.blazepose_options(),
+            )?)
+        }
+    })
 }
 
 /// The segmenter `choice` asks for on `rec`, and whether it is the model:
@@ -237,7 +294,7 @@ pub(crate) fn open_segmenter(
     };
     let segmenter: Box<dyn Segmenter + Send> = if use_model {
         let (model, _) = resolve_model(config)?;
-        Box::new(load_segmenter(config, &model)?)
+        load_segmenter(config, &model)?
     } else {
         Box::new(RecordedSegmenter::new())
     };
@@ -253,6 +310,7 @@ mod tests {
         let mut cfg = PipelineConfig::default();
         cfg.parsing.runtime_library = "/x/libonnxruntime.so".into();
         cfg.parsing.model = "m.onnx".into();
+        cfg.parsing.segmenter = SegmenterKind::Onnx;
         assert_eq!(
             runtime_library_from(&cfg, Some("/y/lib.so".as_ref()), None).expect("configured"),
             (PathBuf::from("/x/libonnxruntime.so"), FoundBy::Config)
@@ -266,6 +324,11 @@ mod tests {
             runtime_library_from(&cfg, Some("/y/lib.so".as_ref()), None).expect("env"),
             (PathBuf::from("/y/lib.so"), FoundBy::Environment)
         );
+        // BlazePose: the variant's model in the checkout.
+        cfg.parsing.segmenter = SegmenterKind::Blazepose;
+        let (full, by) = resolve_model(&cfg).expect("models/blazepose_full.onnx is in git");
+        assert!(full.ends_with("models/blazepose_full.onnx"), "{full:?}");
+        assert_eq!(by, FoundBy::Checkout);
     }
 
     /// A library planted in the current folder, or in a folder above the executable, is

@@ -9,7 +9,7 @@ use crate::recording::{Layer, Layout, Recording, check_stem};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
 use bodyseg_core::{Class, LabelImage, RgbImage};
-use bodyseg_parsing::{RecordedSegmenter, Segmenter};
+use bodyseg_parsing::{RecordedSegmenter, Segmenter, SegmenterKind};
 use std::path::PathBuf;
 
 /// Which segmenter [`parse_file`] runs.
@@ -83,14 +83,19 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     check_stem(&opts.frame)?;
     check_output_folder(&opts.out, "--recording", &opts.recording)?;
     let cfg = &opts.config;
-    // The colour images for the previews; the recorded predictions for --recorded.
-    let needs = FrameNeeds {
-        colour: true,
-        parsing: opts.source == ParseSource::Recorded,
-        ..FrameNeeds::default()
-    };
+    // The colour images for the previews; the recorded predictions for --recorded; the
+    // depth images, where the recording has them, for a parser that takes the people found
+    // from depth (BlazePose).
+    let people_from_depth =
+        opts.source == ParseSource::Model && cfg.parsing.segmenter == SegmenterKind::Blazepose;
     let ((rec, frame), read) = timed(|| -> Result<_> {
         let rec = Recording::open(&opts.recording)?;
+        let needs = FrameNeeds {
+            colour: true,
+            parsing: opts.source == ParseSource::Recorded,
+            depth: people_from_depth && rec.has_layer(Layer::Depth),
+            ..FrameNeeds::default()
+        };
         let frame = Frame::read(&rec, &opts.frame, needs)?;
         Ok((rec, frame))
     })?;
@@ -111,10 +116,10 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     };
     let (parsed, took) = timed(|| -> Result<ParsedFrame> {
         let mut segmenter: Box<dyn Segmenter> = match &model {
-            Some(path) => Box::new(load_segmenter(cfg, path)?),
+            Some(path) => load_segmenter(cfg, path)?,
             None => Box::new(RecordedSegmenter::new()),
         };
-        parse_frame(frame, rec.rig(), segmenter.as_mut())
+        parse_frame(frame, rec.rig(), segmenter.as_mut(), cfg)
             .with_context(|| format!("{}: frame {}", opts.recording.display(), opts.frame))
     })?;
     let images = parsed
@@ -174,7 +179,9 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
             written.push(preview_path);
         }
         let mut resolved = cfg.clone();
-        if let Some(path) = &model {
+        if let Some(path) = &model
+            && cfg.parsing.segmenter == SegmenterKind::Onnx
+        {
             resolved.parsing.model = path.display().to_string();
         }
         let config_path = opts.out.join("parse.config.resolved.toml");

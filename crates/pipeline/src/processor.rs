@@ -6,6 +6,12 @@
 //! refine.vote = multi_view) → boxes (PersonBoxes) → refine (the configured steps, and the
 //! paper's five when scored, written or drawn) → score → write
 //! ```
+//!
+//! With a segmenter that takes person regions (BlazePose), parse starts by finding the
+//! people from depth (geometry-mode boxes, [`crate::regions`]): depth → people → parse →
+//! project → boxes → refine. With `boxes.mode = "geometry"` those boxes are the
+//! refinement's too; in `labels` mode (default) the boxes are found again on the projected
+//! labels.
 
 use crate::batch::{FrameRecord, FrameWriter};
 use crate::config::PipelineConfig;
@@ -229,13 +235,20 @@ impl FrameProcessor {
                 .segmenter
                 .lock()
                 .map_err(|_| anyhow::anyhow!("the parser failed on an earlier frame"))?;
-            parse_frame(frame, self.rig(), segmenter.as_mut())
+            parse_frame(frame, self.rig(), segmenter.as_mut(), &self.config)
         })?;
         if !self.needs_colours() {
             parsed.frame.colour = None;
         }
         let source = if self.uses_model { "model" } else { "recorded" };
-        stages.push(Stage::new("parse", took, source.into()));
+        let summary = match &parsed.people {
+            Some(people) => format!(
+                "{source}, {} from depth",
+                plural(people.boxes.len(), "person", "people")
+            ),
+            None => source.to_string(),
+        };
+        stages.push(Stage::new("parse", took, summary));
         Ok(parsed)
     }
 
@@ -375,12 +388,14 @@ impl FrameProcessor {
         }
 
         let (boxes, took) = timed(|| -> Result<PersonBoxes> {
-            let mut boxes = if cfg.boxes.mode == BoxMode::File {
-                self.recording
+            let mut boxes = match (&parsed.people, cfg.boxes.mode) {
+                (_, BoxMode::File) => self
+                    .recording
                     .read_boxes(frame)
-                    .context("boxes file (boxes.mode = file)")?
-            } else {
-                bodyseg_people::find_boxes(cloud, &cfg.boxes)?
+                    .context("boxes file (boxes.mode = file)")?,
+                // Found from depth before parsing, as geometry mode would find them now.
+                (Some(people), BoxMode::Geometry) => people.clone(),
+                _ => bodyseg_people::find_boxes(cloud, &cfg.boxes)?,
             };
             boxes.frame = frame.to_string();
             Ok(boxes)

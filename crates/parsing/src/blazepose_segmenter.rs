@@ -1,0 +1,454 @@
+//! [`BlazePoseSegmenter`]: the BlazePose landmark model run on person regions (one ROI per
+//! person, from boxes found in 3D), its landmarks and mask turned into the 7 classes by
+//! the rule of [`crate::blazepose`].
+
+use crate::ParsingError;
+use crate::blazepose::{
+    INPUT, NUM_LANDMARKS, Pose, Roi, RuleConfig, crop_into, decode, label_person, landmark,
+    merge_people,
+};
+use crate::onnx::load_session;
+use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
+use bodyseg_core::{LabelImage, RgbImage};
+use ort::session::Session;
+use ort::value::{TensorRef, ValueType};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Which of BlazePose's landmark models runs (the sizes MediaPipe ships).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BlazePoseVariant {
+    /// `pose_landmark_lite` (2.8 MB): fastest, least accurate.
+    Lite,
+    /// `pose_landmark_full` (6.4 MB): the default.
+    #[default]
+    Full,
+    /// `pose_landmark_heavy` (27.7 MB, not in git: `scripts/convert_blazepose.py` makes it).
+    Heavy,
+}
+
+impl BlazePoseVariant {
+    /// `lite`, `full` or `heavy`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BlazePoseVariant::Lite => "lite",
+            BlazePoseVariant::Full => "full",
+            BlazePoseVariant::Heavy => "heavy",
+        }
+    }
+}
+
+/// How a [`BlazePoseSegmenter`] runs; defaults are the values tuned on the tune split of
+/// the real photographs (docs/notes/2026-12-02-blazepose-rule.md §5–6).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlazePoseOptions {
+    /// ONNX Runtime intra-op threads; 0 lets ONNX Runtime choose. Default 2.
+    pub threads: usize,
+    /// The first ROI's side, × the region's longer side. Default 2.0 (a region from a
+    /// person box; the model is trained on MediaPipe's ROIs, which hold the body with a
+    /// wide margin).
+    pub roi_scale: f64,
+    /// Runs on the ROI that the previous run's alignment points give (MediaPipe's
+    /// landmarks-to-ROI), each accepted only when the pose flag stays ≥ 0.8 × the
+    /// previous one. Default 1.
+    pub refine_passes: u32,
+    /// A region whose pose flag is below this gives no person. Default 0.1.
+    pub min_pose_flag: f64,
+    /// The landmarks + mask → classes rule.
+    pub rule: RuleConfig,
+}
+
+impl Default for BlazePoseOptions {
+    fn default() -> Self {
+        BlazePoseOptions {
+            threads: 2,
+            roi_scale: 2.0,
+            refine_passes: 1,
+            min_pose_flag: 0.1,
+            rule: RuleConfig::default(),
+        }
+    }
+}
+
+/// The landmark model's input and outputs used here: name and shape (ONNX conversion of
+/// `scripts/convert_blazepose.py`, sidecar `models/blazepose_*.json`).
+const INPUT_NAME: &str = "input_1";
+const LANDMARKS: (&str, [i64; 2]) = ("Identity", [1, 195]);
+const FLAG: (&str, [i64; 2]) = ("Identity_1", [1, 1]);
+const MASK: (&str, [i64; 4]) = ("Identity_2", [1, 256, 256, 1]);
+const HEATMAP: (&str, [i64; 4]) = ("Identity_3", [1, 64, 64, 39]);
+
+/// A pose refined by [`BlazePoseOptions::refine_passes`] is accepted when its ROI's side
+/// is within this factor of the previous one (a jump means the landmarks are lost).
+const MAX_ROI_CHANGE: f64 = 2.0;
+/// The refined pose is kept when its flag is at least this × the previous flag.
+const MIN_FLAG_RATIO: f64 = 0.8;
+/// Refinement runs only from a pose whose flag is at least this (MediaPipe's threshold).
+const MIN_FLAG_TO_REFINE: f64 = 0.5;
+/// MediaPipe's scale of the box around the alignment points.
+const ALIGNMENT_ROI_SCALE: f64 = 1.5;
+/// A pose belongs to its region when its body centre lies within the region widened by
+/// this fraction of the region's width and height on each side.
+pub const REGION_SLACK: f64 = 0.1;
+/// The ROI's side, × the region's longer side, of the second try when the first pose's
+/// centre left the region (a tighter crop holds fewer neighbours: on PCL's five_people
+/// frame it finds the three people in the middle whom the 2.0 crop lost to neighbours).
+pub const RETRY_ROI_SCALE: f64 = 1.25;
+
+/// Whether `pose`'s body centre (alignment centre) lies in `bounds` widened by
+/// [`REGION_SLACK`].
+fn centre_inside(pose: &Pose, bounds: &PixelBox) -> bool {
+    let Some(c) = pose.xy.get(landmark::ALIGN_CENTRE) else {
+        return false;
+    };
+    let (sx, sy) = (
+        REGION_SLACK * (bounds.x1 - bounds.x0).max(1.0),
+        REGION_SLACK * (bounds.y1 - bounds.y0).max(1.0),
+    );
+    (bounds.x0 - sx..=bounds.x1 + sx).contains(&c[0])
+        && (bounds.y0 - sy..=bounds.y1 + sy).contains(&c[1])
+}
+
+/// BlazePose (MediaPipe Pose's landmark model, converted to ONNX) as a [`Segmenter`]: for
+/// each person region of a view, the model runs on a square ROI around it (and once more
+/// on the ROI its alignment points give), its landmarks and mask become the 7 classes with
+/// a probability per pixel (`label_person`), and the people of the view are merged, the
+/// one in front winning where they overlap (`merge_people`).
+///
+/// Without regions ([`ViewInput::regions`] `None`: colour-only input) the whole image is
+/// one region; with an empty list (nobody found in 3D) the view is all background.
+pub struct BlazePoseSegmenter {
+    session: Session,
+    model_path: PathBuf,
+    options: BlazePoseOptions,
+    /// The crop, reused from run to run (NHWC, 256×256×3).
+    input: Vec<f32>,
+    /// Inferences run so far (for benches and logs).
+    runs: u64,
+}
+
+impl std::fmt::Debug for BlazePoseSegmenter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BlazePoseSegmenter")
+            .field("model_path", &self.model_path)
+            .field("options", &self.options)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The dims of a float32 tensor outlet; `None` for another type.
+fn float_dims(dtype: &ValueType) -> Option<Vec<i64>> {
+    match dtype {
+        ValueType::Tensor { ty, shape, .. } if *ty == ort::value::TensorElementType::Float32 => {
+            Some(shape.to_vec())
+        }
+        _ => None,
+    }
+}
+
+/// Whether `got` (dims, −1 = dynamic) fits `want`.
+fn dims_fit(got: &[i64], want: &[i64]) -> bool {
+    got.len() == want.len() && got.iter().zip(want).all(|(&g, &w)| g == w || g == -1)
+}
+
+impl BlazePoseSegmenter {
+    /// Loads a BlazePose landmark model from its bytes (read by the caller; `model_path`
+    /// names it in errors) in the ONNX Runtime of `runtime_library`, and checks that it is
+    /// one: input `input_1` float32 `[1,256,256,3]`; outputs `Identity` `[1,195]`,
+    /// `Identity_1` `[1,1]`, `Identity_2` `[1,256,256,1]`, `Identity_3` `[1,64,64,39]`.
+    ///
+    /// # Errors
+    /// [`ParsingError::RuntimeLibrary`], [`ParsingError::ModelLoad`],
+    /// [`ParsingError::NotBlazePose`] naming the model file and what differs.
+    pub fn new(
+        runtime_library: &Path,
+        model_bytes: &[u8],
+        model_path: &Path,
+        options: &BlazePoseOptions,
+    ) -> Result<BlazePoseSegmenter, ParsingError> {
+        // A spinning pool is several times slower on a shared 2-core machine.
+        let session = load_session(
+            runtime_library,
+            model_bytes,
+            model_path,
+            options.threads,
+            false,
+        )?;
+        let not_blazepose = |reason: String| ParsingError::NotBlazePose {
+            reason,
+            path: model_path.to_path_buf(),
+        };
+        let inputs = session.inputs();
+        let input_ok = inputs.len() == 1
+            && inputs[0].name() == INPUT_NAME
+            && float_dims(inputs[0].dtype()).is_some_and(|d| dims_fit(&d, &[1, 256, 256, 3]));
+        if !input_ok {
+            let got: Vec<String> = inputs
+                .iter()
+                .map(|i| format!("{} {:?}", i.name(), float_dims(i.dtype())))
+                .collect();
+            return Err(not_blazepose(format!(
+                "inputs [{}], expected one: {INPUT_NAME} float32 [1, 256, 256, 3]",
+                got.join(", ")
+            )));
+        }
+        let wanted: [(&str, &[i64]); 4] = [
+            (LANDMARKS.0, &LANDMARKS.1),
+            (FLAG.0, &FLAG.1),
+            (MASK.0, &MASK.1),
+            (HEATMAP.0, &HEATMAP.1),
+        ];
+        for (name, want) in wanted {
+            let Some(out) = session.outputs().iter().find(|o| o.name() == name) else {
+                return Err(not_blazepose(format!(
+                    "no output {name} (float32 {want:?})"
+                )));
+            };
+            let dims = float_dims(out.dtype());
+            if !dims.as_ref().is_some_and(|d| dims_fit(d, want)) {
+                return Err(not_blazepose(format!(
+                    "output {name} is {dims:?}, expected float32 {want:?}"
+                )));
+            }
+        }
+        tracing::debug!(model = %model_path.display(), "loaded BlazePose landmark model");
+        Ok(BlazePoseSegmenter {
+            session,
+            model_path: model_path.to_path_buf(),
+            options: options.clone(),
+            input: Vec::with_capacity(INPUT * INPUT * 3),
+            runs: 0,
+        })
+    }
+
+    /// The options it runs with.
+    pub fn options(&self) -> &BlazePoseOptions {
+        &self.options
+    }
+
+    /// Landmark-model runs so far.
+    pub fn runs(&self) -> u64 {
+        self.runs
+    }
+
+    /// One run of the landmark model on `roi` of `image`.
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`] naming the model file.
+    pub fn run(&mut self, image: &RgbImage, roi: &Roi) -> Result<Pose, ParsingError> {
+        crop_into(image, roi, INPUT, &mut self.input);
+        let path = &self.model_path;
+        let infer = |cause: String| ParsingError::Inference {
+            cause,
+            path: path.clone(),
+        };
+        let tensor = TensorRef::from_array_view(([1usize, INPUT, INPUT, 3], &self.input[..]))
+            .map_err(|e| infer(e.to_string()))?;
+        let outputs = self
+            .session
+            .run(ort::inputs![INPUT_NAME => tensor])
+            .map_err(|e| infer(e.to_string()))?;
+        let get = |name: &str| -> Result<&[f32], ParsingError> {
+            let value = outputs
+                .get(name)
+                .ok_or_else(|| infer(format!("no output {name}")))?;
+            let (_, data) = value
+                .try_extract_tensor::<f32>()
+                .map_err(|e| infer(format!("{name}: {e}")))?;
+            Ok(data)
+        };
+        let landmarks = get(LANDMARKS.0)?;
+        let flag = get(FLAG.0)?.first().copied().unwrap_or(0.0);
+        let mask = get(MASK.0)?;
+        let heatmap = get(HEATMAP.0)?;
+        self.runs += 1;
+        decode(roi, landmarks, flag, mask, Some(heatmap)).ok_or_else(|| {
+            infer(format!(
+                "outputs shorter than BlazePose's ({} landmark values, {} mask values)",
+                landmarks.len(),
+                mask.len()
+            ))
+        })
+    }
+
+    /// The pose of the person in `bounds` (image px): a run on the ROI around it
+    /// ([`BlazePoseOptions::roi_scale`]), then up to
+    /// [`BlazePoseOptions::refine_passes`] runs on the ROI of the previous run's alignment
+    /// points, each kept only while the pose flag holds and the pose stays in the region.
+    ///
+    /// A crowded crop may lock onto a neighbour: a pose whose body centre (MediaPipe's
+    /// alignment centre, the mid-hip point) lies outside `bounds` widened by
+    /// [`REGION_SLACK`] of its size is not this person's. Then (and when the first pose's
+    /// flag is below [`BlazePoseOptions::min_pose_flag`]) one run on the tighter ROI of
+    /// [`RETRY_ROI_SCALE`] × the region is tried, and kept when its centre is in the region
+    /// (and its flag higher); when neither pose is in the region the result has flag 0 (no
+    /// person).
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`].
+    pub fn pose_in(&mut self, image: &RgbImage, bounds: &PixelBox) -> Result<Pose, ParsingError> {
+        let mut pose = self.run(image, &Roi::from_box(bounds, self.options.roi_scale))?;
+        let inside = centre_inside(&pose, bounds);
+        if !inside || pose.flag < self.options.min_pose_flag {
+            let retry = self.run(image, &Roi::from_box(bounds, RETRY_ROI_SCALE))?;
+            if centre_inside(&retry, bounds) && (!inside || retry.flag > pose.flag) {
+                return Ok(retry);
+            }
+            if !inside {
+                pose.flag = 0.0;
+            }
+            return Ok(pose);
+        }
+        for _ in 0..self.options.refine_passes {
+            if pose.flag < MIN_FLAG_TO_REFINE || pose.xy.len() < NUM_LANDMARKS {
+                break;
+            }
+            let roi = Roi::from_alignment(
+                pose.xy[landmark::ALIGN_CENTRE],
+                pose.xy[landmark::ALIGN_SCALE],
+                ALIGNMENT_ROI_SCALE,
+            );
+            let side = pose.roi.side_px;
+            if !(roi.side_px.is_finite()
+                && roi.side_px >= side / MAX_ROI_CHANGE
+                && roi.side_px <= side * MAX_ROI_CHANGE)
+            {
+                break;
+            }
+            let next = self.run(image, &roi)?;
+            if next.flag < pose.flag * MIN_FLAG_RATIO || !centre_inside(&next, bounds) {
+                break;
+            }
+            pose = next;
+        }
+        Ok(pose)
+    }
+
+    /// Labels one view: every region's person (or the whole image as one region when
+    /// `regions` is `None`), merged.
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`].
+    pub fn segment_image(
+        &mut self,
+        image: &RgbImage,
+        regions: Option<&[PersonRegion]>,
+    ) -> Result<LabelImage, ParsingError> {
+        let (w, h) = (image.width as usize, image.height as usize);
+        let whole = [PersonRegion {
+            bounds: PixelBox {
+                x0: 0.0,
+                y0: 0.0,
+                x1: (w.max(1) - 1) as f64,
+                y1: (h.max(1) - 1) as f64,
+            },
+            depth_m: f64::NAN,
+        }];
+        let regions = regions.unwrap_or(&whole);
+        let mut people = Vec::with_capacity(regions.len());
+        for region in regions {
+            let b = &region.bounds;
+            let usable = [b.x0, b.y0, b.x1, b.y1].iter().all(|v| v.is_finite())
+                && b.x1 >= b.x0
+                && b.y1 >= b.y0;
+            if !usable {
+                continue;
+            }
+            let pose = self.pose_in(image, b)?;
+            if pose.flag < self.options.min_pose_flag {
+                continue;
+            }
+            if let Some(mut person) = label_person(&pose, &self.options.rule, w, h) {
+                person.depth_m =
+                    (region.depth_m.is_finite() && region.depth_m > 0.0).then_some(region.depth_m);
+                people.push(person);
+            }
+        }
+        Ok(merge_people(w, h, &people))
+    }
+}
+
+impl Segmenter for BlazePoseSegmenter {
+    fn needs_regions(&self) -> bool {
+        true
+    }
+
+    fn segment(&mut self, views: &[ViewInput<'_>]) -> Result<Vec<ParsedView>, ParsingError> {
+        let mut parsed = Vec::with_capacity(views.len());
+        for (view, input) in views.iter().enumerate() {
+            let Some(image) = input.image else {
+                return Err(ParsingError::BadImage {
+                    view,
+                    reason: format!("camera {}: no colour image", input.camera),
+                });
+            };
+            if image.width == 0 || image.height == 0 || image.rgb.len() != image.num_pixels() * 3 {
+                return Err(ParsingError::BadImage {
+                    view,
+                    reason: format!(
+                        "camera {}: colour image {}x{} with {} bytes",
+                        input.camera,
+                        image.width,
+                        image.height,
+                        image.rgb.len()
+                    ),
+                });
+            }
+            let labels = self.segment_image(image, input.regions)?;
+            parsed.push(ParsedView {
+                labels,
+                class_probs: None,
+            });
+        }
+        Ok(parsed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose_centred_at(c: [f64; 2]) -> Pose {
+        let mut xy = vec![[0.0, 0.0]; NUM_LANDMARKS];
+        xy[landmark::ALIGN_CENTRE] = c;
+        Pose {
+            roi: Roi {
+                centre_px: c,
+                side_px: 100.0,
+                angle_rad: 0.0,
+            },
+            flag: 1.0,
+            xy,
+            visibility: vec![1.0; NUM_LANDMARKS],
+            presence: vec![1.0; NUM_LANDMARKS],
+            mask: Vec::new(),
+        }
+    }
+
+    /// A pose drifted onto a neighbour (centre beyond the region's 10 % slack) is not the
+    /// region's person; one at the edge of the slack still is.
+    #[test]
+    fn a_pose_belongs_to_the_region_holding_its_centre() {
+        let region = PixelBox {
+            x0: 100.0,
+            y0: 50.0,
+            x1: 200.0,
+            y1: 450.0,
+        };
+        assert!(centre_inside(&pose_centred_at([150.0, 250.0]), &region));
+        assert!(
+            centre_inside(&pose_centred_at([209.0, 250.0]), &region),
+            "slack"
+        );
+        assert!(
+            !centre_inside(&pose_centred_at([211.0, 250.0]), &region),
+            "neighbour"
+        );
+        assert!(!centre_inside(&pose_centred_at([150.0, 500.0]), &region));
+        assert!(!centre_inside(&pose_centred_at([f64::NAN, 250.0]), &region));
+        let mut short = pose_centred_at([150.0, 250.0]);
+        short.xy.truncate(10);
+        assert!(!centre_inside(&short, &region), "no alignment point");
+    }
+}

@@ -1,0 +1,138 @@
+//! [`BlazePoseSegmenter`] with the committed `models/blazepose_full.onnx`: a model that is
+//! not BlazePose's is refused naming the file, a view with nobody in it is all background
+//! (not an error), and regions outside the image or malformed do not fail.
+//!
+//! Needs the ONNX Runtime library: `scripts/setup_onnxruntime.sh` (scripts/test.sh runs it)
+//! or `ORT_DYLIB_PATH`.
+
+use bodyseg_core::{Label, RgbImage};
+use bodyseg_parsing::{BlazePoseOptions, BlazePoseSegmenter};
+use bodyseg_parsing::{ParsingError, PersonRegion, PixelBox, Segmenter, ViewInput};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The ONNX Runtime library the tests load: ORT_DYLIB_PATH, else the project-local copy.
+fn runtime_library() -> PathBuf {
+    let path = std::env::var_os("ORT_DYLIB_PATH")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join(".deps/onnxruntime/libonnxruntime.so"));
+    assert!(
+        path.is_file(),
+        "{}: ONNX Runtime library missing: run scripts/setup_onnxruntime.sh (or set ORT_DYLIB_PATH)",
+        path.display()
+    );
+    path
+}
+
+fn load(model: &Path) -> Result<BlazePoseSegmenter, ParsingError> {
+    let bytes = std::fs::read(model).expect("committed model");
+    BlazePoseSegmenter::new(
+        &runtime_library(),
+        &bytes,
+        model,
+        &BlazePoseOptions {
+            threads: 1,
+            ..BlazePoseOptions::default()
+        },
+    )
+}
+
+fn full() -> BlazePoseSegmenter {
+    load(&root().join("models/blazepose_full.onnx")).expect("the committed full model loads")
+}
+
+/// A grey image with a smooth pattern (no person).
+fn image(w: u32, h: u32) -> RgbImage {
+    let mut rgb = Vec::with_capacity(w as usize * h as usize * 3);
+    for v in 0..h {
+        for u in 0..w {
+            let g = 100 + ((u / 40 + v / 40) % 2) as u8 * 30;
+            rgb.extend_from_slice(&[g, g, g]);
+        }
+    }
+    RgbImage::new(w, h, rgb).expect("w*h*3 bytes")
+}
+
+fn view<'a>(image: &'a RgbImage, regions: Option<&'a [PersonRegion]>) -> ViewInput<'a> {
+    ViewInput {
+        camera: "cam0",
+        frame: "000000",
+        image: Some(image),
+        recorded: None,
+        regions,
+    }
+}
+
+#[test]
+fn a_model_that_is_not_blazepose_is_refused_naming_the_file() {
+    let tiny = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny.onnx");
+    let e = load(&tiny).expect_err("the SCHP-contract test model is not BlazePose");
+    assert!(matches!(e, ParsingError::NotBlazePose { .. }), "{e}");
+    let text = e.to_string();
+    assert!(
+        text.contains("tiny.onnx") && text.contains("not a BlazePose"),
+        "{text}"
+    );
+}
+
+#[test]
+fn nobody_gives_an_all_background_view_and_odd_regions_do_not_fail() {
+    let mut seg = full();
+    assert!(seg.needs_regions() && seg.needs_images());
+    let img = image(320, 240);
+    let out = seg
+        .segment(&[view(&img, Some(&[]))])
+        .expect("nobody is no error");
+    assert_eq!(out.len(), 1);
+    let labels = &out[0].labels;
+    assert_eq!((labels.width, labels.height), (320, 240));
+    assert!(labels.labels.iter().all(|&l| l == Label::BACKGROUND));
+    assert!(
+        labels
+            .probs
+            .as_ref()
+            .expect("probabilities")
+            .iter()
+            .all(|&p| p == 1.0)
+    );
+    assert_eq!(seg.runs(), 0, "no region, no inference");
+
+    // A region wholly outside the image and a malformed one: no error, right size.
+    let regions = [
+        PersonRegion {
+            bounds: PixelBox {
+                x0: 1000.0,
+                y0: 1000.0,
+                x1: 1100.0,
+                y1: 1300.0,
+            },
+            depth_m: 3.0,
+        },
+        PersonRegion {
+            bounds: PixelBox {
+                x0: f64::NAN,
+                y0: 0.0,
+                x1: 10.0,
+                y1: 10.0,
+            },
+            depth_m: 3.0,
+        },
+    ];
+    let out = seg
+        .segment(&[view(&img, Some(&regions))])
+        .expect("odd regions are no error");
+    assert_eq!((out[0].labels.width, out[0].labels.height), (320, 240));
+    let probs = out[0].labels.probs.as_ref().expect("probabilities");
+    assert!(probs.iter().all(|p| (0.0..=1.0).contains(p)));
+
+    // No colour image: an error naming the camera.
+    let none = ViewInput {
+        image: None,
+        ..view(&img, None)
+    };
+    let e = seg.segment(&[none]).expect_err("no image");
+    assert!(e.to_string().contains("cam0"), "{e}");
+}
