@@ -179,6 +179,7 @@ fn implausible_inputs_are_warned_about() {
     let boxes = bodyseg_core::PersonBoxes {
         frame: "000000".into(),
         boxes: vec![far],
+        world_from_cloud: None,
     };
     bodyseg_io::write_boxes(&d.join("far.json"), &boxes).expect("write");
     let out = refine(d, "in.ply", "far.json", "r.ply", &["-q"]);
@@ -194,6 +195,7 @@ fn implausible_inputs_are_warned_about() {
     let none = bodyseg_core::PersonBoxes {
         frame: "000000".into(),
         boxes: vec![],
+        world_from_cloud: None,
     };
     bodyseg_io::write_boxes(&d.join("none.json"), &none).expect("write");
     let out = refine(d, "in.ply", "none.json", "r.ply", &[]);
