@@ -106,7 +106,7 @@ fn pcls_five_people_in_the_camera_frame_get_five_boxes_then_import_and_run_too()
     assert_ok(&out, "boxes --mode geometry");
     let err = stderr(&out);
     assert!(err.contains("5 person boxes (mode geometry)"), "{err}");
-    assert!(!err.contains("WARN"), "no warning expected:\n{err}");
+    assert!(!err.contains("warning:"), "no warning expected:\n{err}");
     let boxes = read_boxes(&d.join("boxes.json")).expect("boxes written");
     assert_eq!(boxes.boxes.len(), 5, "{boxes:?}");
     assert_one_head_per_box(&boxes, &heads, "boxes --cloud");
@@ -280,7 +280,7 @@ fn unlabelled_foreign_labelled_millimetre_and_unorganised_clouds() {
     let out = boxes_geometry(d, &pcd, &[]);
     assert_ok(&out, "geometry mode in millimetres");
     let err = stderr(&out);
-    assert!(err.contains("WARN") && err.contains("millimetres"), "{err}");
+    assert!(err.contains("warning:") && err.contains("millimetres"), "{err}");
 
     // The camera's view above the floor (rows 0..260 of the grid: heads and trunks,
     // walls, no floor): warnings that no floor and no person are found, naming that.
