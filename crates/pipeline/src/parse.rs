@@ -84,7 +84,7 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     let cfg = &opts.config;
     // The colour images for the previews; the recorded predictions for --recorded.
     let needs = FrameNeeds {
-        colour: true,
+        color: true,
         parsing: opts.source == ParseSource::Recorded,
         ..FrameNeeds::default()
     };
@@ -118,7 +118,7 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     })?;
     let images = parsed
         .frame
-        .colour
+        .color
         .as_deref()
         .context("the colour images were read")?;
     let body_pixels: Vec<usize> = parsed

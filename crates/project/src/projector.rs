@@ -166,16 +166,16 @@ impl FrameProjector {
     /// [`FrameProjector::project_frame`] with every point's camera colour in the cloud's
     /// `colors`: the colour at its colour pixel in its camera's image (`colour[camera]`,
     /// [`Hits::colors_of`]; black where it has none), as a coloured cloud (a PCD) has them.
-    pub fn project_frame_coloured(
+    pub fn project_frame_colored(
         &self,
         images: &[CameraImages<'_>],
-        colour: &[&RgbImage],
+        color: &[&RgbImage],
         opts: &BackProjectOptions,
         cfg: &ProjectConfig,
     ) -> Result<LabeledCloud, ProjectError> {
         let (mut cloud, mut hits) = (LabeledCloud::default(), Hits::default());
         self.project_frame_keeping_hits(images, opts, cfg, &mut cloud, &mut hits)?;
-        cloud.colors = Some(hits.colors_of(&cloud, colour));
+        cloud.colors = Some(hits.colors_of(&cloud, color));
         Ok(cloud)
     }
 

@@ -121,7 +121,7 @@ fn true_boxes_hold_their_people() {
 /// from silhouettes, a depth point projected into the colour image with the true rig
 /// finds the same class there.
 #[test]
-fn colour_and_depth_truth_agree_through_the_true_rig() {
+fn color_and_depth_truth_agree_through_the_true_rig() {
     let synth = synth("handover", 1);
     let frame = synth.frame(2);
     for (camera, images) in synth.true_rig().cameras.iter().zip(&frame.cameras) {
@@ -229,7 +229,7 @@ fn depth_has_kinect_like_faults_and_truth_marks_them() {
 }
 
 #[test]
-fn colour_exposure_offset_moves_people_in_colour_only() {
+fn color_exposure_offset_moves_people_in_color_only() {
     let base = preset("single").expect("preset");
     let mut late = base.clone();
     late.dsa.color_time_offset_s = 0.1;

@@ -145,7 +145,7 @@ pub(crate) struct Header {
     pub(crate) lines: usize,
     /// A comment says the colours are the class palette ([`PALETTE_COMMENT`]), not the
     /// camera's.
-    pub(crate) palette_colours: bool,
+    pub(crate) palette_colors: bool,
 }
 
 /// What bodyseg's PLY comment says when red, green and blue are the class palette.
@@ -164,7 +164,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         path: path.to_path_buf(),
     };
     let mut encoding = None;
-    let mut palette_colours = false;
+    let mut palette_colors = false;
     let mut elements: Vec<Element> = Vec::new();
     let mut pos = 0;
     let mut line_no = 0;
@@ -188,7 +188,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         };
         let rest: Vec<&str> = words.collect();
         match keyword {
-            "comment" => palette_colours |= text.contains(PALETTE_COMMENT),
+            "comment" => palette_colors |= text.contains(PALETTE_COMMENT),
             "obj_info" => {}
             "end_header" => break,
             "format" => {
@@ -282,7 +282,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         elements,
         data_offset: pos,
         lines: line_no,
-        palette_colours,
+        palette_colors,
     })
 }
 

@@ -104,7 +104,7 @@ pub fn parse_ply(bytes: &[u8], path_for_errors: &Path) -> Result<LabeledCloud, I
         Encoding::BinaryBigEndian => binary::<true>(data, before, vertex, after, &plan, path)?,
     };
     // bodyseg's own files may colour the points by class: that is no camera colour.
-    if header.palette_colours {
+    if header.palette_colors {
         cloud.colors = None;
     }
     Ok(cloud)
