@@ -45,7 +45,7 @@ pub struct FrameProcessor {
     segmenter_needs: FrameNeeds,
     uses_model: bool,
     /// Idle per-worker buffers; a worker takes one per frame.
-    scratch: Mutex<Vec<Scratch>>,
+    scratch: Mutex<Vec<WorkerScratch>>,
     template: FrameProjector,
     has_truth: bool,
     write_stages: bool,
@@ -57,7 +57,7 @@ pub struct FrameProcessor {
 }
 
 /// One worker's buffers.
-struct Scratch {
+struct WorkerScratch {
     projector: FrameProjector,
     cloud: LabeledCloud,
     /// Where the cloud's points landed in their colour images (for the label images).
@@ -266,7 +266,7 @@ impl FrameProcessor {
             .lock()
             .ok()
             .and_then(|mut p| p.pop())
-            .unwrap_or_else(|| Scratch {
+            .unwrap_or_else(|| WorkerScratch {
                 projector: self.template.clone(),
                 cloud: LabeledCloud::default(),
                 hits: Hits::default(),
@@ -287,9 +287,9 @@ impl FrameProcessor {
         parsed: &ParsedFrame,
         writer: &mut FrameWriter,
         stages: &mut Vec<Stage>,
-        scratch: &mut Scratch,
+        scratch: &mut WorkerScratch,
     ) -> Result<FrameRecord> {
-        let Scratch {
+        let WorkerScratch {
             projector,
             cloud,
             hits,

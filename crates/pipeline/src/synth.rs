@@ -117,7 +117,7 @@ pub(crate) fn write_frame(
             &rec.root().join(PREVIEW_FOLDER).join(format!("{stem}.png")),
             image.width,
             image.height,
-            &image.data,
+            &image.rgb,
         )?;
     }
     Ok(())

@@ -47,7 +47,7 @@ pub struct FloorObstacle {
 
 /// The poses of the library (`people.poses` in the scene configuration).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Pose {
+pub enum BodyPose {
     /// Upright, arms hanging, small sway.
     Standing,
     /// Walking a closed loop inside the area with a gait cycle of legs and arms.
@@ -66,36 +66,36 @@ pub enum Pose {
     Crouching,
 }
 
-impl Pose {
+impl BodyPose {
     /// Every pose, in the order of `config::POSE_NAMES`.
-    pub const ALL: [Pose; 8] = [
-        Pose::Standing,
-        Pose::Walking,
-        Pose::Reaching,
-        Pose::HandingOver,
-        Pose::ArmsCrossed,
-        Pose::HandsOnHips,
-        Pose::Pointing,
-        Pose::Crouching,
+    pub const ALL: [BodyPose; 8] = [
+        BodyPose::Standing,
+        BodyPose::Walking,
+        BodyPose::Reaching,
+        BodyPose::HandingOver,
+        BodyPose::ArmsCrossed,
+        BodyPose::HandsOnHips,
+        BodyPose::Pointing,
+        BodyPose::Crouching,
     ];
 
     /// The configuration name of the pose (`"arms_crossed"`).
     pub fn name(self) -> &'static str {
         match self {
-            Pose::Standing => "standing",
-            Pose::Walking => "walking",
-            Pose::Reaching => "reaching",
-            Pose::HandingOver => "handing_over",
-            Pose::ArmsCrossed => "arms_crossed",
-            Pose::HandsOnHips => "hands_on_hips",
-            Pose::Pointing => "pointing",
-            Pose::Crouching => "crouching",
+            BodyPose::Standing => "standing",
+            BodyPose::Walking => "walking",
+            BodyPose::Reaching => "reaching",
+            BodyPose::HandingOver => "handing_over",
+            BodyPose::ArmsCrossed => "arms_crossed",
+            BodyPose::HandsOnHips => "hands_on_hips",
+            BodyPose::Pointing => "pointing",
+            BodyPose::Crouching => "crouching",
         }
     }
 
     /// The pose of a configuration name, `None` for an unknown name.
-    pub fn from_name(name: &str) -> Option<Pose> {
-        Pose::ALL.into_iter().find(|p| p.name() == name)
+    pub fn from_name(name: &str) -> Option<BodyPose> {
+        BodyPose::ALL.into_iter().find(|p| p.name() == name)
     }
 }
 
@@ -719,7 +719,7 @@ impl Handover {
 pub struct Person {
     /// 1-based id (written in `depth_person` images).
     pub id: u8,
-    pose: Pose,
+    pose: BodyPose,
     girth: f32,
     dims: Dims,
     clothes: Clothes,
@@ -786,7 +786,7 @@ impl Person {
     }
 
     /// The pose drawn for this person.
-    pub fn pose(&self) -> Pose {
+    pub fn pose(&self) -> BodyPose {
         self.pose
     }
 
@@ -1301,7 +1301,7 @@ fn perturb(rng: &mut ChaCha8Rng, person: &mut Person, sigma: f32) {
 }
 
 /// Draws shape, clothing and pose of person `index` (motion is set at placement).
-fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: Pose) -> Person {
+fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: BodyPose) -> Person {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(index as u64 + 1);
     let [h_lo, h_hi] = config.height_m.map(|x| x as f32);
@@ -1319,8 +1319,8 @@ fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: Pose) -> Pe
     let mut hip_z_nominal = d.ankle_h + STAND_LEG_FRACTION * d.leg();
 
     match pose {
-        Pose::Standing => {}
-        Pose::Walking => {
+        BodyPose::Standing => {}
+        BodyPose::Walking => {
             hip_z_nominal = d.ankle_h + WALK_LEG_FRACTION * d.leg();
             trunk.pelvis_x = Chan::default();
             trunk.pelvis_y = Chan::default();
@@ -1340,7 +1340,7 @@ fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: Pose) -> Pe
                 arm.twist.base = -SIDES[i] * uni_deg(&mut rng, 5.0, 15.0);
             }
         }
-        Pose::Reaching => {
+        BodyPose::Reaching => {
             let (left, right) = arms_used(&mut rng, 0.4);
             trunk.lumbar_flex.base = uni_deg(&mut rng, 0.0, 8.0);
             for (i, used) in [left, right].into_iter().enumerate() {
@@ -1360,7 +1360,7 @@ fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: Pose) -> Pe
             legs[which].ankle_xy[0] += fwd;
             legs[1 - which].ankle_xy[0] -= 0.5 * fwd;
         }
-        Pose::HandingOver => {
+        BodyPose::HandingOver => {
             // Without a partner: offering forward with the right hand, elbow bent.
             arms[1] = Arm {
                 flex: sway_r(&mut rng, 45.0, 60.0, 3.0, 10.0),
@@ -1376,7 +1376,7 @@ fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: Pose) -> Pe
             legs[1].ankle_xy[0] += fwd;
             legs[0].ankle_xy[0] -= 0.5 * fwd;
         }
-        Pose::ArmsCrossed => {
+        BodyPose::ArmsCrossed => {
             for (i, side) in SIDES.into_iter().enumerate() {
                 let flex = uni_deg(&mut rng, 20.0, 30.0) + (girth - 1.0).max(0.0) * 0.6;
                 let abd = uni_deg(&mut rng, 10.0, 20.0);
@@ -1386,7 +1386,7 @@ fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: Pose) -> Pe
                 arms[i] = arm_aimed(&mut rng, d, side, flex, abd, target);
             }
         }
-        Pose::HandsOnHips => {
+        BodyPose::HandsOnHips => {
             for (i, side) in SIDES.into_iter().enumerate() {
                 let flex = -uni_deg(&mut rng, 10.0, 20.0);
                 let abd = uni_deg(&mut rng, 40.0, 55.0);
@@ -1399,7 +1399,7 @@ fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: Pose) -> Pe
                 arms[i] = arm_aimed(&mut rng, d, side, flex, abd, target);
             }
         }
-        Pose::Pointing => {
+        BodyPose::Pointing => {
             let i = if rng.random::<f32>() < 0.7 { 1 } else { 0 };
             let side = SIDES[i];
             let abd = uni_deg(&mut rng, 15.0, 50.0);
@@ -1414,7 +1414,7 @@ fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: Pose) -> Pe
             trunk.head_yaw.base = side * 0.6 * abd;
             trunk.head_yaw.amp *= 0.4;
         }
-        Pose::Crouching => {
+        BodyPose::Crouching => {
             let w = uni(&mut rng, 0.07, 0.1) * h;
             let x = uni(&mut rng, 0.03, 0.06) * h;
             for (leg, side) in legs.iter_mut().zip(SIDES) {
@@ -1558,7 +1558,7 @@ fn facing_center(rng: &mut ChaCha8Rng, xy: [f32; 2]) -> f32 {
 
 fn candidate(rng: &mut ChaCha8Rng, person: &Person, area: f32, walk_speed: f32) -> Motion {
     let xy = [uni(rng, -area, area), uni(rng, -area, area)];
-    if person.pose != Pose::Walking {
+    if person.pose != BodyPose::Walking {
         let yaw = facing_center(rng, xy);
         return Motion::Still { xy, yaw };
     }
@@ -1599,19 +1599,19 @@ fn candidate(rng: &mut ChaCha8Rng, person: &Person, area: f32, walk_speed: f32) 
 pub fn make_people(config: &PeopleConfig, seed: u64, obstacles: &[FloorObstacle]) -> Vec<Person> {
     let count = config.count.min(u32::from(u8::MAX - 1)) as usize;
     let handover = config.handover && count >= 2;
-    let poses: Vec<Pose> = config
+    let poses: Vec<BodyPose> = config
         .poses
         .iter()
-        .filter_map(|n| Pose::from_name(n))
+        .filter_map(|n| BodyPose::from_name(n))
         .collect();
 
     let mut pose_rng = ChaCha8Rng::seed_from_u64(seed);
     pose_rng.set_stream(0xA11_0C47);
     let mut people: Vec<Person> = (0..count)
         .map(|i| {
-            let drawn = pick(&mut pose_rng, &poses, Pose::Standing);
+            let drawn = pick(&mut pose_rng, &poses, BodyPose::Standing);
             let pose = if handover && i < 2 {
-                Pose::HandingOver
+                BodyPose::HandingOver
             } else {
                 drawn
             };
@@ -1621,7 +1621,7 @@ pub fn make_people(config: &PeopleConfig, seed: u64, obstacles: &[FloorObstacle]
 
     let area = (config.area_half_m as f32).max(0.0);
     let walk_speed = config.walk_speed_m_s as f32;
-    let any_walker = people.iter().any(|p| p.pose == Pose::Walking);
+    let any_walker = people.iter().any(|p| p.pose == BodyPose::Walking);
     let constraints = Constraints {
         area,
         spacing: (config.min_spacing_m as f32).max(0.0),
@@ -1862,11 +1862,11 @@ mod tests {
 
     #[test]
     fn pose_names_round_trip() {
-        for (name, pose) in POSE_NAMES.iter().zip(Pose::ALL) {
-            assert_eq!(Pose::from_name(name), Some(pose));
+        for (name, pose) in POSE_NAMES.iter().zip(BodyPose::ALL) {
+            assert_eq!(BodyPose::from_name(name), Some(pose));
             assert_eq!(pose.name(), *name);
         }
-        assert_eq!(Pose::from_name("dancing"), None);
+        assert_eq!(BodyPose::from_name("dancing"), None);
     }
 
     #[test]
@@ -1965,7 +1965,7 @@ mod tests {
             }
         }
         // Poses vary with the seed.
-        let mut seen: Vec<Pose> = (0..40)
+        let mut seen: Vec<BodyPose> = (0..40)
             .flat_map(|s| make_people(&c, s, &[]))
             .map(|p| p.pose())
             .collect();
@@ -1984,8 +1984,8 @@ mod tests {
             for seed in 0..12 {
                 let people = make_people(&c, seed, &[]);
                 let (p1, p2) = (&people[0], &people[1]);
-                assert_eq!(p1.pose(), Pose::HandingOver);
-                assert_eq!(p2.pose(), Pose::HandingOver);
+                assert_eq!(p1.pose(), BodyPose::HandingOver);
+                assert_eq!(p2.pose(), BodyPose::HandingOver);
                 let yaw_gap = (p1.yaw_rad_at(0.0) - p2.yaw_rad_at(0.0)).rem_euclid(TAU);
                 assert!((yaw_gap - PI).abs() < 0.1, "not facing: {yaw_gap}");
                 for k in 0..30 {

@@ -4,9 +4,9 @@
 
 use bodyseg_calib::{Pose, RgbdCamera};
 use bodyseg_core::Class;
-use bodyseg_synth::errors::mismatch_fraction;
+use bodyseg_synth::parser_mistakes::mismatch_fraction;
 use bodyseg_synth::render::surface_distance;
-use bodyseg_synth::{NO_SURFACE, ParsingErrorsConfig, SceneConfig, Synth, preset};
+use bodyseg_synth::{NO_SURFACE, ParserMistakesConfig, SceneConfig, Synth, preset};
 
 /// World point of depth pixel `i` of `camera` at depth `mm`, with the true rig.
 fn world_point(camera: &RgbdCamera, i: usize, mm: u16) -> Option<[f32; 3]> {
@@ -178,7 +178,7 @@ fn color_and_depth_truth_agree_through_the_true_rig() {
 #[test]
 fn no_errors_means_prediction_equals_truth_and_defaults_err_as_configured() {
     let mut config = preset("handover").expect("preset");
-    config.parsing = ParsingErrorsConfig::none();
+    config.parsing = ParserMistakesConfig::none();
     let exact = Synth::new(config, 1).expect("synth").frame(3);
     for c in &exact.cameras {
         assert_eq!(c.parsing, c.labels);
@@ -190,7 +190,7 @@ fn no_errors_means_prediction_equals_truth_and_defaults_err_as_configured() {
             "default parsing errors: {:.3} of person pixels mislabelled",
             m
         );
-        // ParsingErrorsConfig's defaults aim at an SCHP-like 5-30% on people pixels.
+        // ParserMistakesConfig's defaults aim at an SCHP-like 5-30% on people pixels.
         assert!((0.03..0.35).contains(&m), "{m}");
     }
 }

@@ -24,7 +24,7 @@
 //!
 //! # Conventions
 //! - Images are row-major, `width * height` entries; pixel (u, v) = (column, row).
-//! - Pixel sizes in [`ParsingErrorsConfig`] are for a 1920-wide image and are scaled by
+//! - Pixel sizes in [`ParserMistakesConfig`] are for a 1920-wide image and are scaled by
 //!   `width / 1920`. Distances are Euclidean between pixel centres (exact distance
 //!   transform, Felzenszwalb & Huttenlocher 2012, "Distance transforms of sampled
 //!   functions").
@@ -34,7 +34,7 @@
 //! - Background (0) pixels of the truth stay background except where dilation or jitter move
 //!   a body label onto them.
 
-use crate::config::ParsingErrorsConfig;
+use crate::config::ParserMistakesConfig;
 use crate::geometry::{Limb, Segment};
 use crate::hash::mix;
 use bodyseg_core::Class;
@@ -54,7 +54,7 @@ pub struct TruthView<'a> {
     pub segment: &'a [u8],
 }
 
-/// Image width the pixel sizes of [`ParsingErrorsConfig`] refer to, pixels.
+/// Image width the pixel sizes of [`ParserMistakesConfig`] refer to, pixels.
 pub const REFERENCE_WIDTH_PX: f64 = 1920.0;
 
 /// Correlation length (grid spacing of the value noise) of the boundary-jitter
@@ -86,7 +86,7 @@ const LIMBS: usize = 4;
 /// `labels.len()`, the labels are returned unchanged. If only `person` or `segment` has the
 /// wrong length, the per-limb errors (miss, swap) are skipped and dilation and jitter,
 /// which need the labels alone, are still applied. Negative or non-finite knobs count as 0.
-pub fn predict_labels(truth: &TruthView<'_>, config: &ParsingErrorsConfig, seed: u64) -> Vec<u8> {
+pub fn predict_labels(truth: &TruthView<'_>, config: &ParserMistakesConfig, seed: u64) -> Vec<u8> {
     let mut labels = truth.labels.to_vec();
     let (Ok(width), Ok(height)) = (usize::try_from(truth.width), usize::try_from(truth.height))
     else {
@@ -834,8 +834,8 @@ mod tests {
         f
     }
 
-    fn only(edit: impl FnOnce(&mut ParsingErrorsConfig)) -> ParsingErrorsConfig {
-        let mut c = ParsingErrorsConfig::none();
+    fn only(edit: impl FnOnce(&mut ParserMistakesConfig)) -> ParserMistakesConfig {
+        let mut c = ParserMistakesConfig::none();
         edit(&mut c);
         c
     }
@@ -864,7 +864,7 @@ mod tests {
         for width in [960, 1920] {
             let f = scene(width);
             for seed in [0, 1, 42, u64::MAX] {
-                let pred = predict_labels(&f.view(), &ParsingErrorsConfig::none(), seed);
+                let pred = predict_labels(&f.view(), &ParserMistakesConfig::none(), seed);
                 assert_eq!(pred, f.labels, "width {width} seed {seed}");
             }
         }
@@ -872,7 +872,7 @@ mod tests {
 
     #[test]
     fn bad_input_does_not_panic() {
-        let cfg = ParsingErrorsConfig::default();
+        let cfg = ParserMistakesConfig::default();
         let empty = TruthView {
             width: 0,
             height: 0,
@@ -905,7 +905,7 @@ mod tests {
         assert_ne!(predict_labels(&no_parts, &cfg, 1), f.labels);
         // Absurd knobs.
         for v in [f64::NAN, -5.0, f64::INFINITY, f64::NEG_INFINITY, 1e300] {
-            let weird = ParsingErrorsConfig {
+            let weird = ParserMistakesConfig {
                 small_part_dilation_px: v,
                 part_dilation_px: v,
                 boundary_jitter_px: v,
@@ -1103,7 +1103,7 @@ mod tests {
     #[test]
     fn deterministic_and_seed_dependent() {
         let f = scene(960);
-        let cfg = ParsingErrorsConfig::default();
+        let cfg = ParserMistakesConfig::default();
         let a = predict_labels(&f.view(), &cfg, 1234);
         assert_eq!(a, predict_labels(&f.view(), &cfg, 1234));
         assert_ne!(a, predict_labels(&f.view(), &cfg, 1235));
@@ -1131,7 +1131,7 @@ mod tests {
     fn default_error_rate_is_plausible() {
         for width in [960, 1920] {
             let f = scene(width);
-            let cfg = ParsingErrorsConfig::default();
+            let cfg = ParserMistakesConfig::default();
             let fracs: Vec<f64> = (0..32)
                 .map(|s| mismatch_fraction(&f.labels, &predict_labels(&f.view(), &cfg, s)))
                 .collect();
