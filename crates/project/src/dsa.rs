@@ -904,20 +904,11 @@ mod tests {
     }
 
     /// xorshift64*, seeded: the brute-force comparisons below are deterministic.
-    struct Rng(u64);
-
-    impl Rng {
-        fn below(&mut self, n: u64) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) % n
-        }
-    }
+    type Rng = bodyseg_core::rng::XorShift64Star;
 
     #[test]
     fn zbuffer_is_the_nearest_point_within_the_radius() {
-        let mut rng = Rng(0x5EED_0001);
+        let mut rng = Rng::new(0x5EED_0001);
         // One buffer for both radii: it must come back all +∞.
         let mut buffer = Vec::new();
         for r in [1, 2] {
@@ -972,7 +963,7 @@ mod tests {
 
     #[test]
     fn label_change_tests_match_brute_force() {
-        let mut rng = Rng(0x5EED_0002);
+        let mut rng = Rng::new(0x5EED_0002);
         let (w, h) = (61, 43);
         // Blobs of a few labels: uniform blocks, borders, and blocks cut by the edges.
         let mut image = vec![Label::BACKGROUND; w * h];
