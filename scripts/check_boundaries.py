@@ -3,7 +3,7 @@
 
 - core depends on no bodyseg crate;
 - a stage crate (calib, parsing, project, people, refine, eval, synth) depends only on core,
-  and project, people and synth also on calib;
+  and project, people and synth also on calib; calib also on io (its atomic writes);
 - io depends only on core; testkit only on core;
 - only pipeline, the root package (the `bodyseg` binary) and lab (the studies) may depend
   on every crate; no crate depends on lab;
@@ -27,7 +27,7 @@ ROOT_PACKAGE = "bodyseg"
 # name (without the "bodyseg-" prefix). None = any.
 ALLOWED = {
     "core": set(),
-    "calib": {"core"},
+    "calib": {"core", "io"},
     "parsing": {"core"},
     "project": {"core", "calib"},
     "people": {"core", "calib"},

@@ -3,11 +3,8 @@
 //! sensor sits 5 cm to the side of its depth sensor. The label image is the exact
 //! projection of the truth, so every wrong label is a DSA error of the projection itself.
 
-use std::path::Path;
-
 use bodyseg_calib::{
     BackProjectOptions, CloudFrame, Intrinsics, Pose, RgbdCamera, Rig, back_project,
-    read_iai_kinect2,
 };
 use bodyseg_core::{Class, Label, LabelImage, LabeledCloud, PointOrigin};
 use bodyseg_project::{
@@ -245,9 +242,8 @@ fn dsa_beats_naive_on_parallax_fixture() {
 /// The fixture with the real Kinect v2 calibration in `../shared/data`: a 0.6 × 0.8 m
 /// rectangle at 1.2 m before a wall at 3 m.
 fn kinect_fixture() -> Fixture {
-    let dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147");
-    let camera = read_iai_kinect2(&dir).expect("the example iai_kinect2 folder reads");
+    let camera = bodyseg_calib::testing::kinect_v2_test_camera()
+        .expect("the example iai_kinect2 folder reads");
     let scene = Scene {
         z_fg_m: 1.2,
         z_bg_m: 3.0,

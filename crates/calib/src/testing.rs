@@ -1,0 +1,81 @@
+//! Fixtures shared by the workspace's tests and benches (hidden from the documentation):
+//! the Kinect v2 test camera of `shared/data/iai_kinect2/196605135147` and a ring rig
+//! built from it. Not for production code.
+
+use crate::{CalibError, Pose, RgbdCamera, Rig, read_iai_kinect2};
+use std::path::PathBuf;
+
+/// The iai_kinect2 folder of the test camera: `shared/` beside the repository
+/// (`shared/data/iai_kinect2/196605135147`).
+pub fn kinect_v2_test_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147")
+}
+
+/// The Kinect v2 test camera (serial 196605135147, distortion included), read from
+/// [`kinect_v2_test_dir`]; the error names the folder when `shared/` is missing.
+pub fn kinect_v2_test_camera() -> Result<RgbdCamera, CalibError> {
+    read_iai_kinect2(&kinect_v2_test_dir())
+}
+
+/// `n` copies of `base` named `cam0`.. placed 2.2 m up on a circle of radius 3 m around
+/// the world origin, evenly spaced in yaw, each looking at the origin 30° down.
+pub fn ring_rig(base: &RgbdCamera, n: usize) -> Rig {
+    let cameras = (0..n)
+        .map(|i| {
+            let yaw = i as f64 * (360.0 / n as f64).to_radians();
+            let (sy, cy) = yaw.sin_cos();
+            let (st, ct) = 30f64.to_radians().sin_cos();
+            // Optical axes in world coordinates: z forward (towards the centre, tilted
+            // down), x right (horizontal), y down = z × x.
+            let fwd = [-cy * ct, -sy * ct, -st];
+            let right = [sy, -cy, 0.0];
+            let down = [
+                fwd[1] * right[2] - fwd[2] * right[1],
+                fwd[2] * right[0] - fwd[0] * right[2],
+                fwd[0] * right[1] - fwd[1] * right[0],
+            ];
+            let rotation = std::array::from_fn(|r| [right[r], down[r], fwd[r]]);
+            let mut cam = base.clone();
+            cam.name = format!("cam{i}");
+            // An orthonormal rotation by construction; identity only if that ever fails.
+            cam.world_from_depth =
+                Pose::from_rotation_translation(rotation, [3.0 * cy, 3.0 * sy, 2.2])
+                    .unwrap_or_else(|_| Pose::identity());
+            cam
+        })
+        .collect();
+    Rig { cameras }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ring_rig_cameras_look_at_the_origin_from_2_2_m() {
+        let optics = crate::Intrinsics {
+            width: 4,
+            height: 4,
+            fx: 2.0,
+            fy: 2.0,
+            cx: 2.0,
+            cy: 2.0,
+            distortion: crate::Distortion::NONE,
+        };
+        let base = RgbdCamera::new("k", optics, optics);
+        let rig = ring_rig(&base, 3);
+        assert_eq!(rig.cameras.len(), 3);
+        for (i, cam) in rig.cameras.iter().enumerate() {
+            assert_eq!(cam.name, format!("cam{i}"));
+            let c = cam.world_from_depth.transform_point([0.0, 0.0, 0.0]);
+            assert!((c[2] - 2.2).abs() < 1e-12 && (c[0].hypot(c[1]) - 3.0).abs() < 1e-12);
+            // The optical axis (depth frame +z) passes near the origin's direction.
+            let ahead = cam.world_from_depth.transform_point([0.0, 0.0, 1.0]);
+            let axis = [ahead[0] - c[0], ahead[1] - c[1], ahead[2] - c[2]];
+            let to_origin = [-c[0], -c[1], -c[2]];
+            let cos = (axis[0] * to_origin[0] + axis[1] * to_origin[1] + axis[2] * to_origin[2])
+                / (to_origin[0].hypot(to_origin[1]).hypot(to_origin[2]));
+            assert!(cos > 0.99, "camera {i}: cos {cos}");
+        }
+    }
+}
