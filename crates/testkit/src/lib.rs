@@ -11,7 +11,7 @@
 //! World frame, metres, z up, floor at z = 0; the person stands at `(x, y)` facing +y.
 //! The same seed gives the same cloud on every machine (ChaCha8).
 
-use bodyseg_core::math::{Vec3, dist2};
+use bodyseg_core::math::{Vec3, add, cross, dist2, dot, normalize, scale, sub};
 use bodyseg_core::{Class, Label, LabeledCloud, PersonBox, PointOrigin};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -362,30 +362,6 @@ pub fn random_cloud(
 /// A seeded RNG (ChaCha8), so tests need not depend on rand themselves.
 pub fn rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed)
-}
-
-fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn add(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn scale(a: Vec3, k: f32) -> Vec3 {
-    [a[0] * k, a[1] * k, a[2] * k]
-}
-fn dot(a: Vec3, b: Vec3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn normalize(a: Vec3) -> Vec3 {
-    let l = dot(a, a).sqrt().max(1e-12);
-    scale(a, 1.0 / l)
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 //! Self-contained (nothing here reads the box finder's configuration), so that the fit can
 //! grow without touching the finders: today the floor is near-horizontal in a z-up frame.
 
-use bodyseg_core::math::Vec3;
+use bodyseg_core::math::{Vec3, cross, dot, norm, sub};
 use bodyseg_core::rng::SplitMix64;
 
 /// Ground plane `n·p + d = 0`, `n` unit with `n.z > 0`: height of `p` is `n·p + d`.
@@ -68,14 +68,8 @@ pub(crate) fn fit_ground(
     let stride = (points.len() / 4000).max(1);
     for _ in 0..iterations {
         let [a, b, c] = [0; 3].map(|_| points[rng.below(points.len() as u64) as usize]);
-        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let mut n = [
-            u[1] * w[2] - u[2] * w[1],
-            u[2] * w[0] - u[0] * w[2],
-            u[0] * w[1] - u[1] * w[0],
-        ];
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let mut n = cross(sub(b, a), sub(c, a));
+        let len = norm(n);
         if len.is_nan() || len <= 1e-9 {
             continue;
         }
@@ -86,10 +80,7 @@ pub(crate) fn fit_ground(
         if n[2] < min_nz {
             continue;
         }
-        let plane = Plane {
-            n,
-            d: -(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]),
-        };
+        let plane = Plane { n, d: -dot(n, a) };
         let count = points
             .iter()
             .step_by(stride)
