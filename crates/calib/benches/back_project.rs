@@ -31,26 +31,9 @@ fn rig() -> Rig {
     testing::ring_rig(&kinect(), 3)
 }
 
-/// A depth image (mm) of a slanted plane with a box in front of it; ~15% of the pixels
-/// are holes (0), as on a real Kinect v2 frame (edges, dark and shiny surfaces).
+/// A depth image (mm) of a slanted plane with a box in front of it, ~15% holes.
 fn depth_image(width: u32, height: u32, seed: u64) -> Vec<u16> {
-    let mut rng = bodyseg_core::rng::XorShift64Star::new(seed);
-    let mut unit = move || rng.unit_f64();
-    let mut out = Vec::with_capacity((width * height) as usize);
-    for v in 0..height {
-        for u in 0..width {
-            let in_box = (180..330).contains(&u) && (140..320).contains(&v);
-            let z_mm = if in_box {
-                2000.0 + 0.8 * f64::from(u - 180)
-            } else {
-                // Floor seen from above: farther towards the top of the image.
-                4500.0 - 6.0 * f64::from(v)
-            };
-            let hole = unit() < 0.15;
-            out.push(if hole { 0 } else { z_mm as u16 });
-        }
-    }
-    out
+    testing::plane_and_box_depth_mm(width, height, seed)
 }
 
 fn bench(c: &mut Criterion) {

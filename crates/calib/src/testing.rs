@@ -47,6 +47,33 @@ pub fn ring_rig(base: &RgbdCamera, n: usize) -> Rig {
     Rig { cameras }
 }
 
+/// Depth pixels (u range, v range) of the box in [`plane_and_box_depth_mm`].
+pub const TEST_BOX_U: std::ops::Range<u32> = 180..330;
+/// See [`TEST_BOX_U`].
+pub const TEST_BOX_V: std::ops::Range<u32> = 140..320;
+
+/// A depth image (mm, row-major) of a slanted plane with a box in front of it
+/// ([`TEST_BOX_U`] × [`TEST_BOX_V`]); ~15% of the pixels are holes (0), as on a real
+/// Kinect v2 frame (edges, dark and shiny surfaces); the holes are drawn from `seed`.
+pub fn plane_and_box_depth_mm(width: u32, height: u32, seed: u64) -> Vec<u16> {
+    let mut rng = bodyseg_core::rng::XorShift64Star::new(seed);
+    let mut out = Vec::with_capacity(width as usize * height as usize);
+    for v in 0..height {
+        for u in 0..width {
+            let in_box = TEST_BOX_U.contains(&u) && TEST_BOX_V.contains(&v);
+            let z_mm = if in_box {
+                2000.0 + 0.8 * f64::from(u - TEST_BOX_U.start)
+            } else {
+                // Floor seen from above: farther towards the top of the image.
+                4500.0 - 6.0 * f64::from(v)
+            };
+            let hole = rng.unit_f64() < 0.15;
+            out.push(if hole { 0 } else { z_mm as u16 });
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -77,5 +104,20 @@ mod tests {
                 / (to_origin[0].hypot(to_origin[1]).hypot(to_origin[2]));
             assert!(cos > 0.99, "camera {i}: cos {cos}");
         }
+    }
+
+    #[test]
+    fn plane_and_box_has_the_box_nearer_and_about_15_percent_holes() {
+        let d = plane_and_box_depth_mm(512, 424, 7);
+        assert_eq!(d.len(), 512 * 424);
+        assert_eq!(d, plane_and_box_depth_mm(512, 424, 7));
+        let holes = d.iter().filter(|&&z| z == 0).count() as f64 / d.len() as f64;
+        assert!((0.13..0.17).contains(&holes), "{holes}");
+        let at = |u: usize, v: usize| d[v * 512 + u];
+        let (boxed, floor) = (0..20)
+            .map(|k| (at(200 + k, 200), at(20 + k, 200)))
+            .find(|&(b, f)| b > 0 && f > 0)
+            .unwrap_or((0, 0));
+        assert!(boxed > 0 && boxed < floor, "{boxed} {floor}");
     }
 }

@@ -1000,7 +1000,7 @@ mod tests {
 
     #[test]
     fn edge_map_matches_the_per_pixel_test() {
-        let mut rng = Rng(0x5EED_0003);
+        let mut rng = Rng::new(0x5EED_0003);
         let (w, h) = (37, 29);
         let mut camera = RgbdCamera::new(
             "e",
