@@ -27,16 +27,6 @@ use crate::geometry::{
     norm, normalize, rotate_z, scale, sub,
 };
 
-mod clothes;
-mod draw;
-mod placement;
-#[cfg(test)]
-mod tests;
-
-use clothes::*;
-use draw::*;
-pub use placement::{handover_object, make_people};
-
 /// Clearance kept between a person's pelvis centre and a [`FloorObstacle`]'s rim, metres
 /// (about the half width of a body seen from above).
 pub const PERSON_RADIUS_M: f32 = 0.3;
@@ -390,6 +380,224 @@ impl Dims {
 const STAND_LEG_FRACTION: f32 = 0.998;
 /// Same while walking (knees a little bent through the stance).
 const WALK_LEG_FRACTION: f32 = 0.975;
+
+// ---------------------------------------------------------------------------------------
+// Clothing.
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Clothes {
+    shirt: Material,
+    /// The forearms: the shirt with long sleeves, skin with short ones.
+    sleeve: Material,
+    trousers: Material,
+    skin: Material,
+    hair: Material,
+    shoes: Material,
+    short_sleeves: bool,
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn linear(srgb: [f32; 3]) -> [f32; 3] {
+    srgb.map(srgb_to_linear)
+}
+
+fn hsv(h: f32, s: f32, v: f32) -> [f32; 3] {
+    let h6 = h.rem_euclid(1.0) * 6.0;
+    let c = v * s;
+    let x = c * (1.0 - ((h6 % 2.0) - 1.0).abs());
+    let (r, g, b) = match h6 as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = v - c;
+    [r + m, g + m, b + m]
+}
+
+/// Distance of two sRGB colours (roughly perceptual).
+fn srgb_dist(a: [f32; 3], b: [f32; 3]) -> f32 {
+    norm(sub(a, b))
+}
+
+fn jitter(rng: &mut ChaCha8Rng, c: [f32; 3], amount: f32) -> [f32; 3] {
+    c.map(|x| (x + uni(rng, -amount, amount)).clamp(0.0, 1.0))
+}
+
+const SKIN_SRGB: [[f32; 3]; 7] = [
+    [1.00, 0.88, 0.77],
+    [0.95, 0.76, 0.65],
+    [0.88, 0.67, 0.55],
+    [0.78, 0.53, 0.40],
+    [0.63, 0.40, 0.27],
+    [0.47, 0.29, 0.20],
+    [0.31, 0.20, 0.14],
+];
+const HAIR_SRGB: [[f32; 3]; 6] = [
+    [0.08, 0.07, 0.06],
+    [0.24, 0.16, 0.11],
+    [0.42, 0.31, 0.22],
+    [0.77, 0.63, 0.39],
+    [0.59, 0.27, 0.16],
+    [0.63, 0.63, 0.63],
+];
+const SHOES_SRGB: [[f32; 3]; 5] = [
+    [0.10, 0.10, 0.10],
+    [0.31, 0.20, 0.12],
+    [0.86, 0.86, 0.84],
+    [0.43, 0.43, 0.45],
+    [0.12, 0.14, 0.27],
+];
+/// Minimum sRGB distance between shirt, trousers and skin colours, so a parser can tell
+/// the torso, the legs and bare skin apart.
+const MIN_CLOTHES_DIST: f32 = 0.3;
+
+fn pick<T: Copy>(rng: &mut ChaCha8Rng, items: &[T], fallback: T) -> T {
+    if items.is_empty() {
+        return fallback;
+    }
+    let i = ((rng.random::<f32>() * items.len() as f32) as usize).min(items.len() - 1);
+    items.get(i).copied().unwrap_or(fallback)
+}
+
+fn skin_srgb(rng: &mut ChaCha8Rng) -> [f32; 3] {
+    let t = uni(rng, 0.0, (SKIN_SRGB.len() - 1) as f32);
+    let i = (t as usize).min(SKIN_SRGB.len() - 2);
+    let f = t - i as f32;
+    let a = SKIN_SRGB[i];
+    let b = SKIN_SRGB[i + 1];
+    jitter(rng, [0, 1, 2].map(|k| a[k] + (b[k] - a[k]) * f), 0.02)
+}
+
+fn shirt_srgb(rng: &mut ChaCha8Rng) -> [f32; 3] {
+    if rng.random::<f32>() < 0.15 {
+        let v = pick(rng, &[0.12, 0.45, 0.92], 0.45);
+        return jitter(rng, [v, v, v], 0.04);
+    }
+    hsv(uni(rng, 0.0, 1.0), uni(rng, 0.3, 0.85), uni(rng, 0.3, 0.95))
+}
+
+fn trousers_srgb(rng: &mut ChaCha8Rng) -> [f32; 3] {
+    match (rng.random::<f32>() * 5.0) as u32 {
+        0 | 1 => hsv(
+            uni(rng, 0.58, 0.64),
+            uni(rng, 0.4, 0.75),
+            uni(rng, 0.3, 0.65),
+        ),
+        2 => {
+            let v = uni(rng, 0.08, 0.5);
+            jitter(rng, [v, v, v], 0.02)
+        }
+        3 => hsv(
+            uni(rng, 0.07, 0.14),
+            uni(rng, 0.25, 0.5),
+            uni(rng, 0.45, 0.8),
+        ),
+        _ => hsv(uni(rng, 0.0, 1.0), uni(rng, 0.3, 0.7), uni(rng, 0.2, 0.7)),
+    }
+}
+
+fn make_clothes(rng: &mut ChaCha8Rng, short_sleeves_prob: f64) -> Clothes {
+    let skin = skin_srgb(rng);
+    let mut shirt = [0.15, 0.3, 0.75];
+    for _ in 0..64 {
+        let c = shirt_srgb(rng);
+        if srgb_dist(c, skin) >= MIN_CLOTHES_DIST {
+            shirt = c;
+            break;
+        }
+    }
+    let mut trousers = if srgb_dist(shirt, [0.2, 0.2, 0.22]) >= MIN_CLOTHES_DIST {
+        [0.2, 0.2, 0.22]
+    } else {
+        [0.85, 0.8, 0.6]
+    };
+    for _ in 0..64 {
+        let c = trousers_srgb(rng);
+        if srgb_dist(c, skin) >= MIN_CLOTHES_DIST && srgb_dist(c, shirt) >= MIN_CLOTHES_DIST {
+            trousers = c;
+            break;
+        }
+    }
+    let mut hair = pick(rng, &HAIR_SRGB, HAIR_SRGB[0]);
+    hair = jitter(rng, hair, 0.03);
+    if srgb_dist(hair, skin) < 0.15 {
+        hair = HAIR_SRGB[1];
+    }
+    let shoes = pick(rng, &SHOES_SRGB, SHOES_SRGB[0]);
+    let shoes = jitter(rng, shoes, 0.02);
+
+    let shirt_texture = {
+        let r = rng.random::<f32>();
+        if r < 0.3 {
+            let toward = if shirt.iter().sum::<f32>() > 1.5 {
+                [0.0; 3]
+            } else {
+                [1.0; 3]
+            };
+            let f = uni(rng, 0.3, 0.5);
+            let other = [0, 1, 2].map(|k| shirt[k] + (toward[k] - shirt[k]) * f);
+            if srgb_dist(other, skin) >= 0.2 && srgb_dist(other, trousers) >= 0.2 {
+                Texture::Stripes {
+                    period_m: uni(rng, 0.03, 0.12),
+                    other: linear(other),
+                }
+            } else {
+                Texture::Plain
+            }
+        } else if r < 0.6 {
+            Texture::Noise {
+                cell_m: uni(rng, 0.02, 0.06),
+                amplitude: uni(rng, 0.1, 0.25),
+            }
+        } else {
+            Texture::Plain
+        }
+    };
+    let shirt = Material {
+        albedo: linear(shirt),
+        texture: shirt_texture,
+    };
+    let skin = Material {
+        albedo: linear(skin),
+        texture: Texture::Noise {
+            cell_m: 0.02,
+            amplitude: 0.05,
+        },
+    };
+    let short_sleeves = f64::from(rng.random::<f32>()) < short_sleeves_prob;
+    Clothes {
+        shirt,
+        sleeve: if short_sleeves { skin } else { shirt },
+        trousers: Material {
+            albedo: linear(trousers),
+            texture: Texture::Noise {
+                cell_m: uni(rng, 0.01, 0.03),
+                amplitude: uni(rng, 0.08, 0.2),
+            },
+        },
+        skin,
+        hair: Material {
+            albedo: linear(hair),
+            texture: Texture::Noise {
+                cell_m: 0.006,
+                amplitude: 0.2,
+            },
+        },
+        shoes: Material::plain(linear(shoes)),
+        short_sleeves,
+    }
+}
 
 // ---------------------------------------------------------------------------------------
 // Motion through the area.
@@ -937,3 +1145,664 @@ fn handover_arm(
     let center = add(wrist, scale(along, d.hand_half[2]));
     (elbow, wrist, center, [width, thick, along])
 }
+
+// ---------------------------------------------------------------------------------------
+// Drawing people.
+
+/// Which arms a one- or two-armed pose uses: (left, right).
+fn arms_used(rng: &mut ChaCha8Rng, both_prob: f32) -> (bool, bool) {
+    let r = rng.random::<f32>();
+    if r < both_prob {
+        (true, true)
+    } else if r < both_prob + (1.0 - both_prob) * 0.65 {
+        (false, true)
+    } else {
+        (true, false)
+    }
+}
+
+/// Arm hanging at the side.
+fn arm_hanging(rng: &mut ChaCha8Rng, side: f32, girth: f32) -> Arm {
+    let inrot = uni_deg(rng, 5.0, 15.0);
+    let abd = uni_deg(rng, 5.0, 10.0) + (girth - 1.0).max(0.0) * 0.5;
+    Arm {
+        flex: sway_r(rng, 0.0, 8.0, 2.0, 8.0),
+        abd: sway_deg(rng, abd, 1.0, 3.0),
+        twist: sway_deg(rng, -side * inrot, 2.0, 8.0),
+        elbow: sway_r(rng, 8.0, 20.0, 3.0, 10.0),
+        wrist: sway_r(rng, 0.0, 10.0, 2.0, 8.0),
+        gait_swing: 0.0,
+    }
+}
+
+/// The twist and elbow flexion that point the forearm of an upper arm at (`flex`, `abd`)
+/// to `target` (chest frame, origin at the thoracic joint).
+fn aim_forearm(d: &Dims, side: f32, flex: f32, abd: f32, target: V3) -> (f32, f32) {
+    let upper = mm(&rot_y(-flex), &rot_x(side * abd));
+    let elbow = add(d.shoulder_at(side), mv(&upper, [0.0, 0.0, -d.upper_arm]));
+    let f = mtv(&upper, normalize(sub(target, elbow)));
+    let e = (-f[2]).clamp(-1.0, 1.0).acos();
+    let twist = if f[0].abs() + f[1].abs() > 1e-5 {
+        f[1].atan2(f[0])
+    } else {
+        0.0
+    };
+    (twist, e.clamp(ELBOW_MIN_RAD, ELBOW_MAX_RAD))
+}
+
+/// An arm aimed at a target with small sway (crossed arms, hands on hips).
+fn arm_aimed(rng: &mut ChaCha8Rng, d: &Dims, side: f32, flex: f32, abd: f32, target: V3) -> Arm {
+    let (twist, elbow) = aim_forearm(d, side, flex, abd, target);
+    Arm {
+        flex: sway_deg(rng, flex, 1.0, 3.0),
+        abd: sway_deg(rng, abd, 0.5, 2.0),
+        twist: sway_deg(rng, twist, 0.5, 2.0),
+        elbow: sway_deg(rng, elbow, 1.0, 3.0),
+        wrist: sway_deg(rng, 0.0, 1.0, 3.0),
+        gait_swing: 0.0,
+    }
+}
+
+/// A calm trunk: every channel with a small sway around zero.
+fn trunk_calm(rng: &mut ChaCha8Rng) -> Trunk {
+    Trunk {
+        pelvis_x: sway(rng, 0.0, 0.005, 0.02),
+        pelvis_y: sway(rng, 0.0, 0.005, 0.02),
+        pelvis_drop: sway(rng, 0.0, 0.0, 0.004),
+        pelvis_yaw: sway_deg(rng, 0.0, 1.0, 3.0),
+        pelvis_pitch: sway_deg(rng, 0.0, 0.5, 1.5),
+        pelvis_roll: sway_deg(rng, 0.0, 0.5, 1.5),
+        lumbar_flex: sway_deg(rng, 0.0, 1.0, 3.0),
+        lumbar_lat: sway_deg(rng, 0.0, 0.5, 2.0),
+        lumbar_twist: sway_deg(rng, 0.0, 1.0, 4.0),
+        thor_flex: Chan {
+            base: 0.0,
+            amp: uni_deg(rng, 0.5, 1.5),
+            omega: TAU / uni(rng, 3.0, 5.0),
+            phase: uni(rng, 0.0, TAU),
+        },
+        thor_lat: sway_deg(rng, 0.0, 0.5, 1.5),
+        thor_twist: sway_deg(rng, 0.0, 1.0, 3.0),
+        neck_flex: sway_deg(rng, 0.0, 1.0, 4.0),
+        neck_lat: sway_deg(rng, 0.0, 1.0, 3.0),
+        neck_yaw: sway_deg(rng, 0.0, 2.0, 6.0),
+        head_nod: sway_deg(rng, 0.0, 2.0, 5.0),
+        head_yaw: sway_deg(rng, 0.0, 3.0, 15.0),
+    }
+}
+
+fn legs_standing(rng: &mut ChaCha8Rng, h: f32) -> [Leg; 2] {
+    let w = uni(rng, 0.05, 0.07) * h;
+    let x = uni(rng, -0.01, 0.01) * h;
+    SIDES.map(|s| Leg {
+        ankle_xy: [x, s * w],
+        toe_yaw: s * uni_deg(rng, 5.0, 15.0),
+    })
+}
+
+/// Adds `sigma` (radians) Gaussian noise to the base of every joint-angle channel.
+fn perturb(rng: &mut ChaCha8Rng, person: &mut Person, sigma: f32) {
+    if sigma <= 0.0 {
+        return;
+    }
+    let tr = &mut person.trunk;
+    tr.pelvis_yaw.base += sigma * gauss(rng);
+    // The spine (pelvis, lumbar, thoracic) and the neck-head chain are each one anatomical
+    // joint split in parts: the noise is shared so that the chain bends by about `sigma`.
+    let spine = sigma / 3f32.sqrt();
+    for c in [
+        &mut tr.pelvis_pitch,
+        &mut tr.pelvis_roll,
+        &mut tr.lumbar_flex,
+        &mut tr.lumbar_lat,
+        &mut tr.lumbar_twist,
+        &mut tr.thor_flex,
+        &mut tr.thor_lat,
+        &mut tr.thor_twist,
+    ] {
+        c.base += spine * gauss(rng);
+    }
+    let neck = sigma / 2f32.sqrt();
+    for c in [
+        &mut tr.neck_flex,
+        &mut tr.neck_lat,
+        &mut tr.neck_yaw,
+        &mut tr.head_nod,
+        &mut tr.head_yaw,
+    ] {
+        c.base += neck * gauss(rng);
+    }
+    for arm in &mut person.arms {
+        for c in [
+            &mut arm.flex,
+            &mut arm.abd,
+            &mut arm.twist,
+            &mut arm.elbow,
+            &mut arm.wrist,
+        ] {
+            c.base += sigma * gauss(rng);
+        }
+        arm.elbow.base = arm.elbow.base.clamp(ELBOW_MIN_RAD, ELBOW_MAX_RAD);
+    }
+    // Hip flexion / abduction / rotation move the planted foot; the knee follows by IK.
+    let leg_len = person.dims.leg();
+    for (i, leg) in person.legs.iter_mut().enumerate() {
+        leg.ankle_xy[0] += leg_len * (sigma * gauss(rng)).sin() * 0.5;
+        leg.ankle_xy[1] += leg_len * (sigma * gauss(rng)).sin() * 0.5;
+        leg.toe_yaw += sigma * gauss(rng);
+        // Feet never cross the midline.
+        let min_w = 0.025 * person.dims.height;
+        leg.ankle_xy[1] = if i == 0 {
+            leg.ankle_xy[1].max(min_w)
+        } else {
+            leg.ankle_xy[1].min(-min_w)
+        };
+    }
+}
+
+/// Draws shape, clothing and pose of person `index` (motion is set at placement).
+fn draw_person(config: &PeopleConfig, seed: u64, index: usize, pose: BodyPose) -> Person {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(index as u64 + 1);
+    let [h_lo, h_hi] = config.height_m.map(|x| x as f32);
+    let [g_lo, g_hi] = config.girth.map(|x| x as f32);
+    let height = uni(&mut rng, h_lo.min(h_hi), h_hi.max(h_lo)).clamp(0.5, 2.5);
+    let girth = uni(&mut rng, g_lo.min(g_hi), g_hi.max(g_lo)).clamp(0.3, 3.0);
+    let dims = Dims::new(height, girth, uni(&mut rng, 0.95, 1.12));
+    let clothes = make_clothes(&mut rng, config.short_sleeves);
+    let d = &dims;
+    let h = height;
+
+    let mut trunk = trunk_calm(&mut rng);
+    let mut arms = SIDES.map(|s| arm_hanging(&mut rng, s, girth));
+    let mut legs = legs_standing(&mut rng, h);
+    let mut hip_z_nominal = d.ankle_h + STAND_LEG_FRACTION * d.leg();
+
+    match pose {
+        BodyPose::Standing => {}
+        BodyPose::Walking => {
+            hip_z_nominal = d.ankle_h + WALK_LEG_FRACTION * d.leg();
+            trunk.pelvis_x = Chan::default();
+            trunk.pelvis_y = Chan::default();
+            trunk.head_yaw.amp *= 0.5;
+            for leg in &mut legs {
+                leg.ankle_xy[0] = 0.0;
+                leg.ankle_xy[1] = leg.ankle_xy[1].signum() * 0.055 * h;
+                leg.toe_yaw *= 0.5;
+            }
+            for (i, arm) in arms.iter_mut().enumerate() {
+                arm.flex = sway_r(&mut rng, 0.0, 5.0, 0.5, 2.0);
+                arm.abd.base = uni_deg(&mut rng, 6.0, 10.0) + (girth - 1.0).max(0.0) * 0.5;
+                arm.elbow = sway_r(&mut rng, 15.0, 30.0, 1.0, 4.0);
+                // Arms swing more the faster the walk (about 15 degrees at 1 m/s).
+                let speed = (config.walk_speed_m_s as f32).clamp(0.3, 1.2);
+                arm.gait_swing = uni_deg(&mut rng, 10.0, 20.0) * speed;
+                arm.twist.base = -SIDES[i] * uni_deg(&mut rng, 5.0, 15.0);
+            }
+        }
+        BodyPose::Reaching => {
+            let (left, right) = arms_used(&mut rng, 0.4);
+            trunk.lumbar_flex.base = uni_deg(&mut rng, 0.0, 8.0);
+            for (i, used) in [left, right].into_iter().enumerate() {
+                if used {
+                    arms[i] = Arm {
+                        flex: sway_r(&mut rng, 70.0, 88.0, 4.0, 15.0),
+                        abd: sway_r(&mut rng, 0.0, 15.0, 2.0, 6.0),
+                        twist: sway_r(&mut rng, -SIDES[i] * 0.0, -SIDES[i] * 10.0, 2.0, 6.0),
+                        elbow: sway_r(&mut rng, 3.0, 18.0, 3.0, 10.0),
+                        wrist: sway_r(&mut rng, -10.0, 10.0, 2.0, 8.0),
+                        gait_swing: 0.0,
+                    };
+                }
+            }
+            let fwd = uni(&mut rng, 0.03, 0.08) * h;
+            let which = usize::from(rng.random::<bool>());
+            legs[which].ankle_xy[0] += fwd;
+            legs[1 - which].ankle_xy[0] -= 0.5 * fwd;
+        }
+        BodyPose::HandingOver => {
+            // Without a partner: offering forward with the right hand, elbow bent.
+            arms[1] = Arm {
+                flex: sway_r(&mut rng, 45.0, 60.0, 3.0, 10.0),
+                abd: sway_r(&mut rng, 5.0, 15.0, 1.0, 4.0),
+                twist: sway_deg(&mut rng, 0.0, 2.0, 6.0),
+                elbow: sway_r(&mut rng, 40.0, 60.0, 3.0, 10.0),
+                wrist: sway_deg(&mut rng, 0.0, 2.0, 6.0),
+                gait_swing: 0.0,
+            };
+            trunk.pelvis_x.amp *= 0.5;
+            trunk.pelvis_y.amp *= 0.5;
+            let fwd = uni(&mut rng, 0.02, 0.06) * h;
+            legs[1].ankle_xy[0] += fwd;
+            legs[0].ankle_xy[0] -= 0.5 * fwd;
+        }
+        BodyPose::ArmsCrossed => {
+            for (i, side) in SIDES.into_iter().enumerate() {
+                let flex = uni_deg(&mut rng, 20.0, 30.0) + (girth - 1.0).max(0.0) * 0.6;
+                let abd = uni_deg(&mut rng, 10.0, 20.0);
+                // Hand on the other upper arm; the left forearm a little higher and closer.
+                let (dx, dz) = if i == 0 { (0.03, 0.07) } else { (0.055, 0.045) };
+                let target = [d.chest_radii[0] + dx * h, -side * 0.11 * h, dz * h];
+                arms[i] = arm_aimed(&mut rng, d, side, flex, abd, target);
+            }
+        }
+        BodyPose::HandsOnHips => {
+            for (i, side) in SIDES.into_iter().enumerate() {
+                let flex = -uni_deg(&mut rng, 10.0, 20.0);
+                let abd = uni_deg(&mut rng, 40.0, 55.0);
+                // Hand at the side of the pelvis, in the chest frame of an upright trunk.
+                let target = [
+                    0.0,
+                    side * (d.pelvis_radii[1] + 0.012 * h),
+                    0.03 * h - d.lumbar_up - d.thoracic_up,
+                ];
+                arms[i] = arm_aimed(&mut rng, d, side, flex, abd, target);
+            }
+        }
+        BodyPose::Pointing => {
+            let i = if rng.random::<f32>() < 0.7 { 1 } else { 0 };
+            let side = SIDES[i];
+            let abd = uni_deg(&mut rng, 15.0, 50.0);
+            arms[i] = Arm {
+                flex: sway_r(&mut rng, 70.0, 95.0, 3.0, 12.0),
+                abd: sway_deg(&mut rng, abd, 2.0, 8.0),
+                twist: sway_deg(&mut rng, 0.0, 2.0, 5.0),
+                elbow: sway_r(&mut rng, 2.0, 10.0, 1.0, 4.0),
+                wrist: sway_deg(&mut rng, 0.0, 2.0, 5.0),
+                gait_swing: 0.0,
+            };
+            trunk.head_yaw.base = side * 0.6 * abd;
+            trunk.head_yaw.amp *= 0.4;
+        }
+        BodyPose::Crouching => {
+            let w = uni(&mut rng, 0.07, 0.1) * h;
+            let x = uni(&mut rng, 0.03, 0.06) * h;
+            for (leg, side) in legs.iter_mut().zip(SIDES) {
+                leg.ankle_xy = [x, side * w];
+                leg.toe_yaw = side * uni_deg(&mut rng, 15.0, 25.0);
+            }
+            hip_z_nominal = uni(&mut rng, 0.28, 0.36) * h;
+            trunk.pelvis_x = sway(&mut rng, 0.0, 0.003, 0.01);
+            trunk.pelvis_y = sway(&mut rng, 0.0, 0.003, 0.01);
+            trunk.pelvis_drop = sway(&mut rng, 0.0, 0.005, 0.02);
+            let pitch = uni_deg(&mut rng, 10.0, 25.0);
+            let lumbar = uni_deg(&mut rng, 10.0, 25.0);
+            let thor = uni_deg(&mut rng, 5.0, 10.0);
+            trunk.pelvis_pitch.base = pitch;
+            trunk.lumbar_flex.base = lumbar;
+            trunk.thor_flex.base = thor;
+            trunk.neck_flex.base = -0.5 * (pitch + lumbar + thor);
+            trunk.head_nod.base = -0.3 * (pitch + lumbar + thor);
+            for (i, arm) in arms.iter_mut().enumerate() {
+                *arm = Arm {
+                    flex: sway_r(&mut rng, 30.0, 50.0, 3.0, 10.0),
+                    abd: sway_r(&mut rng, 8.0, 15.0, 1.0, 4.0),
+                    twist: sway_r(&mut rng, -SIDES[i] * 10.0, -SIDES[i] * 20.0, 2.0, 5.0),
+                    elbow: sway_r(&mut rng, 40.0, 70.0, 3.0, 10.0),
+                    wrist: sway_deg(&mut rng, 0.0, 2.0, 6.0),
+                    gait_swing: 0.0,
+                };
+            }
+        }
+    }
+
+    let mut person = Person {
+        id: u8::try_from(index + 1).unwrap_or(u8::MAX),
+        pose,
+        girth,
+        dims,
+        clothes,
+        motion: Motion::Still {
+            xy: [0.0, 0.0],
+            yaw: 0.0,
+        },
+        trunk,
+        arms,
+        legs,
+        hip_z_nominal,
+        handover: None,
+    };
+    let sigma = (config.joint_noise_deg as f32).max(0.0).to_radians();
+    perturb(&mut rng, &mut person, sigma);
+    person
+}
+
+// ---------------------------------------------------------------------------------------
+// Placement.
+
+/// Candidate placements tried per person before the least bad one is taken.
+const PLACEMENT_TRIES: usize = 1000;
+/// Times (seconds) at which walking paths are checked against the constraints.
+const CHECK_STEP_S: f64 = 0.25;
+const CHECK_STEPS: usize = 240;
+
+struct Constraints<'a> {
+    area: f32,
+    spacing: f32,
+    obstacles: &'a [FloorObstacle],
+    times: Vec<f64>,
+}
+
+impl Constraints<'_> {
+    /// How far a pelvis position breaks the area and obstacle constraints, metres.
+    fn site_violation(&self, xy: [f32; 2]) -> f32 {
+        let mut v = (xy[0].abs() - self.area).max(0.0) + (xy[1].abs() - self.area).max(0.0);
+        for o in self.obstacles {
+            let dist = ((xy[0] - o.center_m[0]).powi(2) + (xy[1] - o.center_m[1]).powi(2)).sqrt();
+            v += (o.radius_m + PERSON_RADIUS_M - dist).max(0.0);
+        }
+        v
+    }
+
+    /// How far a walking loop leaves the area or enters an obstacle (exact, over the whole
+    /// loop), metres.
+    fn path_violation(&self, path: &Stadium) -> f32 {
+        let e = rotate_z([path.half_len, 0.0, 0.0], path.angle);
+        let ends = [
+            [path.center[0] + e[0], path.center[1] + e[1]],
+            [path.center[0] - e[0], path.center[1] - e[1]],
+        ];
+        let mut v = 0.0;
+        for end in ends {
+            for k in 0..2 {
+                v += (end[k].abs() + path.radius - self.area).max(0.0);
+            }
+        }
+        for o in self.obstacles {
+            // Distance of the obstacle centre to the loop (the rim of the stadium).
+            let ab = sub([ends[1][0], ends[1][1], 0.0], [ends[0][0], ends[0][1], 0.0]);
+            let ap = [o.center_m[0] - ends[0][0], o.center_m[1] - ends[0][1], 0.0];
+            let len2 = dot(ab, ab);
+            let f = if len2 > 0.0 {
+                (dot(ap, ab) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let to_axis = norm(sub(ap, scale(ab, f)));
+            let dist = (to_axis - path.radius).abs();
+            v += (o.radius_m + PERSON_RADIUS_M - dist).max(0.0);
+        }
+        v
+    }
+
+    /// Total violation of `motions` (moving together) against the placed ones.
+    fn violation(&self, motions: &[Motion], placed: &[Motion]) -> f32 {
+        let mut v = 0.0;
+        for m in motions {
+            if let Motion::Walk(w) = m {
+                v += self.path_violation(&w.path) * self.times.len() as f32;
+            }
+        }
+        for &t in &self.times {
+            for m in motions {
+                let (xy, _) = m.at(t);
+                v += self.site_violation(xy);
+                for q in placed {
+                    let (qxy, _) = q.at(t);
+                    let dist = ((xy[0] - qxy[0]).powi(2) + (xy[1] - qxy[1]).powi(2)).sqrt();
+                    v += (self.spacing - dist).max(0.0);
+                }
+            }
+        }
+        v
+    }
+}
+
+fn facing_center(rng: &mut ChaCha8Rng, xy: [f32; 2]) -> f32 {
+    if xy[0].hypot(xy[1]) < 0.1 {
+        uni(rng, -PI, PI)
+    } else {
+        (-xy[1]).atan2(-xy[0]) + 0.45 * gauss(rng)
+    }
+}
+
+fn candidate(rng: &mut ChaCha8Rng, person: &Person, area: f32, walk_speed: f32) -> Motion {
+    let xy = [uni(rng, -area, area), uni(rng, -area, area)];
+    if person.pose != BodyPose::Walking {
+        let yaw = facing_center(rng, xy);
+        return Motion::Still { xy, yaw };
+    }
+    let h = person.dims.height;
+    let radius = uni(rng, 0.3, 0.5).min(area.max(0.05));
+    let half_len = uni(rng, 0.0, (area - radius).max(0.0));
+    let path = Stadium {
+        center: xy,
+        angle: uni(rng, -PI, PI),
+        half_len,
+        radius,
+    };
+    let speed = walk_speed.max(0.0);
+    // Slow walking: shorter strides; at (almost) zero speed the person steps in place.
+    let stride = (h * (0.3 + 0.25 * speed)).min(speed * 1.6);
+    let gait_period_s = if speed > 0.05 { stride / speed } else { 1.2 };
+    Motion::Walk(Walk {
+        path,
+        speed_m_s: speed,
+        s0_m: uni(rng, 0.0, path.perimeter()),
+        gait_period_s: gait_period_s.clamp(0.6, 2.0),
+        stride_m: if speed > 0.05 {
+            speed * gait_period_s.clamp(0.6, 2.0)
+        } else {
+            0.0
+        },
+        gait_phase0: rng.random::<f32>(),
+    })
+}
+
+/// The people of a sequence, drawn from `config` with `seed` (same seed, same people),
+/// standing in the workspace around the world origin and outside `obstacles`.
+///
+/// Placement keeps pelvis centres inside `|x|, |y| <= area_half_m`, `min_spacing_m` apart
+/// and [`PERSON_RADIUS_M`] outside every obstacle; when no tried placement meets all of
+/// this, the one that breaks it least is used (the constraints are relaxed, never looped
+/// on). With `config.handover` persons 1 and 2 face each other `handover_distance_m` apart.
+pub fn make_people(config: &PeopleConfig, seed: u64, obstacles: &[FloorObstacle]) -> Vec<Person> {
+    let count = config.count.min(u32::from(u8::MAX - 1)) as usize;
+    let handover = config.handover && count >= 2;
+    let poses: Vec<BodyPose> = config
+        .poses
+        .iter()
+        .filter_map(|n| BodyPose::from_name(n))
+        .collect();
+
+    let mut pose_rng = ChaCha8Rng::seed_from_u64(seed);
+    pose_rng.set_stream(0xA11_0C47);
+    let mut people: Vec<Person> = (0..count)
+        .map(|i| {
+            let drawn = pick(&mut pose_rng, &poses, BodyPose::Standing);
+            let pose = if handover && i < 2 {
+                BodyPose::HandingOver
+            } else {
+                drawn
+            };
+            draw_person(config, seed, i, pose)
+        })
+        .collect();
+
+    let area = (config.area_half_m as f32).max(0.0);
+    let walk_speed = config.walk_speed_m_s as f32;
+    let any_walker = people.iter().any(|p| p.pose == BodyPose::Walking);
+    let constraints = Constraints {
+        area,
+        spacing: (config.min_spacing_m as f32).max(0.0),
+        obstacles,
+        times: if any_walker {
+            (0..CHECK_STEPS).map(|k| k as f64 * CHECK_STEP_S).collect()
+        } else {
+            vec![0.0]
+        },
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(0x9_1ACE);
+    let mut placed: Vec<Motion> = Vec::with_capacity(count);
+
+    let mut first = 0;
+    if handover {
+        let dist = (config.handover_distance_m as f32).max(0.1);
+        let mut best: Option<(f32, [Motion; 2])> = None;
+        for _ in 0..PLACEMENT_TRIES {
+            let inner = (area - 0.5 * dist).max(0.0);
+            let c = [uni(&mut rng, -inner, inner), uni(&mut rng, -inner, inner)];
+            let a = uni(&mut rng, -PI, PI);
+            let u = [a.cos(), a.sin()];
+            let pair = [
+                Motion::Still {
+                    xy: [c[0] - 0.5 * dist * u[0], c[1] - 0.5 * dist * u[1]],
+                    yaw: a,
+                },
+                Motion::Still {
+                    xy: [c[0] + 0.5 * dist * u[0], c[1] + 0.5 * dist * u[1]],
+                    yaw: a + PI,
+                },
+            ];
+            let v = constraints.violation(&pair, &placed);
+            if best.as_ref().is_none_or(|(bv, _)| v < *bv) {
+                best = Some((v, pair));
+            }
+            if v <= 0.0 {
+                break;
+            }
+        }
+        if let Some((_, pair)) = best {
+            for (p, m) in people.iter_mut().zip(pair) {
+                p.motion = m;
+            }
+            placed.extend(pair);
+        }
+        setup_handover(&mut people, &mut rng);
+        first = 2;
+    }
+    for p in people.iter_mut().skip(first) {
+        let mut best: Option<(f32, Motion)> = None;
+        for _ in 0..PLACEMENT_TRIES {
+            let m = candidate(&mut rng, p, area, walk_speed);
+            let v = constraints.violation(&[m], &placed);
+            if best.as_ref().is_none_or(|(bv, _)| v < *bv) {
+                best = Some((v, m));
+            }
+            if v <= 0.0 {
+                break;
+            }
+        }
+        if let Some((_, m)) = best {
+            p.motion = m;
+            placed.push(m);
+        }
+    }
+    people
+}
+
+/// Meeting point, trunk lean and shared sway of the hand-over between persons 1 and 2
+/// (already placed facing each other).
+fn setup_handover(people: &mut [Person], rng: &mut ChaCha8Rng) {
+    let [a, b, ..] = people else {
+        return;
+    };
+    let (Motion::Still { xy: xa, yaw }, Motion::Still { xy: xb, .. }) = (a.motion, b.motion) else {
+        return;
+    };
+    let u = [yaw.cos(), yaw.sin(), 0.0];
+    let v = [-u[1], u[0], 0.0];
+    let shoulder_z = |p: &Person| {
+        let d = &p.dims;
+        p.hip_z_nominal + d.lumbar_up + d.thoracic_up + d.shoulder[2]
+    };
+    let z = (0.5 * (shoulder_z(&*a) + shoulder_z(&*b)) - 0.3).clamp(1.0, 1.2);
+    let mid = [0.5 * (xa[0] + xb[0]), 0.5 * (xa[1] + xb[1]), z];
+    let meet = sub(mid, scale(v, 0.06));
+    let hand_sep = 0.9 * (a.dims.hand_half[0] + b.dims.hand_half[0]);
+    let hand_top = a.dims.hand_half[1].max(b.dims.hand_half[1]);
+    let sway = [
+        sway(rng, 0.0, 0.01, 0.025),
+        sway(rng, 0.0, 0.01, 0.025),
+        sway(rng, 0.0, 0.01, 0.02),
+    ];
+    let object_color = object_color(&[&a.clothes, &b.clothes]);
+    let dist = ((xb[0] - xa[0]).powi(2) + (xb[1] - xa[1]).powi(2)).sqrt();
+    for (p, giver) in [(a, true), (b, false)] {
+        // Lean forward until the shoulder is well within reach of the hand.
+        let d = p.dims;
+        let arm = 0.92 * (d.upper_arm + d.forearm);
+        let fwd = 0.5 * dist - 0.5 * hand_sep;
+        let trunk_len = d.lumbar_up + d.thoracic_up + d.shoulder[2];
+        let mut lean = 0.0f32;
+        for step in 0..=45 {
+            lean = (step as f32).to_radians();
+            let sx = fwd - trunk_len * lean.sin();
+            let sz = p.hip_z_nominal + trunk_len * lean.cos() - z;
+            if sx.hypot(sz) <= arm {
+                break;
+            }
+        }
+        p.trunk.pelvis_pitch.base = 0.4 * lean + 0.03;
+        p.trunk.lumbar_flex.base = 0.6 * lean + 0.03;
+        // Facing the partner: no yaw offset, little yaw sway.
+        p.trunk.pelvis_yaw.base = 0.0;
+        p.trunk.pelvis_yaw.amp = p.trunk.pelvis_yaw.amp.min(0.03);
+        p.trunk.pelvis_x.amp = p.trunk.pelvis_x.amp.min(0.008);
+        p.trunk.pelvis_y.amp = p.trunk.pelvis_y.amp.min(0.008);
+        p.handover = Some(Handover {
+            giver,
+            meet,
+            u,
+            sway,
+            hand_sep,
+            hand_top,
+            object_color,
+        });
+    }
+}
+
+/// A plain colour for the hand-over object that differs most from both people's clothes
+/// and skin (linear RGB).
+fn object_color(clothes: &[&Clothes]) -> [f32; 3] {
+    const CANDIDATES: [[f32; 3]; 5] = [
+        [0.85, 0.35, 0.02],
+        [0.02, 0.55, 0.65],
+        [0.85, 0.75, 0.02],
+        [0.65, 0.03, 0.5],
+        [0.08, 0.55, 0.08],
+    ];
+    let mut best = CANDIDATES[0];
+    let mut best_d = f32::NEG_INFINITY;
+    for c in CANDIDATES {
+        let mut dmin = f32::INFINITY;
+        for cl in clothes {
+            for m in [cl.shirt, cl.trousers, cl.skin, cl.sleeve] {
+                dmin = dmin.min(norm(sub(c, m.albedo)));
+            }
+        }
+        if dmin > best_d {
+            best_d = dmin;
+            best = c;
+        }
+    }
+    best
+}
+
+/// The object passed between the first two people in a hand-over at `t_s` (class
+/// background: `Owner::Scene`), `None` when the sequence has no hand-over.
+///
+/// A box of [`HANDOVER_OBJECT_SIZE_M`] resting on both palms at the meeting point, its long
+/// side across the line between the two people.
+pub fn handover_object(people: &[Person], config: &PeopleConfig, t_s: f64) -> Option<Primitive> {
+    if !config.handover {
+        return None;
+    }
+    let h = people.iter().find_map(|p| p.handover.filter(|h| h.giver))?;
+    let m = h.meet_at(t_s);
+    let [across, along, up] = HANDOVER_OBJECT_SIZE_M;
+    let center = add(m, [0.0, 0.0, h.hand_top + 0.5 * up + 0.002]);
+    Some(Primitive {
+        shape: Shape::Box {
+            center,
+            axes: [h.u, h.v(), UP],
+            half: [0.5 * along, 0.5 * across, 0.5 * up],
+        },
+        owner: Owner::Scene,
+        material: Material::plain(h.object_color),
+    })
+}
+
+#[cfg(test)]
+mod tests;
