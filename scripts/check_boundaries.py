@@ -3,7 +3,8 @@
 
 - core depends on no bodyseg crate;
 - a stage crate (calib, parsing, project, people, refine, eval, synth, ros2) depends only
-  on core, and project, people, synth and ros2 also on calib;
+  on core, and project, people, synth and ros2 also on calib; calib also on io (its atomic
+  writes);
 - io depends only on core; testkit only on core;
 - only pipeline, the root package (the `bodyseg` binary) and lab (the studies) may depend
   on every crate; no crate depends on lab;
@@ -27,7 +28,7 @@ ROOT_PACKAGE = "bodyseg"
 # name (without the "bodyseg-" prefix). None = any.
 ALLOWED = {
     "core": set(),
-    "calib": {"core"},
+    "calib": {"core", "io"},
     "parsing": {"core"},
     "project": {"core", "calib"},
     "people": {"core", "calib"},

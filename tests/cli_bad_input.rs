@@ -1,7 +1,7 @@
 //! Bad input: exit status 1, one `error:` line on stderr naming the file or the
 //! configuration field, and no output file (an existing one is left as it was).
 
-use crate::common::{bodyseg, files_in, stderr, tempdir, write_scene};
+use crate::common::{bodyseg, files_in, refine_scene, stderr, tempdir, write_scene};
 use std::path::Path;
 
 /// Runs `bodyseg refine` with the scene's inputs, `extra` args, and `--out out.ply`.
@@ -227,18 +227,7 @@ fn output_in_a_missing_folder() {
     let d = dir.path();
     write_scene(d);
     let before = files_in(d);
-    let out = bodyseg(
-        d,
-        &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
-            "--out",
-            "no/such/dir/o.ply",
-        ],
-    );
+    let out = refine_scene(d, &["--out", "no/such/dir/o.ply"]);
     assert_fails(&out, d, &before, &["no/such/dir/o.ply", "cannot write"]);
 }
 

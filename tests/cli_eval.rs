@@ -1,6 +1,6 @@
 //! `bodyseg eval`: several named predictions, markdown output, report files, merging.
 
-use crate::common::{assert_ok, bodyseg, stdout, tempdir, write_scene};
+use crate::common::{assert_ok, bodyseg, refine_scene, stdout, tempdir, write_scene};
 use bodyseg_eval::Report;
 
 #[test]
@@ -8,18 +8,7 @@ fn named_predictions_markdown_json_and_merge() {
     let dir = tempdir();
     let d = dir.path();
     write_scene(d);
-    let out = bodyseg(
-        d,
-        &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
-            "--out",
-            "refined.ply",
-        ],
-    );
+    let out = refine_scene(d, &["--out", "refined.ply"]);
     assert_ok(&out, "bodyseg refine");
 
     // Markdown on stdout: the paper's table, one row per configuration and a change row.

@@ -6,7 +6,7 @@
 //! folder.
 
 use crate::common::{assert_ok, bodyseg, files_in, stderr, tempdir};
-use bodyseg_calib::{Pose, RgbdCamera, Rig, read_iai_kinect2, write_rig_toml};
+use bodyseg_calib::{Pose, RgbdCamera, Rig, write_rig_toml};
 use bodyseg_core::{Class, Label, LabelImage, LabeledCloud};
 use bodyseg_io::{DepthImage, read_ply, write_depth_png, write_label_png};
 use std::path::Path;
@@ -29,8 +29,7 @@ const CAM1_X_M: f64 = 1.0;
 
 /// The real iai_kinect2 calibration of one Kinect v2.
 fn kinect2() -> RgbdCamera {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/iai_kinect2/196605135147");
-    read_iai_kinect2(&dir).expect("read the iai_kinect2 calibration")
+    bodyseg_calib::testing::kinect_v2_test_camera().expect("read the iai_kinect2 calibration")
 }
 
 /// The true depth (metres) of depth pixel (u, v), `None` without measurement.

@@ -1,6 +1,8 @@
 //! `bodyseg refine` on a synthetic person, then `bodyseg eval` of its output.
 
-use crate::common::{SEED, assert_ok, bodyseg, index_origins, stderr, tempdir, write_scene};
+use crate::common::{
+    SEED, assert_ok, bodyseg, index_origins, refine_scene, stderr, tempdir, write_scene,
+};
 use bodyseg_io::read_ply;
 use bodyseg_pipeline::PipelineConfig;
 
@@ -19,18 +21,7 @@ fn refine_keeps_the_points_and_raises_biou() {
     let dir = tempdir();
     let d = dir.path();
     let scene = write_scene(d);
-    let out = bodyseg(
-        d,
-        &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
-            "--out",
-            "refined.ply",
-        ],
-    );
+    let out = refine_scene(d, &["--out", "refined.ply"]);
     assert_ok(&out, "bodyseg refine");
 
     // One summary line per stage, with its time.
@@ -85,14 +76,9 @@ fn flags_override_the_config_file_and_ascii_output_reads_back() {
         "[refine]\neps_m = 0.04\nmin_points = 30\nsteps = \"M-R-N\"\n",
     )
     .expect("write my.toml");
-    let out = bodyseg(
+    let out = refine_scene(
         d,
         &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
             "--config",
             "my.toml",
             "--steps",
@@ -128,20 +114,7 @@ fn reference_steps_leave_labels_untouched() {
     let dir = tempdir();
     let d = dir.path();
     let scene = write_scene(d);
-    let out = bodyseg(
-        d,
-        &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
-            "--steps",
-            "reference",
-            "--out",
-            "same.ply",
-        ],
-    );
+    let out = refine_scene(d, &["--steps", "reference", "--out", "same.ply"]);
     assert_ok(&out, "bodyseg refine --steps reference");
     let same = read_ply(&d.join("same.ply")).expect("same.ply reads back");
     assert_eq!(same.labels, scene.person.cloud.labels);
@@ -163,14 +136,9 @@ fn config_files_layer_then_set_then_flags() {
     )
     .expect("a");
     std::fs::write(d.join("b.toml"), "[refine]\neps_m = 0.045\n").expect("b");
-    let out = bodyseg(
+    let out = refine_scene(
         d,
         &[
-            "refine",
-            "--cloud",
-            "in.ply",
-            "--boxes",
-            "boxes.json",
             "--config",
             "a.toml",
             "--config",

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 /// The real iai_kinect2 folder of a Kinect v2 (serial 196605135147).
 fn kinect2_folder() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/iai_kinect2/196605135147")
+    bodyseg_calib::testing::kinect_v2_test_dir()
 }
 
 /// Copies the real folder's files into `dir/name`.

@@ -102,6 +102,14 @@ pub fn files_in(dir: &Path) -> Vec<String> {
     names
 }
 
+/// `bodyseg refine --cloud in.ply --boxes boxes.json ARGS` in `dir` (the files of
+/// [`write_scene`]).
+pub fn refine_scene(dir: &Path, args: &[&str]) -> Output {
+    let mut all = vec!["refine", "--cloud", "in.ply", "--boxes", "boxes.json"];
+    all.extend_from_slice(args);
+    bodyseg(dir, &all)
+}
+
 /// A temporary folder for one test.
 pub fn tempdir() -> tempfile::TempDir {
     tempfile::tempdir().expect("create temp dir")

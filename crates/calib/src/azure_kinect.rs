@@ -280,7 +280,7 @@ impl Doc<'_> {
 
 /// Which sensor a camera entry is, for the pixel conversion.
 #[derive(Clone, Copy)]
-enum Sensor {
+enum AzureSensor {
     Depth(Option<AzureDepthMode>),
     Color(Option<AzureColorResolution>),
 }
@@ -290,14 +290,14 @@ enum Sensor {
 fn to_pixels(
     doc: &Doc,
     key: &str,
-    sensor: Sensor,
+    sensor: AzureSensor,
     stored: [u32; 2],
     n: [f64; 4],
 ) -> Result<([f64; 4], [u32; 2]), CalibError> {
     let [w, h] = stored;
     let info = match sensor {
-        Sensor::Depth(None) | Sensor::Color(None) => mode(stored, [0, 0], stored),
-        Sensor::Depth(Some(m)) => {
+        AzureSensor::Depth(None) | AzureSensor::Color(None) => mode(stored, [0, 0], stored),
+        AzureSensor::Depth(Some(m)) => {
             if stored != [1024, 1024] {
                 return Err(doc.bad(
                     &format!("{key}.SensorWidth"),
@@ -310,10 +310,10 @@ fn to_pixels(
             }
             m.info()
         }
-        Sensor::Color(Some(r)) => r.info(),
+        AzureSensor::Color(Some(r)) => r.info(),
     };
     let mut n = n;
-    if let Sensor::Color(Some(r)) = sensor {
+    if let AzureSensor::Color(Some(r)) = sensor {
         // A calibration stored for a 16:9 image is brought to the 4:3 sensor, still
         // normalised, as the SDK does (its mode {4096x2304 binned, crop (0, -384),
         // 4096x3072 out}); integer arithmetic as the SDK's.
@@ -357,7 +357,7 @@ fn read_camera(
     doc: &Doc,
     cam: &Value,
     key: &str,
-    sensor: Sensor,
+    sensor: AzureSensor,
 ) -> Result<(Intrinsics, Pose), CalibError> {
     let width = doc.size(cam, key, "SensorWidth")?;
     let height = doc.size(cam, key, "SensorHeight")?;
@@ -468,13 +468,13 @@ pub fn parse_azure_kinect_json(
         &doc,
         depth_cam,
         &format!("{cams_key}[{di}]"),
-        Sensor::Depth(mode.depth),
+        AzureSensor::Depth(mode.depth),
     )?;
     let (color, color_from_ref) = read_camera(
         &doc,
         color_cam,
         &format!("{cams_key}[{ci}]"),
-        Sensor::Color(mode.color),
+        AzureSensor::Color(mode.color),
     )?;
     let color_from_depth = if depth_from_ref == Pose::identity() {
         color_from_ref

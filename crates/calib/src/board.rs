@@ -305,7 +305,7 @@ mod tests {
     }
 
     #[test]
-    fn toward_camera_flips_the_handedness_keeping_the_colours() {
+    fn toward_camera_flips_the_handedness_keeping_the_colors() {
         let board = Board::new([9, 6], 0.04).expect("board");
         let (image, truth) = board_image(&board, 12.0, [30.0, 25.0]);
         let got =

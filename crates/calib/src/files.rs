@@ -1,25 +1,18 @@
 //! Small file helpers shared by the writers.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::CalibError;
 
-/// Writes `text` to `path` through a temporary file in the same folder and a rename, so a
-/// failed write never leaves a half-written file behind.
+/// Writes `text` to `path` atomically with `bodyseg_io::write_bytes_atomic` (temporary
+/// sibling, fsync, rename), so a failed write never leaves a half-written file behind.
 pub(crate) fn write_atomic(path: &Path, text: &str) -> Result<(), CalibError> {
-    let tmp = temporary_path(path);
-    let write_err = |cause| CalibError::Write {
-        cause,
+    bodyseg_io::write_bytes_atomic(path, text.as_bytes()).map_err(|e| CalibError::Write {
+        cause: match e {
+            bodyseg_io::IoError::Write { cause, .. } => cause,
+            other => std::io::Error::other(other.to_string()),
+        },
         path: path.to_path_buf(),
-    };
-    if let Err(e) = std::fs::write(&tmp, text) {
-        // Best effort: the temporary may not exist at all.
-        let _ = std::fs::remove_file(&tmp);
-        return Err(write_err(e));
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        write_err(e)
     })
 }
 
@@ -43,13 +36,6 @@ const BOM: char = '\u{feff}';
 /// by the caller (not through [`read_text`]) may carry one too.
 pub(crate) fn without_bom(text: &str) -> &str {
     text.strip_prefix(BOM).unwrap_or(text)
-}
-
-fn temporary_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map_or_else(|| "calib".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.tmp{}", std::process::id()))
 }
 
 /// `{:?}` of a finite `f64`: the shortest text that parses back to the same bits, and

@@ -95,6 +95,9 @@ mod rig_toml;
 mod ros_camera_info;
 mod yaml;
 
+#[doc(hidden)]
+pub mod testing;
+
 pub use azure_kinect::{
     AZURE_COLOR_LOCATION, AZURE_DEPTH_LOCATION, AzureColorResolution, AzureDepthMode,
     AzureKinectMode, azure_kinect_json_to_string, parse_azure_kinect_json, read_azure_kinect_json,

@@ -346,7 +346,7 @@ fn azure_bad_input_names_file_and_key() {
 
 /// The shared calibration folder; CI checks out `shared/` beside the repository.
 fn kinect_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147")
+    bodyseg_calib::testing::kinect_v2_test_dir()
 }
 
 #[test]

@@ -9,13 +9,12 @@ use common::{Rng, seed};
 
 use bodyseg_calib::{
     BackProjectOptions, CalibError, CloudFrame, DepthBackProjector, Distortion, Intrinsics, Pose,
-    RgbdCamera, back_project, read_iai_kinect2,
+    RgbdCamera, back_project, read_iai_kinect2, testing,
 };
 
 /// The shared calibration folder; CI checks out `shared/` beside the repository.
 fn kinect_dir() -> PathBuf {
-    let dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147");
+    let dir = testing::kinect_v2_test_dir();
     assert!(
         dir.is_dir(),
         "test data missing: {} (the shared/ folder must sit beside the repository)",
@@ -246,8 +245,8 @@ fn round_trip_random_subpixel_points_and_depths() {
         ];
         let mut samples: Vec<([f64; 2], f64)> = corners.iter().map(|&c| (c, 2.0)).collect();
         for _ in 0..50_000 {
-            let uv = [rng.range(-0.5, w - 0.5), rng.range(-0.5, h - 0.5)];
-            samples.push((uv, rng.range(0.3, 10.0)));
+            let uv = [rng.range_f64(-0.5, w - 0.5), rng.range_f64(-0.5, h - 0.5)];
+            samples.push((uv, rng.range_f64(0.3, 10.0)));
         }
         let worst = worst_round_trip(&intr, samples.into_iter());
         assert!(
@@ -326,9 +325,9 @@ fn back_projected_pixels_project_back_to_themselves() {
     };
     let mut depth = vec![0u16; cam.depth.num_pixels()];
     for _ in 0..2_000 {
-        let u = (rng.unit() * f64::from(cam.depth.width)) as u32;
-        let v = (rng.unit() * f64::from(cam.depth.height)) as u32;
-        let raw = rng.range(500.0, 8000.0) as u16;
+        let u = (rng.unit_f64() * f64::from(cam.depth.width)) as u32;
+        let v = (rng.unit_f64() * f64::from(cam.depth.height)) as u32;
+        let raw = rng.range_f64(500.0, 8000.0) as u16;
         let pixel = (v * cam.depth.width + u) as usize;
         depth[pixel] = raw;
         let out = projector.back_project(&depth, &opts).expect("valid input");

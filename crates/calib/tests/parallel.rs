@@ -1,17 +1,13 @@
 //! Parallel back-projection (rayon across chunks of rows, and across a rig's cameras)
 //! gives exactly the sequential output: same points bit for bit, same origins, same order.
 
-use std::path::Path;
-
 use bodyseg_calib::{
     BackProjectOptions, BackProjected, CalibError, CloudFrame, DepthBackProjector, Pose,
-    RgbdCamera, Rig, RigBackProjector, back_project_rig, read_iai_kinect2,
+    RgbdCamera, Rig, RigBackProjector, back_project_rig,
 };
 
 fn kinect() -> RgbdCamera {
-    let dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147");
-    read_iai_kinect2(&dir).unwrap_or_else(|e| {
+    bodyseg_calib::testing::kinect_v2_test_camera().unwrap_or_else(|e| {
         panic!("test data (the shared/ folder must sit beside the repository): {e}")
     })
 }
@@ -38,13 +34,8 @@ fn placed(mut cam: RgbdCamera, name: &str, yaw_deg: f64) -> RgbdCamera {
 /// A Kinect-like depth image (mm): slanted plane, a box, ~15% holes (0), a few raw values
 /// below the file's −13.35 mm depth shift (non-positive after it) and a few above 8 m.
 fn depth_image(cam: &RgbdCamera, seed: u64) -> Vec<u16> {
-    let mut state = seed.max(1);
-    let mut unit = move || {
-        state ^= state >> 12;
-        state ^= state << 25;
-        state ^= state >> 27;
-        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = bodyseg_core::rng::XorShift64Star::new(seed);
+    let mut unit = move || rng.unit_f64();
     let (w, h) = (cam.depth.width, cam.depth.height);
     let mut out = Vec::with_capacity(cam.depth.num_pixels());
     for v in 0..h {

@@ -91,8 +91,12 @@ fn project_matches_opencv_formula_on_random_points() {
         let mut worst = 0.0f64;
         for _ in 0..20_000 {
             // Within ±60° of the axis (the WFOV depth sensor's field), 0.2–10 m.
-            let z = rng.range(0.2, 10.0);
-            let p = [rng.range(-1.7, 1.7) * z, rng.range(-1.7, 1.7) * z, z];
+            let z = rng.range_f64(0.2, 10.0);
+            let p = [
+                rng.range_f64(-1.7, 1.7) * z,
+                rng.range_f64(-1.7, 1.7) * z,
+                z,
+            ];
             let ours = intr.project(p).expect("denominator > 0 within the field");
             let cv = opencv_project(&intr, &k, p);
             worst = worst
@@ -122,9 +126,9 @@ fn brown_conrady_as_rational_projects_bit_for_bit() {
     let mut rng = Rng::new(seed());
     for _ in 0..1000 {
         let p = [
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(0.5, 4.0),
+            rng.range_f64(-1.0, 1.0),
+            rng.range_f64(-1.0, 1.0),
+            rng.range_f64(0.5, 4.0),
         ];
         assert_eq!(bc.project(p), rational.project(p), "{p:?}");
     }

@@ -205,11 +205,11 @@ fn sdk_mode_params(
     stored: [u32; 2],
     binned: [f32; 2],
     crop: [f32; 2],
-    colour: bool,
+    color: bool,
 ) -> [f32; 14] {
     let mut p: [f32; 14] = std::array::from_fn(|i| json_params[i] as f32);
     let [w, h] = stored;
-    if colour && w * 9 / 16 == h {
+    if color && w * 9 / 16 == h {
         // Legacy 16:9 colour: {4096x2304, crop (0, -384), 4096x3072}, normalised output.
         let (cx, cy) = (p[0] * 4096.0 - 0.0, p[1] * 2304.0 - (-384.0));
         let (fx, fy) = (p[2] * 4096.0, p[3] * 2304.0);

@@ -56,15 +56,12 @@ fn source_camera() -> RgbdCamera {
 
 /// Floor, a box and ~15% holes, raw millimetres.
 fn depth_image(cam: &RgbdCamera) -> Vec<u16> {
-    let mut state = 0x5A3E_9017_u64;
+    let mut rng = bodyseg_core::rng::XorShift64Star::new(0x5A3E_9017);
     let (w, h) = (cam.depth.width, cam.depth.height);
     let mut out = Vec::with_capacity(cam.depth.num_pixels());
     for v in 0..h {
         for u in 0..w {
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            let r = (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64;
+            let r = rng.unit_f64();
             let z = if r < 0.15 {
                 0.0
             } else if (160..330).contains(&u) && (130..320).contains(&v) {

@@ -162,9 +162,29 @@ impl RgbImage {
         Ok(RgbImage { width, height, rgb })
     }
 
+    /// An image of `width × height` pixels, every one `rgb`.
+    pub fn filled(width: u32, height: u32, rgb: [u8; 3]) -> RgbImage {
+        RgbImage {
+            width,
+            height,
+            rgb: rgb.repeat(width as usize * height as usize),
+        }
+    }
+
     /// Number of pixels, `width * height`.
     pub fn num_pixels(&self) -> usize {
         self.width as usize * self.height as usize
+    }
+
+    /// Sets pixel (u, v) to `rgb`; a pixel outside the image is left out.
+    pub fn set_pixel(&mut self, u: u32, v: u32, rgb: [u8; 3]) {
+        if u >= self.width || v >= self.height {
+            return;
+        }
+        let i = 3 * (v as usize * self.width as usize + u as usize);
+        if let Some(p) = self.rgb.get_mut(i..i + 3) {
+            p.copy_from_slice(&rgb);
+        }
     }
 
     /// The R, G, B bytes of pixel (u, v), `None` outside the image.
@@ -196,6 +216,18 @@ mod tests {
         image.probs = Some(vec![0.5; 6]);
         assert_eq!(image.prob(1, 1), Some(0.5));
         assert_eq!(image.validate(), Ok(()));
+    }
+
+    #[test]
+    fn set_pixel_writes_one_pixel_and_leaves_outside_alone() {
+        let mut image = RgbImage::filled(3, 2, [1, 2, 3]);
+        assert_eq!(image.rgb.len(), 18);
+        image.set_pixel(2, 1, [9, 8, 7]);
+        image.set_pixel(3, 0, [0, 0, 0]);
+        image.set_pixel(0, 2, [0, 0, 0]);
+        assert_eq!(image.pixel(2, 1), Some([9, 8, 7]));
+        assert_eq!(image.pixel(1, 1), Some([1, 2, 3]));
+        assert_eq!(image.rgb.iter().filter(|&&b| b == 0).count(), 0);
     }
 
     #[test]

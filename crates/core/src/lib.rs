@@ -16,6 +16,7 @@ pub mod cloud;
 pub mod image;
 pub mod math;
 pub mod person;
+pub mod rng;
 
 pub use class::{Class, Label, NUM_CLASSES};
 pub use cloud::{CloudError, LabeledCloud, PointOrigin, RefinedCloud};

@@ -4,6 +4,59 @@
 /// A 3D point or vector, metres, in the frame its name says.
 pub type Vec3 = [f32; 3];
 
+/// `a + b`.
+#[inline]
+pub fn add(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// `a - b`.
+#[inline]
+pub fn sub(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// `a * s`.
+#[inline]
+pub fn scale(a: Vec3, s: f32) -> Vec3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+/// Dot product, summed x + y + z in that order.
+#[inline]
+pub fn dot(a: Vec3, b: Vec3) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Cross product `a × b`.
+#[inline]
+pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Euclidean length.
+#[inline]
+pub fn norm(a: Vec3) -> f32 {
+    dot(a, a).sqrt()
+}
+
+/// `a / |a|`; a zero vector stays zero.
+#[inline]
+pub fn normalize(a: Vec3) -> Vec3 {
+    let n = norm(a);
+    if n > 0.0 { scale(a, 1.0 / n) } else { a }
+}
+
+/// `a + (b - a) * t`.
+#[inline]
+pub fn lerp(a: Vec3, b: Vec3, t: f32) -> Vec3 {
+    add(a, scale(sub(b, a), t))
+}
+
 /// Squared Euclidean distance, m². Every stage that compares a distance to a radius uses
 /// this one function, so brute-force references and fast paths round identically.
 #[inline]
@@ -103,6 +156,25 @@ impl RigidTransform {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn vector_ops_agree_with_their_definitions() {
+        let (a, b) = ([1.0, 2.0, 3.0], [-4.0, 0.5, 2.0]);
+        assert_eq!(add(a, b), [-3.0, 2.5, 5.0]);
+        assert_eq!(sub(a, b), [5.0, 1.5, 1.0]);
+        assert_eq!(scale(a, -2.0), [-2.0, -4.0, -6.0]);
+        assert_eq!(dot(a, b), -4.0 + 1.0 + 6.0);
+        let c = cross(a, b);
+        assert_eq!(c, [2.5, -14.0, 8.5]);
+        assert_eq!((dot(c, a), dot(c, b)), (0.0, 0.0));
+        assert_eq!(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
+        assert_eq!(norm([3.0, 0.0, 4.0]), 5.0);
+        assert_eq!(normalize([0.0, 3.0, 4.0]), [0.0, 0.6, 0.8]);
+        assert_eq!(normalize([0.0; 3]), [0.0; 3]);
+        assert_eq!(lerp(a, b, 0.0), a);
+        assert_eq!(lerp(a, b, 0.5), [-1.5, 1.25, 2.5]);
+        assert_eq!(dist(a, b), norm(sub(a, b)));
+    }
 
     #[test]
     fn chromaticity_keeps_its_bin_under_shading_and_neighbours_stay_in_range() {

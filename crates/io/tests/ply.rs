@@ -52,7 +52,7 @@ fn ascii_round_trip_is_exact() {
 }
 
 #[test]
-fn default_options_write_formats_md_layout_with_palette_colours() {
+fn default_options_write_formats_md_layout_with_palette_colors() {
     let cloud = sample_cloud(10, 3);
     let bytes = ply_bytes(&cloud, &PlyWriteOptions::default(), Path::new(P)).expect("bytes");
     let end = b"end_header\n";

@@ -36,8 +36,8 @@ fn write_frame(path: &Path, cloud: &LabeledCloud, truth: &PersonBoxes) -> Result
         }
     }
     bytes.extend(cloud.labels.iter().map(|l| l.id()));
-    let colours = cloud.colors.as_deref().context("a coloured cloud")?;
-    bytes.extend(colours.iter().flatten());
+    let colors = cloud.colors.as_deref().context("a coloured cloud")?;
+    bytes.extend(colors.iter().flatten());
     std::fs::write(path.with_extension("bin"), bytes)?;
     std::fs::write(path.with_extension("json"), serde_json::to_vec(truth)?)?;
     Ok(())
@@ -55,7 +55,7 @@ fn read_frame(path: &Path) -> Result<(LabeledCloud, PersonBoxes)> {
         bail!("{}: {} bytes for {n} points", path.display(), bytes.len());
     }
     let (pos, rest) = bytes[8..].split_at(12 * n);
-    let (labels, colours) = rest.split_at(n);
+    let (labels, colors) = rest.split_at(n);
     let f = |b: &[u8]| f32::from_le_bytes(b.try_into().expect("4 bytes"));
     let positions_m = pos
         .chunks_exact(12)
@@ -65,10 +65,7 @@ fn read_frame(path: &Path) -> Result<(LabeledCloud, PersonBoxes)> {
         .iter()
         .map(|&l| Label::from_id_or_unknown(l))
         .collect();
-    let colors = colours
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
+    let colors = colors.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let cloud = LabeledCloud {
         positions_m,
         labels,

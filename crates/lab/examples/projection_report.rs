@@ -7,7 +7,7 @@
 
 use bodyseg_lab::projection_stats;
 use bodyseg_project::ProjectConfig;
-use bodyseg_synth::{ParsingErrorsConfig, Synth, preset};
+use bodyseg_synth::{ParserMistakesConfig, Synth, preset};
 
 fn main() -> anyhow::Result<()> {
     let frames: usize = std::env::args()
@@ -22,7 +22,7 @@ fn main() -> anyhow::Result<()> {
     for name in ["single", "handover", "robot_cell"] {
         for calib in [false, true] {
             let mut config = preset(name)?;
-            config.parsing = ParsingErrorsConfig::none();
+            config.parsing = ParserMistakesConfig::none();
             if calib {
                 config.dsa.color_from_depth_rotation_deg = 0.5;
                 config.dsa.color_from_depth_translation_m = 0.01;

@@ -84,7 +84,7 @@ pub fn study_frame(
     let labels = parsing_images(rig, &frame);
     let images = camera_images(&frame, &labels);
     // The points' camera colours, as a coloured cloud (a PCD) would have them.
-    let colour: Vec<RgbImage> = rig
+    let color: Vec<RgbImage> = rig
         .cameras
         .iter()
         .zip(&frame.cameras)
@@ -94,10 +94,10 @@ pub fn study_frame(
             rgb: images.color.clone(),
         })
         .collect();
-    let colour: Vec<&RgbImage> = colour.iter().collect();
-    let cloud = projector.project_frame_coloured(
+    let color: Vec<&RgbImage> = color.iter().collect();
+    let cloud = projector.project_frame_colored(
         &images,
-        &colour,
+        &color,
         &BackProjectOptions::default(),
         &ProjectConfig::default(),
     )?;

@@ -85,7 +85,7 @@ fn labels_mode_finds_people_whose_legs_the_cameras_miss() {
 }
 
 #[test]
-fn geometry_mode_keeps_an_arm_reaching_along_a_robot_link_by_its_colour() {
+fn geometry_mode_keeps_an_arm_reaching_along_a_robot_link_by_its_color() {
     // robot_cell seed 1101, frames 12, 20 and 60: a person beside the robot reaches
     // towards it, the forearm along the robot's forearm link. On positions alone the
     // robot's part, spreading from its pedestal, takes the arm (box IoU 0.48 and 0.46 in
@@ -116,7 +116,7 @@ fn geometry_mode_keeps_an_arm_reaching_along_a_robot_link_by_its_colour() {
 }
 
 #[test]
-fn geometry_mode_keeps_an_arm_reaching_a_neighbour_by_its_sleeve_colour() {
+fn geometry_mode_keeps_an_arm_reaching_a_neighbour_by_its_sleeve_color() {
     // robot_cell seed 403 frame 28 and handover seed 300 frames 0 and 72: a person's arm
     // reaches a neighbour's chest or arm below the head. Along the voxel graph its far end
     // is nearer the neighbour's head than its owner's, and went to the neighbour (a box

@@ -5,11 +5,11 @@
 
 use bodyseg_lab::{camera_images, parsing_images, projection_stats};
 use bodyseg_project::ProjectConfig;
-use bodyseg_synth::{ParsingErrorsConfig, Synth, preset};
+use bodyseg_synth::{ParserMistakesConfig, Synth, preset};
 
 fn synth(name: &str, calibration_error: bool) -> Synth {
     let mut config = preset(name).expect("preset");
-    config.parsing = ParsingErrorsConfig::none();
+    config.parsing = ParserMistakesConfig::none();
     if calibration_error {
         config.dsa.color_from_depth_rotation_deg = 0.5;
         config.dsa.color_from_depth_translation_m = 0.01;

@@ -9,7 +9,7 @@
 #![allow(missing_docs)]
 
 use bodyseg_parsing::blazepose::{
-    INPUT, NUM_LANDMARKS, Pose, Roi, RuleConfig, label_person, landmark, merge_people,
+    DecodedPose, INPUT, NUM_LANDMARKS, Roi, RuleConfig, label_person, landmark, merge_people,
 };
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -19,7 +19,7 @@ const H: usize = 540;
 
 /// The figure of the unit tests (image px, 100×160 frame), scaled by `k` and moved by
 /// `shift`, with a graded mask on a ROI of side `side`.
-fn person(k: f64, shift: [f64; 2], side: f64) -> Pose {
+fn person(k: f64, shift: [f64; 2], side: f64) -> DecodedPose {
     use landmark::*;
     let mut xy = vec![[50.0, 25.0]; NUM_LANDMARKS];
     let set = [
@@ -65,7 +65,7 @@ fn person(k: f64, shift: [f64; 2], side: f64) -> Pose {
             mask[j * INPUT + i] = m.clamp(0.0, 1.0) as f32;
         }
     }
-    Pose {
+    DecodedPose {
         roi: Roi {
             centre_px: [50.0 * k + shift[0], 80.0 * k + shift[1]],
             side_px: side,

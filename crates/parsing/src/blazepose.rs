@@ -277,7 +277,7 @@ pub fn refine_from_heatmap(
 
 /// One person's decoded model output, in image coordinates.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Pose {
+pub struct DecodedPose {
     /// The ROI the model saw.
     pub roi: Roi,
     /// Pose presence in [0, 1] (the model's `Identity_1`).
@@ -302,7 +302,7 @@ pub fn decode(
     flag: f32,
     mask_logits: &[f32],
     heatmap: Option<&[f32]>,
-) -> Option<Pose> {
+) -> Option<DecodedPose> {
     if landmarks.len() < NUM_LANDMARKS * 5 || mask_logits.len() < INPUT * INPUT {
         return None;
     }
@@ -322,7 +322,7 @@ pub fn decode(
     if let Some(h) = heatmap {
         refine_from_heatmap(&mut lm, h, 7, 0.5);
     }
-    Some(Pose {
+    Some(DecodedPose {
         roi: *roi,
         flag: f64::from(flag),
         xy: lm
@@ -422,7 +422,7 @@ pub struct Bone {
 }
 
 /// The bones a pose supports (§3 of the note).
-pub fn bones(pose: &Pose, cfg: &RuleConfig) -> Vec<Bone> {
+pub fn bones(pose: &DecodedPose, cfg: &RuleConfig) -> Vec<Bone> {
     use landmark::*;
     let p = &pose.xy;
     if p.len() < NUM_LANDMARKS || pose.presence.len() < NUM_LANDMARKS {
@@ -615,7 +615,7 @@ pub struct PersonLabels {
 
 /// The mask at image point `q`, bilinear on the ROI grid (tensor pixel centres), 0 outside
 /// the ROI. `axes` = `pose.roi.axes()`, computed once by the caller.
-fn mask_at(pose: &Pose, axes: (P2, P2), q: P2) -> f64 {
+fn mask_at(pose: &DecodedPose, axes: (P2, P2), q: P2) -> f64 {
     let (right, down) = axes;
     let d = sub(q, pose.roi.centre_px);
     let k = INPUT as f64 / pose.roi.side_px;
@@ -687,7 +687,7 @@ fn best_two(per_class: &[f64; 7]) -> (usize, f64, f64) {
 /// second-smallest class upper bound of the block is skipped. The result equals scoring
 /// every bone (a property test checks it against that reference).
 pub fn label_person(
-    pose: &Pose,
+    pose: &DecodedPose,
     cfg: &RuleConfig,
     width: usize,
     height: usize,
@@ -916,7 +916,7 @@ mod tests {
     }
 
     /// An upright figure (image px), mask 1 everywhere.
-    fn figure() -> Pose {
+    fn figure() -> DecodedPose {
         use landmark::*;
         let mut xy = vec![[50.0, 25.0]; NUM_LANDMARKS];
         xy[LEFT_EYE] = [53.0, 23.0];
@@ -953,7 +953,7 @@ mod tests {
         for i in RIGHT_FOOT {
             xy[i] = [42.0, 146.0];
         }
-        Pose {
+        DecodedPose {
             roi: Roi {
                 centre_px: [50.0, 80.0],
                 side_px: 160.0,

@@ -184,12 +184,6 @@ impl BoxesConfig {
         self.mode == BoxMode::Geometry && self.color_split
     }
 
-    /// [`BoxesConfig::uses_colors`] under its former spelling, kept while callers move to
-    /// the new one.
-    pub fn uses_colours(&self) -> bool {
-        self.uses_colors()
-    }
-
     /// The lowest top a person may have in this mode, metres: `geometry_min_height_m` in
     /// geometry mode, else `min_height_m`.
     pub fn min_top_m(&self) -> f32 {
@@ -388,7 +382,7 @@ mod tests {
                 mode: BoxMode::Geometry,
                 ..cfg
             };
-            assert!(!geometry.uses_colors() && !geometry.uses_colours(), "{key}");
+            assert!(!geometry.uses_colors(), "{key}");
         }
         // Unknown keys are still refused.
         assert!(from_bools(&[("colur_split", false)]).is_err());

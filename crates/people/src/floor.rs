@@ -26,9 +26,9 @@
 //!   origin below the cloud's origin. For a camera's optical frame (x right, y down, z
 //!   forward) that is x right, y forward, z up.
 
-use crate::find::ground::SplitMix;
 use crate::voxel::{VoxelGraph, voxelize};
 use bodyseg_core::math::{RigidTransform, Vec3};
+use bodyseg_core::rng::SplitMix64;
 use rustc_hash::{FxHashMap, FxHashSet};
 
 /// Voxel edge of the search, metres: a plane's support counts voxels, i.e. area, so the
@@ -311,7 +311,7 @@ struct Candidate {
 /// each one's voxels removed before the next is searched; with `up`, only planes within
 /// [`UP_HINT_CONE_DEG`] of it, their normals along it.
 fn candidate_planes(centers: &[Vec3], up: Option<[f64; 3]>) -> Vec<Candidate> {
-    let mut rng = SplitMix(0x243F_6A88_85A3_08D3);
+    let mut rng = SplitMix64::new(0x243F_6A88_85A3_08D3);
     let mut remaining: Vec<u32> = (0..centers.len() as u32).collect();
     let min_cos = f64::from(UP_HINT_CONE_DEG.to_radians().cos());
     let tol = f64::from(PLANE_TOL_M);
@@ -322,10 +322,10 @@ fn candidate_planes(centers: &[Vec3], up: Option<[f64; 3]>) -> Vec<Candidate> {
         let mut best: Option<(usize, Plane)> = None;
         for it in 0..RANSAC_ITERATIONS {
             let triple = if it % 2 == 0 || local.is_empty() {
-                [0; 3].map(|_| remaining[rng.below(remaining.len())])
+                [0; 3].map(|_| remaining[rng.below(remaining.len() as u64) as usize])
             } else {
-                let cell = &local[rng.below(local.len())];
-                [0; 3].map(|_| cell[rng.below(cell.len())])
+                let cell = &local[rng.below(local.len() as u64) as usize];
+                [0; 3].map(|_| cell[rng.below(cell.len() as u64) as usize])
             };
             let Some(mut plane) = plane_through(triple.map(|i| centers[i as usize])) else {
                 continue;

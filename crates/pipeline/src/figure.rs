@@ -9,7 +9,7 @@ use bodyseg_core::{Class, Label, LabelImage, LabeledCloud, PersonBox, RgbImage};
 use bodyseg_project::{ColorProjection, Hits, NO_HIT};
 
 /// Draws a cloud's labels into one camera's colour image: each point of that camera goes
-/// through `colour_from_world` and the colour intrinsics (bodyseg-project's f32
+/// through `color_from_world` and the colour intrinsics (bodyseg-project's f32
 /// [`ColorProjection`], distortion included) to its nearest colour pixel and covers a
 /// small square around it (the colour image is denser than the depth image), the nearest
 /// point winning.
@@ -52,8 +52,8 @@ impl LabelView {
     /// camera's colour image, in the cloud's order
     /// ([`bodyseg_project::FrameProjector::project_frame_keeping_hits`] of this very
     /// cloud, which is in projection order: cameras one after the other): the points are
-    /// then not projected again. Hits from `colour_from_depth` and this view's
-    /// `colour_from_world` are the same pixels up to f32 rounding (a point within ~1e-3 px
+    /// then not projected again. Hits from `color_from_depth` and this view's
+    /// `color_from_world` are the same pixels up to f32 rounding (a point within ~1e-3 px
     /// of a half-pixel boundary may take the neighbour). Without hits, or with hits of
     /// another length, every point of the camera is projected here.
     pub(crate) fn render_into(

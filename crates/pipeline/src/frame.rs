@@ -31,7 +31,7 @@ pub struct FrameNeeds {
     pub depth: bool,
     /// The colour images (`color/`): for a segmenter that looks at them, or for the
     /// points' colours.
-    pub colour: bool,
+    pub color: bool,
     /// The recorded predictions (`parsing/`): for [`bodyseg_parsing::RecordedSegmenter`].
     pub parsing: bool,
     /// The ground truth of every depth pixel (`depth_labels/`), for scoring.
@@ -45,7 +45,7 @@ impl FrameNeeds {
     pub fn of(segmenter: &dyn Segmenter) -> FrameNeeds {
         FrameNeeds {
             depth: segmenter.needs_regions(),
-            colour: segmenter.needs_images(),
+            color: segmenter.needs_images(),
             parsing: segmenter.needs_recorded(),
             ..FrameNeeds::default()
         }
@@ -61,8 +61,8 @@ pub struct Frame {
     /// Raw depth per camera, the depth sensor's size; empty when not read
     /// ([`FrameNeeds::depth`]: `bodyseg parse` reads none).
     pub depth: Vec<DepthImage>,
-    /// Colour per camera, the colour sensor's size, when read ([`FrameNeeds::colour`]).
-    pub colour: Option<Vec<RgbImage>>,
+    /// Colour per camera, the colour sensor's size, when read ([`FrameNeeds::color`]).
+    pub color: Option<Vec<RgbImage>>,
     /// Recorded predictions per camera (`parsing/`), when read ([`FrameNeeds::parsing`]).
     pub parsing: Option<Vec<LabelImage>>,
     /// Ground truth per depth pixel per camera (`depth_labels/`), when read
@@ -84,7 +84,7 @@ impl Frame {
         let mut inputs = Vec::new();
         let mut note = |path: &std::path::Path| inputs.extend(InputFile::of(path));
         let mut depth = Vec::new();
-        let mut colour = Vec::new();
+        let mut color = Vec::new();
         let mut parsing = Vec::new();
         let mut truth = Vec::new();
         for index in 0..rec.rig().cameras.len() {
@@ -93,10 +93,10 @@ impl Frame {
                 note(&path);
                 depth.push(image);
             }
-            if needs.colour {
-                let (image, path) = rec.read_colour(index, stem)?;
+            if needs.color {
+                let (image, path) = rec.read_color(index, stem)?;
                 note(&path);
-                colour.push(image);
+                color.push(image);
             }
             if needs.parsing {
                 let (labels, path) = rec.read_labels(index, Layer::Parsing, stem)?;
@@ -112,7 +112,7 @@ impl Frame {
         Ok(Frame {
             stem: stem.to_string(),
             depth,
-            colour: needs.colour.then_some(colour),
+            color: needs.color.then_some(color),
             parsing: needs.parsing.then_some(parsing),
             truth: needs.truth.then_some(truth),
             inputs,
@@ -153,7 +153,7 @@ pub fn parse_frame(
 ) -> Result<ParsedFrame> {
     let cameras = rig.cameras.len();
     let lengths = [
-        frame.colour.as_ref().map(Vec::len),
+        frame.color.as_ref().map(Vec::len),
         frame.parsing.as_ref().map(Vec::len),
     ];
     if lengths.iter().flatten().any(|&n| n != cameras) {
@@ -163,7 +163,7 @@ pub fn parse_frame(
         );
     }
     let missing = |what: &str| format!("frame {}: the parser needs the {what}", frame.stem);
-    if segmenter.needs_images() && frame.colour.is_none() {
+    if segmenter.needs_images() && frame.color.is_none() {
         bail!("{}, which were not read", missing("colour images"));
     }
     if segmenter.needs_recorded() && frame.parsing.is_none() {
@@ -193,7 +193,7 @@ pub fn parse_frame(
         .map(|(i, camera)| ViewInput {
             camera: &camera.name,
             frame: &frame.stem,
-            image: frame.colour.as_ref().and_then(|c| c.get(i)),
+            image: frame.color.as_ref().and_then(|c| c.get(i)),
             recorded: frame.parsing.as_ref().and_then(|p| p.get(i)),
             regions: regions.as_ref().and_then(|r| r.get(i)).map(Vec::as_slice),
         })
@@ -217,7 +217,7 @@ pub fn parse_frame(
 
 /// Projects a parsed frame's labels onto its depth points
 /// ([`bodyseg_project::FrameProjector::project_frame`]; with the points' camera colours
-/// when `colour`, which then needs the frame's colour images).
+/// when `color`, which then needs the frame's colour images).
 ///
 /// # Errors
 /// The frame has no depth images, or not the colour images asked for; the images do not
@@ -226,7 +226,7 @@ pub fn project_parsed(
     parsed: &ParsedFrame,
     rig: &Rig,
     config: &PipelineConfig,
-    colour: bool,
+    color: bool,
 ) -> Result<LabeledCloud> {
     let frame = &parsed.frame;
     if frame.depth.len() != rig.cameras.len() {
@@ -248,14 +248,14 @@ pub fn project_parsed(
         .collect();
     let projector = FrameProjector::new(rig)?;
     let backproject = config.backproject.options();
-    if colour {
-        let colour: Vec<&RgbImage> = frame
-            .colour
+    if color {
+        let color: Vec<&RgbImage> = frame
+            .color
             .as_ref()
             .with_context(|| format!("frame {}: the colour images were not read", frame.stem))?
             .iter()
             .collect();
-        Ok(projector.project_frame_coloured(&images, &colour, &backproject, &config.project)?)
+        Ok(projector.project_frame_colored(&images, &color, &backproject, &config.project)?)
     } else {
         Ok(projector.project_frame(&images, &backproject, &config.project)?)
     }
@@ -275,11 +275,11 @@ pub(crate) fn read_and_project(
     config: &PipelineConfig,
 ) -> Result<(Rig, LabeledCloud, Vec<Stage>)> {
     check_stem(stem)?;
-    let colour = config.boxes.uses_colors();
+    let color = config.boxes.uses_colors();
     let mut segmenter = RecordedSegmenter::new();
     let needs = FrameNeeds {
         depth: true,
-        colour,
+        color,
         ..FrameNeeds::of(&segmenter)
     };
     let ((rec, frame), read) = timed(|| -> Result<_> {
@@ -302,7 +302,7 @@ pub(crate) fn read_and_project(
     let (cloud, took) = timed(|| {
         let parsed = parse_frame(frame, rig, &mut segmenter, config).with_context(context)?;
         // Geometry-mode boxes split people from what is nobody's by colour too.
-        project_parsed(&parsed, rig, config, colour).with_context(context)
+        project_parsed(&parsed, rig, config, color).with_context(context)
     })?;
     crate::sanity::warn_all(crate::sanity::projected_scale_warning(
         &cloud,
@@ -337,7 +337,7 @@ mod tests {
         Frame {
             stem: "000001".into(),
             depth: Vec::new(),
-            colour: None,
+            color: None,
             parsing,
             truth: None,
             inputs: Vec::new(),

@@ -91,7 +91,7 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     let ((rec, frame), read) = timed(|| -> Result<_> {
         let rec = Recording::open(&opts.recording)?;
         let needs = FrameNeeds {
-            colour: true,
+            color: true,
             parsing: opts.source == ParseSource::Recorded,
             depth: people_from_depth && rec.has_layer(Layer::Depth),
             ..FrameNeeds::default()
@@ -124,7 +124,7 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     })?;
     let images = parsed
         .frame
-        .colour
+        .color
         .as_deref()
         .context("the colour images were read")?;
     let body_pixels: Vec<usize> = parsed

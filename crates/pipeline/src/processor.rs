@@ -52,7 +52,7 @@ pub struct FrameProcessor {
     segmenter_needs: FrameNeeds,
     uses_model: bool,
     /// Idle per-worker buffers; a worker takes one per frame.
-    scratch: Mutex<Vec<Scratch>>,
+    scratch: Mutex<Vec<WorkerScratch>>,
     template: FrameProjector,
     has_truth: bool,
     write_stages: bool,
@@ -64,7 +64,7 @@ pub struct FrameProcessor {
 }
 
 /// One worker's buffers.
-struct Scratch {
+struct WorkerScratch {
     projector: FrameProjector,
     cloud: LabeledCloud,
     /// Where the cloud's points landed in their colour images (for the label images).
@@ -193,7 +193,7 @@ impl FrameProcessor {
     /// Whether the refinement or the box finder needs the points' camera colours (then the
     /// colour images are read, and sampled where the points land): foreign colours, and
     /// geometry mode's split between people and what is nobody's.
-    fn needs_colours(&self) -> bool {
+    fn needs_colors(&self) -> bool {
         self.config.refine.foreign_color_density > 0.0 || self.config.boxes.uses_colors()
     }
 
@@ -202,7 +202,7 @@ impl FrameProcessor {
     pub fn needs(&self) -> FrameNeeds {
         FrameNeeds {
             depth: true,
-            colour: self.segmenter_needs.colour || self.needs_colours(),
+            color: self.segmenter_needs.color || self.needs_colors(),
             parsing: self.segmenter_needs.parsing,
             truth: self.has_truth,
         }
@@ -237,8 +237,8 @@ impl FrameProcessor {
                 .map_err(|_| anyhow::anyhow!("the parser failed on an earlier frame"))?;
             parse_frame(frame, self.rig(), segmenter.as_mut(), &self.config)
         })?;
-        if !self.needs_colours() {
-            parsed.frame.colour = None;
+        if !self.needs_colors() {
+            parsed.frame.color = None;
         }
         let source = if self.uses_model { "model" } else { "recorded" };
         let summary = match &parsed.people {
@@ -288,7 +288,7 @@ impl FrameProcessor {
             .lock()
             .ok()
             .and_then(|mut p| p.pop())
-            .unwrap_or_else(|| Scratch {
+            .unwrap_or_else(|| WorkerScratch {
                 projector: self.template.clone(),
                 cloud: LabeledCloud::default(),
                 hits: Hits::default(),
@@ -309,9 +309,9 @@ impl FrameProcessor {
         parsed: &ParsedFrame,
         writer: &mut FrameWriter,
         stages: &mut Vec<Stage>,
-        scratch: &mut Scratch,
+        scratch: &mut WorkerScratch,
     ) -> Result<FrameRecord> {
-        let Scratch {
+        let WorkerScratch {
             projector,
             cloud,
             hits,
@@ -336,7 +336,7 @@ impl FrameProcessor {
         let with_probs = cfg.refine.noise == NoiseMode::Probability
             && parsed.labels.iter().any(|l| l.probs.is_some());
         let ((), took) = timed(|| -> Result<()> {
-            if self.label_images || with_probs || self.needs_colours() {
+            if self.label_images || with_probs || self.needs_colors() {
                 // The label images and the label probabilities reuse where the points
                 // landed.
                 projector.project_frame_keeping_hits(
@@ -357,14 +357,14 @@ impl FrameProcessor {
             if with_probs {
                 hits.label_probs_into(cloud, &images, label_probs);
             }
-            if self.needs_colours() {
-                let colour: Vec<&RgbImage> = inputs
-                    .colour
+            if self.needs_colors() {
+                let color: Vec<&RgbImage> = inputs
+                    .color
                     .as_ref()
                     .context("the colour images were not read")?
                     .iter()
                     .collect();
-                cloud.colors = Some(hits.colors_of(cloud, &colour));
+                cloud.colors = Some(hits.colors_of(cloud, &color));
             }
             Ok(())
         })?;

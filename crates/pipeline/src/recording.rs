@@ -441,7 +441,7 @@ impl Recording {
     ///
     /// # Errors
     /// As [`Recording::read_depth`].
-    pub fn read_colour(&self, index: usize, stem: &str) -> Result<(RgbImage, PathBuf)> {
+    pub fn read_color(&self, index: usize, stem: &str) -> Result<(RgbImage, PathBuf)> {
         let camera = self.camera(index)?;
         let path = self.image_path(&camera.name, Layer::Color, stem)?;
         let image =
@@ -578,7 +578,7 @@ impl RecordingWriter {
     ///
     /// # Errors
     /// `rgb` does not fit the sensor's size; writing fails.
-    pub fn write_colour(&self, index: usize, stem: &str, rgb: &[u8]) -> Result<()> {
+    pub fn write_color(&self, index: usize, stem: &str, rgb: &[u8]) -> Result<()> {
         let (path, w, h) = self.png_path(index, Layer::Color, stem)?;
         Ok(bodyseg_io::write_rgb_png(&path, w, h, rgb)?)
     }
@@ -808,7 +808,7 @@ pub(crate) mod tests {
             .write_ids(0, Layer::Parsing, "000000", &ids)
             .expect("parsing");
         assert!(writer.write_ids(0, Layer::Depth, "000000", &ids).is_err());
-        assert!(writer.write_colour(0, "000000", &[0; 3]).is_err(), "size");
+        assert!(writer.write_color(0, "000000", &[0; 3]).is_err(), "size");
 
         let rec = Recording::open(&root).expect("open");
         assert_eq!(rec.rig(), &rig);

@@ -103,7 +103,7 @@ pub(crate) fn write_frame(
 ) -> Result<()> {
     let stem = frame.stem();
     for (index, images) in frame.cameras.iter().enumerate() {
-        rec.write_colour(index, &stem, &images.color)?;
+        rec.write_color(index, &stem, &images.color)?;
         rec.write_depth(index, &stem, &images.depth_mm)?;
         rec.write_ids(index, Layer::Parsing, &stem, &images.parsing)?;
         rec.write_ids(index, Layer::Labels, &stem, &images.labels)?;
@@ -117,7 +117,7 @@ pub(crate) fn write_frame(
             &rec.root().join(PREVIEW_FOLDER).join(format!("{stem}.png")),
             image.width,
             image.height,
-            &image.data,
+            &image.rgb,
         )?;
     }
     Ok(())

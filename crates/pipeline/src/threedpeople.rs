@@ -454,7 +454,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn palette_colours_are_far_enough_apart_for_the_largest_tolerance() {
+    fn palette_colors_are_far_enough_apart_for_the_largest_tolerance() {
         let mut smallest = u8::MAX;
         for (i, (_, a, _)) in THREEDPEOPLE_PALETTE.iter().enumerate() {
             for (_, b, _) in &THREEDPEOPLE_PALETTE[i + 1..] {

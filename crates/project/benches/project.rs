@@ -18,11 +18,8 @@
 #![allow(missing_docs)]
 
 use std::hint::black_box;
-use std::path::Path;
 
-use bodyseg_calib::{
-    BackProjectOptions, CloudFrame, Distortion, Pose, RgbdCamera, Rig, read_iai_kinect2,
-};
+use bodyseg_calib::{BackProjectOptions, CloudFrame, Distortion, RgbdCamera, Rig, testing};
 use bodyseg_core::{Label, LabelImage};
 use bodyseg_project::{CameraImages, FrameProjector, ProjectConfig};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -34,70 +31,22 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 const SEED: u64 = 0x00B0_D15E_6BEC_0001;
 
 /// The box's depth pixels (u range, v range) in every camera's depth image.
-const BOX_U: std::ops::Range<u32> = 180..330;
-const BOX_V: std::ops::Range<u32> = 140..320;
+const BOX_U: std::ops::Range<u32> = testing::TEST_BOX_U;
+const BOX_V: std::ops::Range<u32> = testing::TEST_BOX_V;
 
 fn kinect() -> RgbdCamera {
-    let dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147");
-    read_iai_kinect2(&dir).unwrap_or_else(|e| panic!("bench data: {e}"))
+    testing::kinect_v2_test_camera().unwrap_or_else(|e| panic!("bench data: {e}"))
 }
 
 /// Three cameras 2.2 m up on a circle of radius 3 m around the world origin, looking at
 /// it 30° down.
 fn rig() -> Rig {
-    let base = kinect();
-    let cameras = (0..3)
-        .map(|i| {
-            let yaw = f64::from(i) * 120f64.to_radians();
-            let (sy, cy) = yaw.sin_cos();
-            let (st, ct) = 30f64.to_radians().sin_cos();
-            // Optical axes in world coordinates: z forward (towards the centre, tilted
-            // down), x right (horizontal), y down = z × x.
-            let fwd = [-cy * ct, -sy * ct, -st];
-            let right = [sy, -cy, 0.0];
-            let down = [
-                fwd[1] * right[2] - fwd[2] * right[1],
-                fwd[2] * right[0] - fwd[0] * right[2],
-                fwd[0] * right[1] - fwd[1] * right[0],
-            ];
-            let rotation = std::array::from_fn(|r| [right[r], down[r], fwd[r]]);
-            let mut cam = base.clone();
-            cam.name = format!("cam{i}");
-            cam.world_from_depth =
-                Pose::from_rotation_translation(rotation, [3.0 * cy, 3.0 * sy, 2.2])
-                    .expect("an orthonormal rotation");
-            cam
-        })
-        .collect();
-    Rig { cameras }
+    testing::ring_rig(&kinect(), 3)
 }
 
-/// A depth image (mm) of a slanted plane with a box in front of it; ~15% of the pixels
-/// are holes (0), as on a real Kinect v2 frame (edges, dark and shiny surfaces).
+/// A depth image (mm) of a slanted plane with a box in front of it, ~15% holes.
 fn depth_image(width: u32, height: u32, seed: u64) -> Vec<u16> {
-    let mut state = seed.max(1);
-    let mut unit = move || {
-        state ^= state >> 12;
-        state ^= state << 25;
-        state ^= state >> 27;
-        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let mut out = Vec::with_capacity((width * height) as usize);
-    for v in 0..height {
-        for u in 0..width {
-            let in_box = BOX_U.contains(&u) && BOX_V.contains(&v);
-            let z_mm = if in_box {
-                2000.0 + 0.8 * f64::from(u - BOX_U.start)
-            } else {
-                // Floor seen from above: farther towards the top of the image.
-                4500.0 - 6.0 * f64::from(v)
-            };
-            let hole = unit() < 0.15;
-            out.push(if hole { 0 } else { z_mm as u16 });
-        }
-    }
-    out
+    testing::plane_and_box_depth_mm(width, height, seed)
 }
 
 /// The colour camera's label image of the truth: every depth point of the box splatted

@@ -107,13 +107,13 @@ impl Hits {
 
     /// Per point of `cloud` (which these hits were kept for): the colour at its colour pixel
     /// in its camera's colour image (`colour[origin.camera]`); black where it has no hit.
-    pub fn colors_of(&self, cloud: &LabeledCloud, colour: &[&RgbImage]) -> Vec<[u8; 3]> {
+    pub fn colors_of(&self, cloud: &LabeledCloud, color: &[&RgbImage]) -> Vec<[u8; 3]> {
         cloud
             .origins
             .iter()
             .zip(self.u.iter().zip(&self.v))
             .map(|(origin, (&u, &v))| {
-                let Some(image) = colour.get(usize::from(origin.camera)) else {
+                let Some(image) = color.get(usize::from(origin.camera)) else {
                     return [0; 3];
                 };
                 if u == NO_HIT {

@@ -37,7 +37,7 @@ pub struct FrameProjector {
     cameras: Vec<CameraTables>,
     /// Reused by [`FrameProjector::project_frame`]; a call that finds it in use (another
     /// thread) or poisoned (a panic) works on fresh buffers instead.
-    scratch: Mutex<Scratch>,
+    scratch: Mutex<FrameScratch>,
 }
 
 impl Clone for FrameProjector {
@@ -52,16 +52,16 @@ impl Clone for FrameProjector {
 /// Buffers of one frame, kept so that they are neither allocated nor cleared per frame
 /// (a z-buffer is 8 MB per Kinect v2 camera).
 #[derive(Default)]
-struct Scratch {
+struct FrameScratch {
     /// Where every point lands in its colour image (contents overwritten every frame).
     hits: Hits,
     /// Per camera the DSA stage's buffers (z-buffer, edge map, labels per pixel).
     dsa: Vec<DsaScratch>,
 }
 
-impl std::fmt::Debug for Scratch {
+impl std::fmt::Debug for FrameScratch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Scratch")
+        f.debug_struct("FrameScratch")
             .field("points", &self.hits.u.len())
             .field("cameras", &self.dsa.len())
             .finish()
@@ -166,16 +166,16 @@ impl FrameProjector {
     /// [`FrameProjector::project_frame`] with every point's camera colour in the cloud's
     /// `colors`: the colour at its colour pixel in its camera's image (`colour[camera]`,
     /// [`Hits::colors_of`]; black where it has none), as a coloured cloud (a PCD) has them.
-    pub fn project_frame_coloured(
+    pub fn project_frame_colored(
         &self,
         images: &[CameraImages<'_>],
-        colour: &[&RgbImage],
+        color: &[&RgbImage],
         opts: &BackProjectOptions,
         cfg: &ProjectConfig,
     ) -> Result<LabeledCloud, ProjectError> {
         let (mut cloud, mut hits) = (LabeledCloud::default(), Hits::default());
         self.project_frame_keeping_hits(images, opts, cfg, &mut cloud, &mut hits)?;
-        cloud.colors = Some(hits.colors_of(&cloud, colour));
+        cloud.colors = Some(hits.colors_of(&cloud, color));
         Ok(cloud)
     }
 
@@ -293,9 +293,9 @@ impl FrameProjector {
         let mut guard = self.scratch.try_lock().ok();
         let scratch = match guard.as_deref_mut() {
             Some(s) => s,
-            None => fresh.insert(Scratch::default()),
+            None => fresh.insert(FrameScratch::default()),
         };
-        let Scratch {
+        let FrameScratch {
             hits: own_hits,
             dsa: dsa_scratch,
         } = scratch;

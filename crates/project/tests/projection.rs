@@ -3,11 +3,8 @@
 //! sensor sits 5 cm to the side of its depth sensor. The label image is the exact
 //! projection of the truth, so every wrong label is a DSA error of the projection itself.
 
-use std::path::Path;
-
 use bodyseg_calib::{
     BackProjectOptions, CloudFrame, Intrinsics, Pose, RgbdCamera, Rig, back_project,
-    read_iai_kinect2,
 };
 use bodyseg_core::{Class, Label, LabelImage, LabeledCloud, PointOrigin};
 use bodyseg_project::{
@@ -245,9 +242,8 @@ fn dsa_beats_naive_on_parallax_fixture() {
 /// The fixture with the real Kinect v2 calibration in `../shared/data`: a 0.6 × 0.8 m
 /// rectangle at 1.2 m before a wall at 3 m.
 fn kinect_fixture() -> Fixture {
-    let dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147");
-    let camera = read_iai_kinect2(&dir).expect("the example iai_kinect2 folder reads");
+    let camera = bodyseg_calib::testing::kinect_v2_test_camera()
+        .expect("the example iai_kinect2 folder reads");
     let scene = Scene {
         z_fg_m: 1.2,
         z_bg_m: 3.0,
@@ -492,7 +488,7 @@ fn low_probability_labels_become_unknown() {
 }
 
 #[test]
-fn points_outside_the_colour_image_are_unknown() {
+fn points_outside_the_color_image_are_unknown() {
     let mut camera = simple_camera();
     // Keep the principal point but cut the colour image to its left half.
     camera.color.width = 64;
@@ -819,7 +815,7 @@ fn project_naive_keeping_hits(rig: &Rig, images: &[CameraImages<'_>]) -> (Labele
 /// pixel (here: left half of camera 0's image unsure, camera 1's image without
 /// probabilities); 1 where that says nothing.
 #[test]
-fn label_probabilities_follow_each_point_to_its_colour_pixel() {
+fn label_probabilities_follow_each_point_to_its_color_pixel() {
     let (cam0, rig, f0, f1) = two_cameras();
     let labels0 = left_half_unsure(&f0.labels);
     let w = labels0.width as usize;
@@ -860,7 +856,7 @@ fn label_probabilities_follow_each_point_to_its_colour_pixel() {
 /// `Hits::colors_of`: each point takes the colour of its own colour pixel in its own
 /// camera's image (here: camera 0's left half red, right half green; camera 1's blue).
 #[test]
-fn point_colours_are_read_at_each_points_colour_pixel() {
+fn point_colors_are_read_at_each_points_color_pixel() {
     let (cam0, rig, f0, f1) = two_cameras();
     let images = [f0.images(), f1.images()];
     let (w, h) = (f0.labels.width, f0.labels.height);
@@ -868,11 +864,11 @@ fn point_colours_are_read_at_each_points_colour_pixel() {
     let rgb0: Vec<u8> = (0..h)
         .flat_map(|_| (0..w).flat_map(|u| if u < w / 2 { red } else { green }))
         .collect();
-    let colour0 = bodyseg_core::RgbImage::new(w, h, rgb0).expect("size");
-    let colour1 = bodyseg_core::RgbImage::new(w, h, blue.repeat((w * h) as usize)).expect("size");
+    let color0 = bodyseg_core::RgbImage::new(w, h, rgb0).expect("size");
+    let color1 = bodyseg_core::RgbImage::new(w, h, blue.repeat((w * h) as usize)).expect("size");
     let (cloud, hits) = project_naive_keeping_hits(&rig, &images);
-    let colours = hits.colors_of(&cloud, &[&colour0, &colour1]);
-    assert_eq!(colours.len(), cloud.len());
+    let colors = hits.colors_of(&cloud, &[&color0, &color1]);
+    assert_eq!(colors.len(), cloud.len());
     let n0 = f0.points.len();
     let (mut left, mut right) = (0, 0);
     for (i, p) in f0.points.iter().enumerate() {
@@ -884,17 +880,17 @@ fn point_colours_are_read_at_each_points_colour_pixel() {
             .project([f64::from(p[0]) - 0.05, f64::from(p[1]), f64::from(p[2])])
             .expect("in front");
         let is_left = (uv[0].round() as u32) < w / 2;
-        assert_eq!(colours[i], if is_left { red } else { green }, "point {i}");
+        assert_eq!(colors[i], if is_left { red } else { green }, "point {i}");
         if is_left { left += 1 } else { right += 1 }
     }
     assert!(left > 100 && right > 100, "{left} left, {right} right");
     assert!(
-        (n0..cloud.len()).all(|i| cloud.labels[i].is_unknown() || colours[i] == blue),
+        (n0..cloud.len()).all(|i| cloud.labels[i].is_unknown() || colors[i] == blue),
         "camera 1's points: its image's blue"
     );
     // A camera without an image: black.
     assert!(
-        hits.colors_of(&cloud, &[&colour0])[n0..]
+        hits.colors_of(&cloud, &[&color0])[n0..]
             .iter()
             .all(|&c| c == [0; 3])
     );

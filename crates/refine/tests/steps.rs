@@ -31,24 +31,12 @@ fn m_merges_a_small_lower_arm_cluster_inside_the_torso_sphere_into_torso() {
     // Offset from the torso's centre, well inside its bounding sphere.
     let arm = s.add(ball([0.05, 0.0, 1.18], 0.04, 0.02, l(Class::LowerArms)));
     let r = refine_person(&s.pos, &s.lab, &cfg("M"));
-    assert!(
-        s.labels_of(&r.point_labels, arm)
-            .iter()
-            .all(|&x| x == l(Class::Torso))
-    );
-    assert!(
-        s.labels_of(&r.point_labels, torso)
-            .iter()
-            .all(|&x| x == l(Class::Torso))
-    );
+    assert!(s.all_labelled(&r.point_labels, arm, l(Class::Torso)));
+    assert!(s.all_labelled(&r.point_labels, torso, l(Class::Torso)));
     assert_eq!(r.merged(), 1);
     // Without M it stays a lower arm.
     let r = refine_person(&s.pos, &s.lab, &cfg("N"));
-    assert!(
-        s.labels_of(&r.point_labels, arm)
-            .iter()
-            .all(|&x| x == l(Class::LowerArms))
-    );
+    assert!(s.all_labelled(&r.point_labels, arm, l(Class::LowerArms)));
 }
 
 #[test]
@@ -58,24 +46,12 @@ fn r_turns_a_head_cluster_floating_1m_from_the_body_into_background() {
     let ghost = s.add(ball([1.0, 0.0, 1.4], 0.05, 0.02, l(Class::Head)));
     let r = refine_person(&s.pos, &s.lab, &cfg("M-R-N"));
     assert!(r.tree.is_valid());
-    assert!(
-        s.labels_of(&r.point_labels, ghost)
-            .iter()
-            .all(|&x| x == Label::BACKGROUND)
-    );
-    assert!(
-        s.labels_of(&r.point_labels, head)
-            .iter()
-            .all(|&x| x == l(Class::Head))
-    );
+    assert!(s.all_labelled(&r.point_labels, ghost, Label::BACKGROUND));
+    assert!(s.all_labelled(&r.point_labels, head, l(Class::Head)));
     assert_eq!(r.removed(), 1);
     // M-N keeps it: only R removes.
     let r = refine_person(&s.pos, &s.lab, &cfg("M-N"));
-    assert!(
-        s.labels_of(&r.point_labels, ghost)
-            .iter()
-            .all(|&x| x == l(Class::Head))
-    );
+    assert!(s.all_labelled(&r.point_labels, ghost, l(Class::Head)));
 }
 
 #[test]
@@ -86,16 +62,8 @@ fn r_does_nothing_without_a_valid_tree() {
     let far = s.add(ball([1.0, 0.0, 1.4], 0.06, 0.02, l(Class::LowerArms)));
     let r = refine_person(&s.pos, &s.lab, &cfg("M-R-N"));
     assert!(!r.tree.is_valid());
-    assert!(
-        s.labels_of(&r.point_labels, head)
-            .iter()
-            .all(|&x| x == l(Class::Head))
-    );
-    assert!(
-        s.labels_of(&r.point_labels, far)
-            .iter()
-            .all(|&x| x == l(Class::LowerArms))
-    );
+    assert!(s.all_labelled(&r.point_labels, head, l(Class::Head)));
+    assert!(s.all_labelled(&r.point_labels, far, l(Class::LowerArms)));
 }
 
 #[test]
@@ -110,21 +78,9 @@ fn a_tree_node_never_changes_even_inside_another_cluster() {
     let tree_head = r.tree.slots[0].expect("head slot filled");
     assert_eq!(r.features[tree_head as usize].label, l(Class::Head));
     assert_eq!(r.labels_after_merge[tree_head as usize], l(Class::Head));
-    assert!(
-        s.labels_of(&r.point_labels, head_big)
-            .iter()
-            .all(|&x| x == l(Class::Head))
-    );
-    assert!(
-        s.labels_of(&r.point_labels, head_small)
-            .iter()
-            .all(|&x| x == l(Class::Torso))
-    );
-    assert!(
-        s.labels_of(&r.point_labels, torso)
-            .iter()
-            .all(|&x| x == l(Class::Torso))
-    );
+    assert!(s.all_labelled(&r.point_labels, head_big, l(Class::Head)));
+    assert!(s.all_labelled(&r.point_labels, head_small, l(Class::Torso)));
+    assert!(s.all_labelled(&r.point_labels, torso, l(Class::Torso)));
 }
 
 #[test]
@@ -177,11 +133,7 @@ fn n_follows_the_labels_after_m_and_r() {
     let ghost = s.add(ball([1.0, 0.0, 1.4], 0.05, 0.02, l(Class::Head)));
     let near_ghost = s.point([1.08, 0.0, 1.4], Label::UNKNOWN);
     let r = refine_person(&s.pos, &s.lab, &cfg("M-R-N"));
-    assert!(
-        s.labels_of(&r.point_labels, ghost)
-            .iter()
-            .all(|&x| x == Label::BACKGROUND)
-    );
+    assert!(s.all_labelled(&r.point_labels, ghost, Label::BACKGROUND));
     assert_eq!(r.point_labels[near_ghost], Label::BACKGROUND);
 }
 

@@ -41,7 +41,7 @@ pub struct SceneConfig {
     /// Kinect-v2-like depth faults.
     pub depth: DepthFaultsConfig,
     /// Errors of the simulated 2D parser (the `parsing/` images).
-    pub parsing: ParsingErrorsConfig,
+    pub parsing: ParserMistakesConfig,
     /// Sources of depth-segmentation association errors.
     pub dsa: DsaConfig,
 }
@@ -55,7 +55,7 @@ impl Default for SceneConfig {
             scene: StaticSceneConfig::default(),
             rig: RigConfig::default(),
             depth: DepthFaultsConfig::default(),
-            parsing: ParsingErrorsConfig::default(),
+            parsing: ParserMistakesConfig::default(),
             dsa: DsaConfig::default(),
         }
     }
@@ -248,7 +248,7 @@ impl Default for DepthFaultsConfig {
 /// Pixel sizes are for a 1920-wide colour image and scale with `rig.color_width`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct ParsingErrorsConfig {
+pub struct ParserMistakesConfig {
     /// Lower arms and lower legs grow by this many pixels into their neighbours and the
     /// background (the paper reports SCHP over-segmenting small parts).
     pub small_part_dilation_px: f64,
@@ -266,9 +266,9 @@ pub struct ParsingErrorsConfig {
     pub miss_prob: f64,
 }
 
-impl Default for ParsingErrorsConfig {
+impl Default for ParserMistakesConfig {
     fn default() -> Self {
-        ParsingErrorsConfig {
+        ParserMistakesConfig {
             small_part_dilation_px: 6.0,
             part_dilation_px: 2.0,
             boundary_jitter_px: 4.0,
@@ -279,10 +279,10 @@ impl Default for ParsingErrorsConfig {
     }
 }
 
-impl ParsingErrorsConfig {
+impl ParserMistakesConfig {
     /// All knobs at zero: predictions equal the truth.
     pub fn none() -> Self {
-        ParsingErrorsConfig {
+        ParserMistakesConfig {
             small_part_dilation_px: 0.0,
             part_dilation_px: 0.0,
             boundary_jitter_px: 0.0,

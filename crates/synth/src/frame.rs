@@ -7,9 +7,9 @@
 //! frame index): frames can be rendered in any order and in parallel.
 
 use crate::config::{SceneConfig, SynthError};
-use crate::errors::{TruthView, predict_labels};
 use crate::geometry::{Owner, Primitive, V3, dot};
 use crate::hash::{gaussian, hash, unit};
+use crate::parser_mistakes::{TruthView, predict_labels};
 use crate::people::{Person, handover_object, make_people};
 use crate::render::{World, camera_frame};
 use crate::rig::{true_rig, written_rig};

@@ -8,58 +8,7 @@ use bodyseg_core::Class;
 /// A point or direction, metres.
 pub type V3 = [f32; 3];
 
-/// `a + b`.
-#[inline]
-pub fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-/// `a - b`.
-#[inline]
-pub fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// `a * s`.
-#[inline]
-pub fn scale(a: V3, s: f32) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
-/// Dot product.
-#[inline]
-pub fn dot(a: V3, b: V3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// Cross product.
-#[inline]
-pub fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// Euclidean length.
-#[inline]
-pub fn norm(a: V3) -> f32 {
-    dot(a, a).sqrt()
-}
-
-/// `a / |a|`; a zero vector stays zero.
-#[inline]
-pub fn normalize(a: V3) -> V3 {
-    let n = norm(a);
-    if n > 0.0 { scale(a, 1.0 / n) } else { a }
-}
-
-/// `a + (b - a) * t`.
-#[inline]
-pub fn lerp(a: V3, b: V3, t: f32) -> V3 {
-    add(a, scale(sub(b, a), t))
-}
+pub use bodyseg_core::math::{add, cross, dot, lerp, norm, normalize, scale, sub};
 
 /// The body segments of a synthetic person (at least the 15 the synth issue asks for),
 /// each mapped to one of the 7 classes by [`Segment::class`].

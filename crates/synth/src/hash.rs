@@ -2,14 +2,8 @@
 //! pixels rendered in parallel get the same noise in any order and the output is
 //! byte-identical for a seed.
 
-/// SplitMix64's finaliser: a well-mixed 64-bit hash.
-#[inline]
-pub fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
+/// SplitMix64's finaliser: a well-mixed 64-bit hash (core's [`splitmix64`]).
+pub use bodyseg_core::rng::splitmix64 as mix;
 
 /// Hash of a seed and up to three counters.
 #[inline]

@@ -8,10 +8,10 @@
 
 pub mod chessboard;
 pub mod config;
-pub mod errors;
 pub mod frame;
 pub mod geometry;
 pub mod hash;
+pub mod parser_mistakes;
 pub mod people;
 pub mod preview;
 pub mod render;
@@ -23,8 +23,8 @@ pub use chessboard::{
     ChessboardConfig, ChessboardSet, ChessboardView, SensorImages, chessboard_set,
 };
 pub use config::{
-    CameraPlacement, DepthFaultsConfig, DsaConfig, PRESETS, ParsingErrorsConfig, PeopleConfig,
+    CameraPlacement, DepthFaultsConfig, DsaConfig, PRESETS, ParserMistakesConfig, PeopleConfig,
     RigConfig, SceneConfig, StaticSceneConfig, SynthError, preset,
 };
 pub use frame::{CameraFrame, NO_SURFACE, Synth, SynthFrame, frame_stem};
-pub use preview::{RgbImage, preview};
+pub use preview::preview;

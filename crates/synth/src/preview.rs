@@ -2,33 +2,7 @@
 
 use crate::frame::SynthFrame;
 use bodyseg_calib::Rig;
-use bodyseg_core::Class;
-
-/// An RGB8 image in memory, row-major.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RgbImage {
-    /// Width, pixels.
-    pub width: u32,
-    /// Height, pixels.
-    pub height: u32,
-    /// `width * height * 3` bytes.
-    pub data: Vec<u8>,
-}
-
-impl RgbImage {
-    fn new(width: u32, height: u32, fill: [u8; 3]) -> Self {
-        RgbImage {
-            width,
-            height,
-            data: fill.repeat(width as usize * height as usize),
-        }
-    }
-
-    fn put(&mut self, x: u32, y: u32, rgb: [u8; 3]) {
-        let i = (y as usize * self.width as usize + x as usize) * 3;
-        self.data[i..i + 3].copy_from_slice(&rgb);
-    }
-}
+use bodyseg_core::{Class, RgbImage};
 
 /// Height of one camera's row in the preview, pixels (half the depth image).
 pub const PREVIEW_ROW_HEIGHT: u32 = 212;
@@ -63,7 +37,7 @@ fn depth_rgb(mm: u16) -> [u8; 3] {
 pub fn preview(frame: &SynthFrame, rig: &Rig) -> RgbImage {
     let h = PREVIEW_ROW_HEIGHT;
     let Some(first) = rig.cameras.first() else {
-        return RgbImage::new(1, 1, [0, 0, 0]);
+        return RgbImage::filled(1, 1, [0, 0, 0]);
     };
     let color_w =
         (u64::from(first.color.width) * u64::from(h) / u64::from(first.color.height).max(1)) as u32;
@@ -72,7 +46,7 @@ pub fn preview(frame: &SynthFrame, rig: &Rig) -> RgbImage {
     let width = color_w * 3 + depth_w + GAP * 3;
     let n = frame.cameras.len().min(rig.cameras.len()) as u32;
     let height = n * h + n.saturating_sub(1) * GAP;
-    let mut out = RgbImage::new(width, height.max(1), [255, 255, 255]);
+    let mut out = RgbImage::filled(width, height.max(1), [255, 255, 255]);
     for (c, (images, camera)) in frame.cameras.iter().zip(&rig.cameras).enumerate() {
         let y0 = c as u32 * (h + GAP);
         let (cw, ch) = (camera.color.width, camera.color.height);
@@ -98,12 +72,12 @@ pub fn preview(frame: &SynthFrame, rig: &Rig) -> RgbImage {
                     }
                 }
                 let rgb = acc.map(|a| (a / count.max(1)) as u8);
-                out.put(x, y0 + y, rgb);
+                out.set_pixel(x, y0 + y, rgb);
                 let centre = (((sy0 + sy1) / 2) * cw + (sx0 + sx1) / 2) as usize;
                 let truth = images.labels.get(centre).copied().unwrap_or(0);
                 let pred = images.parsing.get(centre).copied().unwrap_or(0);
-                out.put(x_truth + x, y0 + y, label_rgb(truth, rgb));
-                out.put(x_pred + x, y0 + y, label_rgb(pred, rgb));
+                out.set_pixel(x_truth + x, y0 + y, label_rgb(truth, rgb));
+                out.set_pixel(x_pred + x, y0 + y, label_rgb(pred, rgb));
             }
             let sy = (y * dh / h).min(dh - 1);
             for x in 0..depth_w {
@@ -113,7 +87,7 @@ pub fn preview(frame: &SynthFrame, rig: &Rig) -> RgbImage {
                     .get((sy * dw + sx) as usize)
                     .copied()
                     .unwrap_or(0);
-                out.put(color_w + GAP + x, y0 + y, depth_rgb(mm));
+                out.set_pixel(color_w + GAP + x, y0 + y, depth_rgb(mm));
             }
         }
     }

@@ -275,7 +275,7 @@ mod tests {
     }
 
     #[test]
-    fn scaled_colour_keeps_the_field_of_view() {
+    fn scaled_color_keeps_the_field_of_view() {
         let full = kinect_v2_color(1920);
         let half = kinect_v2_color(960);
         assert_eq!((half.width, half.height), (960, 540));

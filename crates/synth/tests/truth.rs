@@ -4,9 +4,9 @@
 
 use bodyseg_calib::{Pose, RgbdCamera};
 use bodyseg_core::Class;
-use bodyseg_synth::errors::mismatch_fraction;
+use bodyseg_synth::parser_mistakes::mismatch_fraction;
 use bodyseg_synth::render::surface_distance;
-use bodyseg_synth::{NO_SURFACE, ParsingErrorsConfig, SceneConfig, Synth, preset};
+use bodyseg_synth::{NO_SURFACE, ParserMistakesConfig, SceneConfig, Synth, preset};
 
 /// World point of depth pixel `i` of `camera` at depth `mm`, with the true rig.
 fn world_point(camera: &RgbdCamera, i: usize, mm: u16) -> Option<[f32; 3]> {
@@ -121,7 +121,7 @@ fn true_boxes_hold_their_people() {
 /// from silhouettes, a depth point projected into the colour image with the true rig
 /// finds the same class there.
 #[test]
-fn colour_and_depth_truth_agree_through_the_true_rig() {
+fn color_and_depth_truth_agree_through_the_true_rig() {
     let synth = synth("handover", 1);
     let frame = synth.frame(2);
     for (camera, images) in synth.true_rig().cameras.iter().zip(&frame.cameras) {
@@ -178,7 +178,7 @@ fn colour_and_depth_truth_agree_through_the_true_rig() {
 #[test]
 fn no_errors_means_prediction_equals_truth_and_defaults_err_as_configured() {
     let mut config = preset("handover").expect("preset");
-    config.parsing = ParsingErrorsConfig::none();
+    config.parsing = ParserMistakesConfig::none();
     let exact = Synth::new(config, 1).expect("synth").frame(3);
     for c in &exact.cameras {
         assert_eq!(c.parsing, c.labels);
@@ -190,7 +190,7 @@ fn no_errors_means_prediction_equals_truth_and_defaults_err_as_configured() {
             "default parsing errors: {:.3} of person pixels mislabelled",
             m
         );
-        // ParsingErrorsConfig's defaults aim at an SCHP-like 5-30% on people pixels.
+        // ParserMistakesConfig's defaults aim at an SCHP-like 5-30% on people pixels.
         assert!((0.03..0.35).contains(&m), "{m}");
     }
 }
@@ -229,7 +229,7 @@ fn depth_has_kinect_like_faults_and_truth_marks_them() {
 }
 
 #[test]
-fn colour_exposure_offset_moves_people_in_colour_only() {
+fn color_exposure_offset_moves_people_in_color_only() {
     let base = preset("single").expect("preset");
     let mut late = base.clone();
     late.dsa.color_time_offset_s = 0.1;

@@ -11,14 +11,14 @@
 //! World frame, metres, z up, floor at z = 0; the person stands at `(x, y)` facing +y.
 //! The same seed gives the same cloud on every machine (ChaCha8).
 
-use bodyseg_core::math::{Vec3, dist2};
+use bodyseg_core::math::{Vec3, add, cross, dist2, dot, normalize, scale, sub};
 use bodyseg_core::{Class, Label, LabeledCloud, PersonBox, PointOrigin};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// A capsule body segment: axis from `a` to `b`, radius, class.
 #[derive(Clone, Copy, Debug)]
-pub struct Segment {
+pub struct Capsule {
     /// Axis start, metres.
     pub a: Vec3,
     /// Axis end, metres.
@@ -29,7 +29,7 @@ pub struct Segment {
     pub class: Class,
 }
 
-impl Segment {
+impl Capsule {
     /// Signed distance from `p` to the capsule surface (negative inside), metres.
     pub fn signed_distance(&self, p: Vec3) -> f32 {
         let ab = sub(self.b, self.a);
@@ -57,7 +57,7 @@ pub struct SyntheticPerson {
     /// A box holding the whole person plus a margin.
     pub person_box: PersonBox,
     /// The capsules the body was made of.
-    pub segments: Vec<Segment>,
+    pub segments: Vec<Capsule>,
 }
 
 /// Fractions of the points given to each kind of sample.
@@ -71,12 +71,12 @@ const DEPTH_NOISE_M: f32 = 0.003;
 const BOUNDARY_BAND_M: f32 = 0.025;
 
 /// A standing person (height ≈ 1.75 m · `scale`) at `(x, y)` with seeded arm poses.
-pub fn body_segments(rng: &mut ChaCha8Rng, x: f32, y: f32, scale_h: f32) -> Vec<Segment> {
+pub fn body_segments(rng: &mut ChaCha8Rng, x: f32, y: f32, scale_h: f32) -> Vec<Capsule> {
     let s = scale_h;
     let p = |px: f32, py: f32, pz: f32| [x + px * s, y + py * s, pz * s];
     let mut segs = Vec::new();
     let mut seg = |a: Vec3, b: Vec3, r: f32, class| {
-        segs.push(Segment {
+        segs.push(Capsule {
             a,
             b,
             radius_m: r * s,
@@ -145,7 +145,7 @@ pub fn concat(people: &[SyntheticPerson]) -> (LabeledCloud, Vec<Label>) {
 
 fn sample_person(
     rng: &mut ChaCha8Rng,
-    segments: Vec<Segment>,
+    segments: Vec<Capsule>,
     n_points: usize,
     at: [f32; 2],
     h: f32,
@@ -159,7 +159,7 @@ fn sample_person(
     let mut pred = Vec::with_capacity(n_points);
 
     // Body surface, uniform by area, hidden (inside another capsule) samples rejected.
-    let areas: Vec<f32> = segments.iter().map(Segment::area).collect();
+    let areas: Vec<f32> = segments.iter().map(Capsule::area).collect();
     let total: f32 = areas.iter().sum();
     let mut tries = 0usize;
     while pos.len() < n_body && tries < n_body * 20 {
@@ -279,7 +279,7 @@ fn sample_person(
     }
 }
 
-fn sample_capsule(rng: &mut ChaCha8Rng, s: &Segment) -> Vec3 {
+fn sample_capsule(rng: &mut ChaCha8Rng, s: &Capsule) -> Vec3 {
     let ab = sub(s.b, s.a);
     let l = dot(ab, ab).sqrt();
     let axis = if l > 1e-6 {
@@ -362,30 +362,6 @@ pub fn random_cloud(
 /// A seeded RNG (ChaCha8), so tests need not depend on rand themselves.
 pub fn rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed)
-}
-
-fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn add(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn scale(a: Vec3, k: f32) -> Vec3 {
-    [a[0] * k, a[1] * k, a[2] * k]
-}
-fn dot(a: Vec3, b: Vec3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn normalize(a: Vec3) -> Vec3 {
-    let l = dot(a, a).sqrt().max(1e-12);
-    scale(a, 1.0 / l)
 }
 
 #[cfg(test)]

@@ -11,24 +11,8 @@ pub fn seed() -> u64 {
         .unwrap_or(0x5EED_CA11_B0D1_5E65)
 }
 
-/// xorshift64*: enough randomness to sample pixels, points and depths, and no dependency.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed.max(1))
-    }
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-}
+/// xorshift64* (core's): enough randomness to sample pixels, points and depths.
+pub use bodyseg_core::rng::XorShift64Star as Rng;
 
 /// The colour sensor's rational distortion of Azure Kinect 001514394512
 /// (`tests/fixtures/calib/azure_kinect/pyk4a_calibration.json`, `ModelParameters` 4..13

@@ -145,7 +145,7 @@ pub(crate) struct Header {
     pub(crate) lines: usize,
     /// A comment says the colours are the class palette ([`PALETTE_COMMENT`]), not the
     /// camera's.
-    pub(crate) palette_colours: bool,
+    pub(crate) palette_colors: bool,
     /// `obj_info num_cols W` and `obj_info num_rows H` (PCL's writer, for an organised
     /// cloud): the grid's columns and rows.
     pub(crate) grid: (Option<u32>, Option<u32>),
@@ -167,7 +167,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         path: path.to_path_buf(),
     };
     let mut encoding = None;
-    let mut palette_colours = false;
+    let mut palette_colors = false;
     let mut grid = (None, None);
     let mut elements: Vec<Element> = Vec::new();
     let mut pos = 0;
@@ -192,7 +192,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         };
         let rest: Vec<&str> = words.collect();
         match keyword {
-            "comment" => palette_colours |= text.contains(PALETTE_COMMENT),
+            "comment" => palette_colors |= text.contains(PALETTE_COMMENT),
             // Other obj_info lines, and numbers that are not a u32, are of no use here.
             "obj_info" => match rest[..] {
                 ["num_cols", w] => grid.0 = w.parse().ok(),
@@ -291,7 +291,7 @@ pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError>
         elements,
         data_offset: pos,
         lines: line_no,
-        palette_colours,
+        palette_colors,
         grid,
     })
 }

@@ -153,7 +153,7 @@ pub fn parse_ply_file(bytes: &[u8], path_for_errors: &Path) -> Result<CloudFile,
         }
     };
     // bodyseg's own files may colour the points by class: that is no camera colour.
-    if header.palette_colours {
+    if header.palette_colors {
         vertices.cloud.colors = None;
     }
     let labels = match (plan.has(LABEL), vertices.foreign) {

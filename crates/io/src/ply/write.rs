@@ -97,14 +97,14 @@ fn encode(cloud: &LabeledCloud, opts: &PlyWriteOptions, w: &mut dyn Write) -> io
         PlyFormat::BinaryLittleEndian => "binary_little_endian",
         PlyFormat::Ascii => "ascii",
     };
-    let colour_source = match opts.colors {
+    let color_source = match opts.colors {
         PlyColors::Palette => "class palette", // read back as no colours (PALETTE_COMMENT)
         PlyColors::Camera => "camera colour",
     };
     write!(
         w,
         "ply\nformat {format} 1.0\n\
-         comment bodyseg labelled point cloud (bodyseg-io {}); red green blue = {colour_source}; label 255 = unknown\n\
+         comment bodyseg labelled point cloud (bodyseg-io {}); red green blue = {color_source}; label 255 = unknown\n\
          element vertex {}\n\
          property float x\nproperty float y\nproperty float z\n\
          property uchar red\nproperty uchar green\nproperty uchar blue\n\

@@ -1,32 +1,19 @@
 //! Helpers shared by this crate's integration tests.
 #![allow(dead_code)]
 
+use bodyseg_core::rng::XorShift64Star;
 use bodyseg_core::{Label, LabeledCloud, PointOrigin};
 use std::io::Write;
 
-/// Tiny deterministic generator (xorshift64*), so tests need no RNG crate.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    pub fn next_u32(&mut self) -> u32 {
-        (self.next_u64() >> 32) as u32
-    }
-    /// A coordinate in about ±5 m with arbitrary low bits.
-    pub fn coord(&mut self) -> f32 {
-        (self.next_u32() as f32 / u32::MAX as f32 - 0.5) * 10.0
-    }
+/// A coordinate in about ±5 m with arbitrary low bits.
+pub fn coord(rng: &mut XorShift64Star) -> f32 {
+    (rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 10.0
 }
 
 /// A cloud of `n` points with every label id, tricky float values in front (signed zero,
 /// subnormal, extremes) and camera colours.
 pub fn sample_cloud(n: usize, seed: u64) -> LabeledCloud {
-    let mut rng = Rng(seed.max(1));
+    let mut rng = XorShift64Star::new(seed);
     let tricky = [
         [0.0, -0.0, 0.1],
         [f32::MAX, f32::MIN, f32::MIN_POSITIVE],
@@ -39,7 +26,7 @@ pub fn sample_cloud(n: usize, seed: u64) -> LabeledCloud {
     for i in 0..n {
         let p = match tricky.get(i) {
             Some(&p) => p,
-            None => [rng.coord(), rng.coord(), rng.coord()],
+            None => [coord(&mut rng), coord(&mut rng), coord(&mut rng)],
         };
         cloud.positions_m.push(p);
         cloud

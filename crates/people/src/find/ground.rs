@@ -4,7 +4,8 @@
 //! Self-contained (nothing here reads the box finder's configuration), so that the fit can
 //! grow without touching the finders: today the floor is near-horizontal in a z-up frame.
 
-use bodyseg_core::math::Vec3;
+use bodyseg_core::math::{Vec3, cross, dot, norm, sub};
+use bodyseg_core::rng::SplitMix64;
 
 /// Ground plane `n·p + d = 0`, `n` unit with `n.z > 0`: height of `p` is `n·p + d`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,21 +47,6 @@ pub(crate) fn xy_dist(a: Vec3, b: Vec3) -> f32 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
-/// splitmix64: a small deterministic generator for RANSAC (here and in the floor search).
-pub(crate) struct SplitMix(pub(crate) u64);
-
-impl SplitMix {
-    /// A number in `0..n` (`n` > 0).
-    pub(crate) fn below(&mut self, n: usize) -> usize {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z % n as u64) as usize
-    }
-}
-
 /// RANSAC ground plane among `points` (world frame, metres): of `iterations` planes
 /// through three points drawn with a fixed seed (deterministic), the near-horizontal one
 /// (normal within `max_tilt_deg` of +z) with the most points within `tol_m` of it; `None`
@@ -76,20 +62,14 @@ pub(crate) fn fit_ground(
         return None;
     }
     let min_nz = max_tilt_deg.to_radians().cos();
-    let mut rng = SplitMix(0x6A09_E667_F3BC_C908);
+    let mut rng = SplitMix64::new(0x6A09_E667_F3BC_C908);
     let mut best: Option<(usize, Plane)> = None;
     // Score on a strided subset: the count only ranks planes.
     let stride = (points.len() / 4000).max(1);
     for _ in 0..iterations {
-        let [a, b, c] = [0; 3].map(|_| points[rng.below(points.len())]);
-        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let mut n = [
-            u[1] * w[2] - u[2] * w[1],
-            u[2] * w[0] - u[0] * w[2],
-            u[0] * w[1] - u[1] * w[0],
-        ];
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let [a, b, c] = [0; 3].map(|_| points[rng.below(points.len() as u64) as usize]);
+        let mut n = cross(sub(b, a), sub(c, a));
+        let len = norm(n);
         if len.is_nan() || len <= 1e-9 {
             continue;
         }
@@ -100,10 +80,7 @@ pub(crate) fn fit_ground(
         if n[2] < min_nz {
             continue;
         }
-        let plane = Plane {
-            n,
-            d: -(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]),
-        };
+        let plane = Plane { n, d: -dot(n, a) };
         let count = points
             .iter()
             .step_by(stride)

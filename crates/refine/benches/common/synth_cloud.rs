@@ -15,12 +15,13 @@
 //!
 //! Labels: each camera's per-pixel truth (the class of the surface its ray hit, so a flying
 //! pixel off a silhouette keeps the person's label) passed through the simulated parser's
-//! dilation and boundary jitter (`bodyseg_synth::errors::predict_labels`, pixel sizes
+//! dilation and boundary jitter (`bodyseg_synth::parser_mistakes::predict_labels`, pixel sizes
 //! scaled to the 512-pixel-wide depth image): label errors along part boundaries, as a
 //! projection makes them.
 
+use bodyseg_core::rng::splitmix64;
 use bodyseg_core::{Label, LabeledCloud, PersonBox, PointOrigin};
-use bodyseg_synth::errors::{TruthView, predict_labels};
+use bodyseg_synth::parser_mistakes::{TruthView, predict_labels};
 use bodyseg_synth::{CameraPlacement, NO_SURFACE, Synth, preset};
 
 /// The cloud of one person and the box holding it.
@@ -145,7 +146,7 @@ pub fn synth_person_cloud(n: usize, seed: u64) -> Result<SynthPersonCloud, Strin
     let mut keyed: Vec<(u64, usize)> = (0..cloud.len())
         .map(|i| {
             (
-                splitmix(seed ^ (i as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)),
+                splitmix64(seed ^ (i as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)),
                 i,
             )
         })
@@ -174,11 +175,4 @@ pub fn synth_person_cloud(n: usize, seed: u64) -> Result<SynthPersonCloud, Strin
         flying,
         mislabelled,
     })
-}
-
-fn splitmix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }

@@ -4,16 +4,11 @@ use super::nn::NnIndex;
 use super::*;
 use bodyseg_core::math::dist2;
 
-/// A tiny xorshift so these unit tests need no dev-dependency; the seed is printed by
-/// every assertion message (`case`), and fixed so that a failure reproduces.
+/// Uniform draws in [0, 1) from core's xorshift64*; the seed is printed by every
+/// assertion message (`case`), and fixed so that a failure reproduces.
 pub(crate) fn rng_from(seed: u64) -> impl FnMut() -> f32 {
-    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    }
+    let mut g = bodyseg_core::rng::XorShift64Star::new(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    move || (g.next_u64() >> 40) as f32 / (1u64 << 24) as f32
 }
 
 /// Random points: a cluttered box, sometimes with a few far strays (kilometres away:

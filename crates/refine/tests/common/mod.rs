@@ -61,6 +61,10 @@ impl Scene {
     pub fn labels_of(&self, out: &[Label], part: usize) -> Vec<Label> {
         out[self.parts[part].clone()].to_vec()
     }
+    /// Whether every point of `part` has `label` in `out`.
+    pub fn all_labelled(&self, out: &[Label], part: usize, label: Label) -> bool {
+        out[self.parts[part].clone()].iter().all(|&x| x == label)
+    }
 }
 
 /// A solid axis-aligned box of points on a lattice of pitch `pitch_m`, corners `lo`..`hi`.

@@ -1,0 +1,123 @@
+//! Fixtures shared by the workspace's tests and benches (hidden from the documentation):
+//! the Kinect v2 test camera of `shared/data/iai_kinect2/196605135147` and a ring rig
+//! built from it. Not for production code.
+
+use crate::{CalibError, Pose, RgbdCamera, Rig, read_iai_kinect2};
+use std::path::PathBuf;
+
+/// The iai_kinect2 folder of the test camera: `shared/` beside the repository
+/// (`shared/data/iai_kinect2/196605135147`).
+pub fn kinect_v2_test_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/iai_kinect2/196605135147")
+}
+
+/// The Kinect v2 test camera (serial 196605135147, distortion included), read from
+/// [`kinect_v2_test_dir`]; the error names the folder when `shared/` is missing.
+pub fn kinect_v2_test_camera() -> Result<RgbdCamera, CalibError> {
+    read_iai_kinect2(&kinect_v2_test_dir())
+}
+
+/// `n` copies of `base` named `cam0`.. placed 2.2 m up on a circle of radius 3 m around
+/// the world origin, evenly spaced in yaw, each looking at the origin 30° down.
+pub fn ring_rig(base: &RgbdCamera, n: usize) -> Rig {
+    let cameras = (0..n)
+        .map(|i| {
+            let yaw = i as f64 * (360.0 / n as f64).to_radians();
+            let (sy, cy) = yaw.sin_cos();
+            let (st, ct) = 30f64.to_radians().sin_cos();
+            // Optical axes in world coordinates: z forward (towards the centre, tilted
+            // down), x right (horizontal), y down = z × x.
+            let fwd = [-cy * ct, -sy * ct, -st];
+            let right = [sy, -cy, 0.0];
+            let down = [
+                fwd[1] * right[2] - fwd[2] * right[1],
+                fwd[2] * right[0] - fwd[0] * right[2],
+                fwd[0] * right[1] - fwd[1] * right[0],
+            ];
+            let rotation = std::array::from_fn(|r| [right[r], down[r], fwd[r]]);
+            let mut cam = base.clone();
+            cam.name = format!("cam{i}");
+            // An orthonormal rotation by construction; identity only if that ever fails.
+            cam.world_from_depth =
+                Pose::from_rotation_translation(rotation, [3.0 * cy, 3.0 * sy, 2.2])
+                    .unwrap_or_else(|_| Pose::identity());
+            cam
+        })
+        .collect();
+    Rig { cameras }
+}
+
+/// Depth pixels (u range, v range) of the box in [`plane_and_box_depth_mm`].
+pub const TEST_BOX_U: std::ops::Range<u32> = 180..330;
+/// See [`TEST_BOX_U`].
+pub const TEST_BOX_V: std::ops::Range<u32> = 140..320;
+
+/// A depth image (mm, row-major) of a slanted plane with a box in front of it
+/// ([`TEST_BOX_U`] × [`TEST_BOX_V`]); ~15% of the pixels are holes (0), as on a real
+/// Kinect v2 frame (edges, dark and shiny surfaces); the holes are drawn from `seed`.
+pub fn plane_and_box_depth_mm(width: u32, height: u32, seed: u64) -> Vec<u16> {
+    let mut rng = bodyseg_core::rng::XorShift64Star::new(seed);
+    let mut out = Vec::with_capacity(width as usize * height as usize);
+    for v in 0..height {
+        for u in 0..width {
+            let in_box = TEST_BOX_U.contains(&u) && TEST_BOX_V.contains(&v);
+            let z_mm = if in_box {
+                2000.0 + 0.8 * f64::from(u - TEST_BOX_U.start)
+            } else {
+                // Floor seen from above: farther towards the top of the image.
+                4500.0 - 6.0 * f64::from(v)
+            };
+            let hole = rng.unit_f64() < 0.15;
+            out.push(if hole { 0 } else { z_mm as u16 });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ring_rig_cameras_look_at_the_origin_from_2_2_m() {
+        let optics = crate::Intrinsics {
+            width: 4,
+            height: 4,
+            fx: 2.0,
+            fy: 2.0,
+            cx: 2.0,
+            cy: 2.0,
+            distortion: crate::Distortion::NONE,
+        };
+        let base = RgbdCamera::new("k", optics, optics);
+        let rig = ring_rig(&base, 3);
+        assert_eq!(rig.cameras.len(), 3);
+        for (i, cam) in rig.cameras.iter().enumerate() {
+            assert_eq!(cam.name, format!("cam{i}"));
+            let c = cam.world_from_depth.transform_point([0.0, 0.0, 0.0]);
+            assert!((c[2] - 2.2).abs() < 1e-12 && (c[0].hypot(c[1]) - 3.0).abs() < 1e-12);
+            // The optical axis (depth frame +z) passes near the origin's direction.
+            let ahead = cam.world_from_depth.transform_point([0.0, 0.0, 1.0]);
+            let axis = [ahead[0] - c[0], ahead[1] - c[1], ahead[2] - c[2]];
+            let to_origin = [-c[0], -c[1], -c[2]];
+            let cos = (axis[0] * to_origin[0] + axis[1] * to_origin[1] + axis[2] * to_origin[2])
+                / (to_origin[0].hypot(to_origin[1]).hypot(to_origin[2]));
+            assert!(cos > 0.99, "camera {i}: cos {cos}");
+        }
+    }
+
+    #[test]
+    fn plane_and_box_has_the_box_nearer_and_about_15_percent_holes() {
+        let d = plane_and_box_depth_mm(512, 424, 7);
+        assert_eq!(d.len(), 512 * 424);
+        assert_eq!(d, plane_and_box_depth_mm(512, 424, 7));
+        let holes = d.iter().filter(|&&z| z == 0).count() as f64 / d.len() as f64;
+        assert!((0.13..0.17).contains(&holes), "{holes}");
+        let at = |u: usize, v: usize| d[v * 512 + u];
+        let (boxed, floor) = (0..20)
+            .map(|k| (at(200 + k, 200), at(20 + k, 200)))
+            .find(|&(b, f)| b > 0 && f > 0)
+            .unwrap_or((0, 0));
+        assert!(boxed > 0 && boxed < floor, "{boxed} {floor}");
+    }
+}
