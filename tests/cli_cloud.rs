@@ -280,7 +280,10 @@ fn unlabelled_foreign_labelled_millimetre_and_unorganised_clouds() {
     let out = boxes_geometry(d, &pcd, &[]);
     assert_ok(&out, "geometry mode in millimetres");
     let err = stderr(&out);
-    assert!(err.contains("warning:") && err.contains("millimetres"), "{err}");
+    assert!(
+        err.contains("warning:") && err.contains("millimetres"),
+        "{err}"
+    );
 
     // The camera's view above the floor (rows 0..260 of the grid: heads and trunks,
     // walls, no floor): warnings that no floor and no person are found, naming that.

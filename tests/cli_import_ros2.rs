@@ -75,11 +75,11 @@ fn assert_same_images(got: &Path, want: &Path, frames: usize) {
                     .expect("depth png")
             };
             assert_eq!(depth(got), depth(want), "{} depth {stem}", cam.name);
-            let colour = |rec: &Path| {
+            let color = |rec: &Path| {
                 bodyseg_io::read_rgb_image(&rec.join(&cam.name).join(format!("color/{stem}.png")))
                     .expect("colour png")
             };
-            assert_eq!(colour(got), colour(want), "{} colour {stem}", cam.name);
+            assert_eq!(color(got), color(want), "{} colour {stem}", cam.name);
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::ParsingError;
 use crate::blazepose::{
-    INPUT, NUM_LANDMARKS, Pose, Roi, RuleConfig, crop_into, decode, label_person, landmark,
+    DecodedPose, INPUT, NUM_LANDMARKS, Roi, RuleConfig, crop_into, decode, label_person, landmark,
     merge_people,
 };
 use crate::onnx::load_session;
@@ -98,7 +98,7 @@ pub const RETRY_ROI_SCALE: f64 = 1.25;
 
 /// Whether `pose`'s body centre (alignment centre) lies in `bounds` widened by
 /// [`REGION_SLACK`].
-fn centre_inside(pose: &Pose, bounds: &PixelBox) -> bool {
+fn centre_inside(pose: &DecodedPose, bounds: &PixelBox) -> bool {
     let Some(c) = pose.xy.get(landmark::ALIGN_CENTRE) else {
         return false;
     };
@@ -236,7 +236,7 @@ impl BlazePoseSegmenter {
     ///
     /// # Errors
     /// [`ParsingError::Inference`] naming the model file.
-    pub fn run(&mut self, image: &RgbImage, roi: &Roi) -> Result<Pose, ParsingError> {
+    pub fn run(&mut self, image: &RgbImage, roi: &Roi) -> Result<DecodedPose, ParsingError> {
         crop_into(image, roi, INPUT, &mut self.input);
         let path = &self.model_path;
         let infer = |cause: String| ParsingError::Inference {
@@ -287,7 +287,11 @@ impl BlazePoseSegmenter {
     ///
     /// # Errors
     /// [`ParsingError::Inference`].
-    pub fn pose_in(&mut self, image: &RgbImage, bounds: &PixelBox) -> Result<Pose, ParsingError> {
+    pub fn pose_in(
+        &mut self,
+        image: &RgbImage,
+        bounds: &PixelBox,
+    ) -> Result<DecodedPose, ParsingError> {
         let mut pose = self.run(image, &Roi::from_box(bounds, self.options.roi_scale))?;
         let inside = centre_inside(&pose, bounds);
         if !inside || pose.flag < self.options.min_pose_flag {
@@ -409,10 +413,10 @@ impl Segmenter for BlazePoseSegmenter {
 mod tests {
     use super::*;
 
-    fn pose_centred_at(c: [f64; 2]) -> Pose {
+    fn pose_centred_at(c: [f64; 2]) -> DecodedPose {
         let mut xy = vec![[0.0, 0.0]; NUM_LANDMARKS];
         xy[landmark::ALIGN_CENTRE] = c;
-        Pose {
+        DecodedPose {
             roi: Roi {
                 centre_px: c,
                 side_px: 100.0,

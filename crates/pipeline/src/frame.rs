@@ -176,7 +176,7 @@ pub fn parse_frame(
         Some(crate::regions::find_people(
             &frame.stem,
             &frame.depth,
-            frame.colour.as_deref(),
+            frame.color.as_deref(),
             rig,
             config,
         )?)

@@ -231,7 +231,7 @@ pub fn import_cloud(opts: &ImportCloudOptions) -> Result<ImportCloudSummary> {
                         vec![128u8; grid.width as usize * grid.height as usize * 3]
                     }
                 };
-                rec.write_colour(0, stem, &rgb)?;
+                rec.write_color(0, stem, &rgb)?;
             }
             Ok(())
         })();

@@ -26,7 +26,7 @@ use crate::recording::{Layer, RecordingWriter};
 use crate::stage::{Stage, plural};
 use anyhow::{Context, Result, bail};
 use bodyseg_ros2::{
-    BagMessage, BagReader, BagScan, Colour, ImportOptions, ImportPlan, PlannedFrame, decode_colour,
+    BagMessage, BagReader, BagScan, Color, ImportOptions, ImportPlan, PlannedFrame, decode_color,
     decode_depth,
 };
 use rayon::prelude::*;
@@ -244,7 +244,7 @@ fn write_frame(
     for (i, (data, view)) in frame.views.iter().zip(&planned.views).enumerate() {
         let source = &plan.sources[i];
         let camera = &plan.rig.cameras[i];
-        let [depth_msg, colour_msg] = data;
+        let [depth_msg, color_msg] = data;
         let depth = decode_depth(
             view.depth.kind,
             depth_msg,
@@ -253,22 +253,20 @@ fn write_frame(
         .map_err(|e| e.at(&source.depth.topic, view.depth.stamp))?;
         let path = rec.image_path(i, Layer::Depth, &stem, "png")?;
         writer.write(&relative(&path), |_| rec.write_depth(i, &stem, &depth))?;
-        let colour = decode_colour(
-            view.colour.kind,
-            colour_msg,
+        let color = decode_color(
+            view.color.kind,
+            color_msg,
             (camera.color.width, camera.color.height),
         )
-        .map_err(|e| e.at(&source.colour.topic, view.colour.stamp))?;
-        match colour {
-            Colour::Rgb { rgb, .. } => {
+        .map_err(|e| e.at(&source.color.topic, view.color.stamp))?;
+        match color {
+            Color::Rgb { rgb, .. } => {
                 let path = rec.image_path(i, Layer::Color, &stem, "png")?;
-                writer.write(&relative(&path), |_| rec.write_colour(i, &stem, &rgb))?;
+                writer.write(&relative(&path), |_| rec.write_color(i, &stem, &rgb))?;
             }
-            Colour::Jpeg { bytes, .. } => {
+            Color::Jpeg { bytes, .. } => {
                 let path = rec.image_path(i, Layer::Color, &stem, "jpg")?;
-                writer.write(&relative(&path), |_| {
-                    rec.write_colour_jpeg(i, &stem, &bytes)
-                })?;
+                writer.write(&relative(&path), |_| rec.write_color_jpeg(i, &stem, &bytes))?;
             }
         }
     }
@@ -278,7 +276,7 @@ fn write_frame(
         stamps_ns: planned
             .views
             .iter()
-            .map(|v| [v.depth.stamp.ns(), v.colour.stamp.ns()])
+            .map(|v| [v.depth.stamp.ns(), v.color.stamp.ns()])
             .collect(),
         outputs: writer.outputs().to_vec(),
     })
@@ -290,7 +288,7 @@ fn wanted_messages(frames: &[(usize, &PlannedFrame)]) -> HashMap<u64, (usize, us
     for (index, frame) in frames {
         for (camera, view) in frame.views.iter().enumerate() {
             wanted.insert(view.depth.ordinal, (*index, camera, 0));
-            wanted.insert(view.colour.ordinal, (*index, camera, 1));
+            wanted.insert(view.color.ordinal, (*index, camera, 1));
         }
     }
     wanted
@@ -358,7 +356,7 @@ fn stamps_csv(plan: &ImportPlan) -> String {
                 stem_of(index),
                 camera.name,
                 view.depth.stamp.ns(),
-                view.colour.stamp.ns()
+                view.color.stamp.ns()
             ));
         }
     }
@@ -372,7 +370,7 @@ fn import_json(files: &[PathBuf], plan: &ImportPlan, cameras: &[String]) -> Resu
         .iter()
         .map(|u| {
             serde_json::json!({
-                "camera": u.camera, "depth": u.depth, "colour": u.colour, "pairs": u.pairs,
+                "camera": u.camera, "depth": u.depth, "colour": u.color, "pairs": u.pairs,
             })
         })
         .collect();
@@ -439,7 +437,7 @@ pub fn import_ros2(
             .map(|u| {
                 format!(
                     "{}: {} depth, {} colour unpaired",
-                    u.camera, u.depth, u.colour
+                    u.camera, u.depth, u.color
                 )
             })
             .collect();
@@ -455,12 +453,12 @@ pub fn import_ros2(
     for u in plan
         .unpaired
         .iter()
-        .filter(|u| u.depth + u.colour + u.pairs > 0)
+        .filter(|u| u.depth + u.color + u.pairs > 0)
     {
         notes.push(format!(
             "camera {}: left out {} depth and {} colour images without a partner within {} ms, \
              and {} pairs without every other camera",
-            u.camera, u.depth, u.colour, options.max_skew_ms, u.pairs
+            u.camera, u.depth, u.color, options.max_skew_ms, u.pairs
         ));
     }
 

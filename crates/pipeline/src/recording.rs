@@ -610,7 +610,7 @@ impl RecordingWriter {
     ///
     /// # Errors
     /// Writing fails.
-    pub fn write_colour_jpeg(&self, index: usize, stem: &str, jpeg: &[u8]) -> Result<()> {
+    pub fn write_color_jpeg(&self, index: usize, stem: &str, jpeg: &[u8]) -> Result<()> {
         let path = self.image_path(index, Layer::Color, stem, "jpg")?;
         bodyseg_io::write_bytes_atomic(&path, jpeg)?;
         let png = path.with_extension("png");
@@ -769,25 +769,22 @@ pub(crate) mod tests {
         let rig = rig();
         let writer =
             RecordingWriter::create(&root, &rig, &[Layer::Color, Layer::Depth]).expect("create");
-        let colour = root.join(&rig.cameras[0].name).join("color");
+        let color = root.join(&rig.cameras[0].name).join("color");
         assert_eq!(
             writer
                 .image_path(0, Layer::Color, "000000", "jpg")
                 .expect("path"),
-            colour.join("000000.jpg")
+            color.join("000000.jpg")
         );
         assert!(writer.image_path(9, Layer::Color, "000000", "jpg").is_err());
         assert!(writer.image_path(0, Layer::Color, "../x", "jpg").is_err());
         let rgb = vec![7u8; 3 * rig.cameras[0].color.num_pixels()];
-        writer.write_colour(0, "000000", &rgb).expect("png");
-        assert!(colour.join("000000.png").is_file());
+        writer.write_color(0, "000000", &rgb).expect("png");
+        assert!(color.join("000000.png").is_file());
         let jpeg = b"\xff\xd8 the bytes as they are".to_vec();
-        writer.write_colour_jpeg(0, "000000", &jpeg).expect("jpeg");
-        assert!(!colour.join("000000.png").exists(), "the older PNG is gone");
-        assert_eq!(
-            std::fs::read(colour.join("000000.jpg")).expect("read"),
-            jpeg
-        );
+        writer.write_color_jpeg(0, "000000", &jpeg).expect("jpeg");
+        assert!(!color.join("000000.png").exists(), "the older PNG is gone");
+        assert_eq!(std::fs::read(color.join("000000.jpg")).expect("read"), jpeg);
     }
 
     #[test]

@@ -138,7 +138,7 @@ pub fn person_regions(rig: &Rig, boxes: &[PersonBox]) -> Vec<Vec<PersonRegion>> 
 pub fn find_people(
     stem: &str,
     depth: &[DepthImage],
-    colour: Option<&[RgbImage]>,
+    color: Option<&[RgbImage]>,
     rig: &Rig,
     config: &PipelineConfig,
 ) -> Result<PersonBoxes> {
@@ -174,10 +174,10 @@ pub fn find_people(
     let mut boxes_cfg = config.boxes.clone();
     boxes_cfg.mode = BoxMode::Geometry;
     if boxes_cfg.uses_colors()
-        && let Some(colour) = colour
+        && let Some(color) = color
     {
-        let colour: Vec<&RgbImage> = colour.iter().collect();
-        cloud.colors = Some(hits.colors_of(&cloud, &colour));
+        let color: Vec<&RgbImage> = color.iter().collect();
+        cloud.colors = Some(hits.colors_of(&cloud, &color));
     }
     let mut boxes = bodyseg_people::find_boxes(&cloud, &boxes_cfg)
         .with_context(|| format!("frame {stem}: people from depth (geometry boxes)"))?;

@@ -3,7 +3,7 @@
 
 use crate::Ros2Error;
 use crate::msg::{MsgKind, decode_compressed_image, decode_image};
-use crate::pixels::{Colour, depth_mm_of_compressed, depth_mm_of_image, rgb_of_image};
+use crate::pixels::{Color, depth_mm_of_compressed, depth_mm_of_image, rgb_of_image};
 
 /// `Err` unless `got` is `want`.
 fn check_size(got: (u32, u32), want: (u32, u32), what: &str) -> Result<(), Ros2Error> {
@@ -42,20 +42,20 @@ pub fn decode_depth(kind: MsgKind, data: &[u8], size: (u32, u32)) -> Result<Vec<
 ///
 /// # Errors
 /// As [`decode_depth`].
-pub fn decode_colour(kind: MsgKind, data: &[u8], size: (u32, u32)) -> Result<Colour, Ros2Error> {
-    let colour = match kind {
+pub fn decode_color(kind: MsgKind, data: &[u8], size: (u32, u32)) -> Result<Color, Ros2Error> {
+    let color = match kind {
         MsgKind::CompressedImage => {
-            crate::pixels::colour_of_compressed(&decode_compressed_image(data)?)?
+            crate::pixels::color_of_compressed(&decode_compressed_image(data)?)?
         }
         _ => {
             let msg = decode_image(data)?;
-            Colour::Rgb {
+            Color::Rgb {
                 width: msg.width,
                 height: msg.height,
                 rgb: rgb_of_image(&msg)?,
             }
         }
     };
-    check_size(colour.size(), size, "colour")?;
-    Ok(colour)
+    check_size(color.size(), size, "colour")?;
+    Ok(color)
 }

@@ -44,12 +44,12 @@ mod tf;
 pub mod topics;
 
 pub use bag::{BagMessage, BagMetadata, BagReader, parse_metadata, sqlite_error};
-pub use decode::{decode_colour, decode_depth};
+pub use decode::{decode_color, decode_depth};
 pub use error::Ros2Error;
 pub use intrinsics::intrinsics_of;
 pub use msg::{MsgKind, Stamp};
 pub use pairing::{group_cameras, pair_nearest};
-pub use pixels::Colour;
+pub use pixels::Color;
 pub use scan::{
     BagScan, CameraSource, ImportOptions, ImportPlan, MessageRef, PlannedFrame, PlannedView,
     Stream, TF, TF_STATIC, Unpaired,

@@ -34,19 +34,19 @@ pub enum ImageRole {
     /// Depth (16-bit millimetres or 32-bit float metres).
     Depth,
     /// Colour or grey.
-    Colour,
+    Color,
 }
 
 /// Image encodings read as depth.
 pub const DEPTH_ENCODINGS: &str = "16UC1, mono16 (millimetres), 32FC1 (metres)";
 /// Image encodings read as colour.
-pub const COLOUR_ENCODINGS: &str = "rgb8, bgr8, rgba8, bgra8, mono8";
+pub const COLOR_ENCODINGS: &str = "rgb8, bgr8, rgba8, bgra8, mono8";
 
 /// The role of a `sensor_msgs/Image` by its encoding; `None` for other encodings.
 pub fn image_role(encoding: &str) -> Option<ImageRole> {
     match encoding {
         "16UC1" | "mono16" | "32FC1" => Some(ImageRole::Depth),
-        "rgb8" | "bgr8" | "rgba8" | "bgra8" | "mono8" => Some(ImageRole::Colour),
+        "rgb8" | "bgr8" | "rgba8" | "bgra8" | "mono8" => Some(ImageRole::Color),
         _ => None,
     }
 }
@@ -58,7 +58,7 @@ pub fn compressed_role(format: &str) -> ImageRole {
     if format.contains("compressedDepth") || matches!(encoding, "16UC1" | "mono16" | "32FC1") {
         ImageRole::Depth
     } else {
-        ImageRole::Colour
+        ImageRole::Color
     }
 }
 
@@ -82,7 +82,7 @@ fn bytes_per_pixel(encoding: &str) -> Option<usize> {
 pub fn check_image(msg: &ImageMsg<'_>, role: ImageRole) -> Result<usize, Ros2Error> {
     let supported = match role {
         ImageRole::Depth => DEPTH_ENCODINGS,
-        ImageRole::Colour => COLOUR_ENCODINGS,
+        ImageRole::Color => COLOR_ENCODINGS,
     };
     let bpp = bytes_per_pixel(&msg.encoding)
         .filter(|_| image_role(&msg.encoding) == Some(role))
@@ -121,7 +121,7 @@ pub fn check_image(msg: &ImageMsg<'_>, role: ImageRole) -> Result<usize, Ros2Err
 fn role_name(role: ImageRole) -> &'static str {
     match role {
         ImageRole::Depth => "depth",
-        ImageRole::Colour => "colour",
+        ImageRole::Color => "colour",
     }
 }
 
@@ -181,7 +181,7 @@ pub fn depth_mm_of_image(msg: &ImageMsg<'_>) -> Result<Vec<u16>, Ros2Error> {
 /// # Errors
 /// As [`check_image`] for [`ImageRole::Colour`].
 pub fn rgb_of_image(msg: &ImageMsg<'_>) -> Result<Vec<u8>, Ros2Error> {
-    let bpp = check_image(msg, ImageRole::Colour)?;
+    let bpp = check_image(msg, ImageRole::Color)?;
     let mut out = Vec::with_capacity(3 * msg.width as usize * msg.height as usize);
     let encoding = msg.encoding.as_str();
     for row in rows(msg, bpp) {
@@ -199,7 +199,7 @@ pub fn rgb_of_image(msg: &ImageMsg<'_>) -> Result<Vec<u8>, Ros2Error> {
 
 /// A colour image ready to be written.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Colour {
+pub enum Color {
     /// Decoded pixels, 8-bit RGB, row-major.
     Rgb {
         /// Columns.
@@ -220,11 +220,11 @@ pub enum Colour {
     },
 }
 
-impl Colour {
+impl Color {
     /// Width and height, pixels.
     pub fn size(&self) -> (u32, u32) {
         match self {
-            Colour::Rgb { width, height, .. } | Colour::Jpeg { width, height, .. } => {
+            Color::Rgb { width, height, .. } | Color::Jpeg { width, height, .. } => {
                 (*width, *height)
             }
         }
@@ -265,7 +265,7 @@ pub fn compressed_image_size(
     role: ImageRole,
 ) -> Result<(u32, u32), Ros2Error> {
     match role {
-        ImageRole::Colour => compressed_size(msg.data, "compressed colour image"),
+        ImageRole::Color => compressed_size(msg.data, "compressed colour image"),
         ImageRole::Depth => {
             let (_, png) = compressed_depth_parts(msg)?;
             compressed_size(png, "compressed depth image")
@@ -277,12 +277,12 @@ pub fn compressed_image_size(
 ///
 /// # Errors
 /// The bytes are neither PNG nor JPEG, or do not decode.
-pub fn colour_of_compressed(msg: &CompressedImageMsg<'_>) -> Result<Colour, Ros2Error> {
+pub fn color_of_compressed(msg: &CompressedImageMsg<'_>) -> Result<Color, Ros2Error> {
     const WHAT: &str = "compressed colour image";
     match compressed_format(msg.data, WHAT)? {
         ImageFormat::Jpeg => {
             let (width, height) = compressed_size(msg.data, WHAT)?;
-            Ok(Colour::Jpeg {
+            Ok(Color::Jpeg {
                 width,
                 height,
                 bytes: msg.data.to_vec(),
@@ -292,7 +292,7 @@ pub fn colour_of_compressed(msg: &CompressedImageMsg<'_>) -> Result<Colour, Ros2
             let decoded = image::load_from_memory_with_format(msg.data, ImageFormat::Png)
                 .map_err(|e| decode_error(WHAT, e))?
                 .into_rgb8();
-            Ok(Colour::Rgb {
+            Ok(Color::Rgb {
                 width: decoded.width(),
                 height: decoded.height(),
                 rgb: decoded.into_raw(),
@@ -425,7 +425,7 @@ mod tests {
     }
 
     #[test]
-    fn colour_encodings_become_rgb_and_row_padding_is_dropped() {
+    fn color_encodings_become_rgb_and_row_padding_is_dropped() {
         // 2x1 bgr8 with 2 bytes of padding per row.
         let bgr = image("bgr8", 2, 8, &[1, 2, 3, 4, 5, 6, 0, 0]);
         assert_eq!(rgb_of_image(&bgr).expect("bgr8"), [3, 2, 1, 6, 5, 4]);
@@ -527,8 +527,8 @@ mod tests {
         assert_eq!(compressed_role("32FC1; compressedDepth"), ImageRole::Depth);
         assert_eq!(
             compressed_role("bgr8; jpeg compressed bgr8"),
-            ImageRole::Colour
+            ImageRole::Color
         );
-        assert_eq!(compressed_role("jpeg"), ImageRole::Colour);
+        assert_eq!(compressed_role("jpeg"), ImageRole::Color);
     }
 }

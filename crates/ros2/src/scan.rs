@@ -13,7 +13,7 @@ use crate::msg::{
 };
 use crate::pairing::{group_cameras, pair_nearest};
 use crate::pixels::{
-    COLOUR_ENCODINGS, DEPTH_ENCODINGS, ImageRole, check_image, compressed_image_size,
+    COLOR_ENCODINGS, DEPTH_ENCODINGS, ImageRole, check_image, compressed_image_size,
     compressed_role, image_role,
 };
 use crate::tf::{TfSource, TfTree};
@@ -255,9 +255,9 @@ impl BagScan {
         if content_role != Some(role) {
             let (field, supported) = match (scan.kind, role) {
                 (MsgKind::Image, ImageRole::Depth) => ("encoding", DEPTH_ENCODINGS.to_string()),
-                (MsgKind::Image, ImageRole::Colour) => ("encoding", COLOUR_ENCODINGS.to_string()),
+                (MsgKind::Image, ImageRole::Color) => ("encoding", COLOR_ENCODINGS.to_string()),
                 (_, ImageRole::Depth) => ("format", "compressedDepth png".to_string()),
-                (_, ImageRole::Colour) => ("format", "JPEG or PNG".to_string()),
+                (_, ImageRole::Color) => ("format", "JPEG or PNG".to_string()),
             };
             let what = if role == ImageRole::Depth {
                 "depth"
@@ -321,7 +321,7 @@ impl BagScan {
         Ok(CameraSource {
             name: cam.name.clone(),
             depth: self.stream(&cam.name, &cam.depth, ImageRole::Depth)?,
-            colour: self.stream(&cam.name, &cam.colour, ImageRole::Colour)?,
+            color: self.stream(&cam.name, &cam.color, ImageRole::Color)?,
         })
     }
 
@@ -357,7 +357,7 @@ impl BagScan {
         world: &str,
         notes: &mut Vec<String>,
     ) -> Result<RgbdCamera, Ros2Error> {
-        let (depth, colour) = (&s.depth, &s.colour);
+        let (depth, color) = (&s.depth, &s.color);
         let missing = |target: &str, target_topic: &str| Ros2Error::Transform {
             reason: format!(
                 "camera {}: no transform from the depth frame {:?} ({}, stamp {}) to {:?} ({}) \
@@ -377,8 +377,8 @@ impl BagScan {
         };
         let (color_from_depth, dyn_c) = self
             .tf
-            .lookup(&colour.frame_id, &depth.frame_id)
-            .ok_or_else(|| missing(&colour.frame_id, &colour.topic))?;
+            .lookup(&color.frame_id, &depth.frame_id)
+            .ok_or_else(|| missing(&color.frame_id, &color.topic))?;
         let (world_from_depth, dyn_w) = self
             .tf
             .lookup(world, &depth.frame_id)
@@ -389,7 +389,7 @@ impl BagScan {
                 s.name
             ));
         }
-        let mut camera = RgbdCamera::new(&s.name, depth.intrinsics, colour.intrinsics);
+        let mut camera = RgbdCamera::new(&s.name, depth.intrinsics, color.intrinsics);
         camera.color_from_depth = color_from_depth;
         camera.world_from_depth = world_from_depth;
         Ok(camera)
@@ -405,12 +405,12 @@ impl BagScan {
         let mut unpaired = Vec::new();
         for s in sources {
             let d: Vec<i64> = s.depth.messages.iter().map(|m| m.0).collect();
-            let c: Vec<i64> = s.colour.messages.iter().map(|m| m.0).collect();
+            let c: Vec<i64> = s.color.messages.iter().map(|m| m.0).collect();
             let pairs = pair_nearest(&d, &c, max_skew_ns);
             unpaired.push(Unpaired {
                 camera: s.name.clone(),
                 depth: d.len() - pairs.len(),
-                colour: c.len() - pairs.len(),
+                color: c.len() - pairs.len(),
                 pairs: 0,
             });
             pairs_per_camera.push(pairs);
@@ -434,7 +434,7 @@ impl BagScan {
                         let (i, j) = pairs[k];
                         PlannedView {
                             depth: MessageRef::of(&s.depth, i),
-                            colour: MessageRef::of(&s.colour, j),
+                            color: MessageRef::of(&s.color, j),
                         }
                     })
                     .collect::<Vec<_>>();
@@ -495,7 +495,7 @@ pub struct CameraSource {
     /// Its depth stream.
     pub depth: Stream,
     /// Its colour stream.
-    pub colour: Stream,
+    pub color: Stream,
 }
 
 impl CameraSource {
@@ -516,7 +516,7 @@ impl CameraSource {
                 }
             )
         };
-        let registered = if self.depth.frame_id == self.colour.frame_id {
+        let registered = if self.depth.frame_id == self.color.frame_id {
             "; registered (one frame)"
         } else {
             ""
@@ -525,7 +525,7 @@ impl CameraSource {
             "camera {}: depth {}, colour {}{registered}",
             self.name,
             line(&self.depth),
-            line(&self.colour)
+            line(&self.color)
         )
     }
 }
@@ -558,7 +558,7 @@ pub struct PlannedView {
     /// The depth image.
     pub depth: MessageRef,
     /// The colour image.
-    pub colour: MessageRef,
+    pub color: MessageRef,
 }
 
 /// One frame: a view per camera, rig order.
@@ -578,7 +578,7 @@ pub struct Unpaired {
     /// Depth images without a colour image within the skew.
     pub depth: usize,
     /// Colour images without a depth image within the skew.
-    pub colour: usize,
+    pub color: usize,
     /// Depth-colour pairs that no frame took (another camera had none within the skew).
     pub pairs: usize,
 }

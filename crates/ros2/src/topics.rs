@@ -95,7 +95,7 @@ impl StreamName {
         Some(if stream.starts_with("image_depth") {
             ImageRole::Depth
         } else {
-            ImageRole::Colour
+            ImageRole::Color
         })
     }
 }
@@ -124,7 +124,7 @@ pub struct CameraTopics {
     /// The depth stream.
     pub depth: StreamName,
     /// The colour stream.
-    pub colour: StreamName,
+    pub color: StreamName,
     /// Other candidates that were not taken, for the user.
     pub notes: Vec<String>,
 }
@@ -142,7 +142,7 @@ fn depth_rank(s: &StreamName) -> (u32, bool, String) {
 }
 
 /// Preference of a colour stream given the chosen depth stream.
-fn colour_rank(s: &StreamName, depth: &StreamName) -> (u32, bool, String) {
+fn color_rank(s: &StreamName, depth: &StreamName) -> (u32, bool, String) {
     let registered_res = depth
         .iai
         .as_ref()
@@ -190,10 +190,10 @@ fn choose(name: &str, topics: &[&ImageTopic], prefix: &str) -> Result<CameraTopi
             ),
         })?
         .clone();
-    let colours = of_role(ImageRole::Colour);
-    let colour = colours
+    let colors = of_role(ImageRole::Color);
+    let color = colors
         .iter()
-        .min_by_key(|s| colour_rank(s, &depth))
+        .min_by_key(|s| color_rank(s, &depth))
         .copied()
         .ok_or_else(|| Ros2Error::Camera {
             reason: format!(
@@ -204,9 +204,9 @@ fn choose(name: &str, topics: &[&ImageTopic], prefix: &str) -> Result<CameraTopi
         .clone();
     let others: Vec<&str> = depths
         .iter()
-        .chain(&colours)
+        .chain(&colors)
         .map(|s| s.topic.as_str())
-        .filter(|t| *t != depth.topic && *t != colour.topic)
+        .filter(|t| *t != depth.topic && *t != color.topic)
         .collect();
     let notes = if others.is_empty() {
         Vec::new()
@@ -214,14 +214,14 @@ fn choose(name: &str, topics: &[&ImageTopic], prefix: &str) -> Result<CameraTopi
         vec![format!(
             "camera {name}: depth from {}, colour from {}; not used: {}",
             depth.topic,
-            colour.topic,
+            color.topic,
             others.join(", ")
         )]
     };
     Ok(CameraTopics {
         name: name.to_string(),
         depth,
-        colour,
+        color,
         notes,
     })
 }
@@ -302,7 +302,7 @@ pub fn find_cameras(
             .filter(|n| !n.is_empty())
             .unwrap_or("camera");
         let has = |role| members.iter().any(|t| t.role() == Some(role));
-        let rgbd = has(ImageRole::Depth) && has(ImageRole::Colour);
+        let rgbd = has(ImageRole::Depth) && has(ImageRole::Color);
         if !iai && !rgbd {
             // A colour-only or depth-only group in a free layout is not an RGB-D camera.
             continue;
@@ -369,17 +369,17 @@ mod tests {
     }
 
     #[test]
-    fn iai_cameras_take_raw_depth_and_raw_colour_first() {
+    fn iai_cameras_take_raw_depth_and_raw_color_first() {
         use ImageRole::*;
         let topics = [
             topic("/k1/sd/image_depth", Some(Depth)),
             topic("/k1/sd/image_depth_rect", Some(Depth)),
-            topic("/k1/qhd/image_color", Some(Colour)),
-            topic("/k1/qhd/image_color/compressed", Some(Colour)),
+            topic("/k1/qhd/image_color", Some(Color)),
+            topic("/k1/qhd/image_color/compressed", Some(Color)),
             topic("/k1/sd/image_ir", Some(Depth)),
             topic("/k0/qhd/image_depth_rect", Some(Depth)),
-            topic("/k0/qhd/image_color_rect", Some(Colour)),
-            topic("/k0/hd/image_color", Some(Colour)),
+            topic("/k0/qhd/image_color_rect", Some(Color)),
+            topic("/k0/hd/image_color", Some(Color)),
         ];
         let cams = find_cameras(&topics, &[]).expect("cameras");
         let names: Vec<(&str, &str, &str)> = cams
@@ -388,7 +388,7 @@ mod tests {
                 (
                     c.name.as_str(),
                     c.depth.topic.as_str(),
-                    c.colour.topic.as_str(),
+                    c.color.topic.as_str(),
                 )
             })
             .collect();
@@ -410,9 +410,9 @@ mod tests {
     fn chosen_prefixes_and_free_layouts() {
         use ImageRole::*;
         let topics = [
-            topic("/cam/color/image_raw", Some(Colour)),
+            topic("/cam/color/image_raw", Some(Color)),
             topic("/cam/depth/image_rect_raw", Some(Depth)),
-            topic("/webcam/image_raw", Some(Colour)),
+            topic("/webcam/image_raw", Some(Color)),
         ];
         let cams = find_cameras(&topics, &[]).expect("found by first component");
         assert_eq!(cams.len(), 1);
