@@ -457,3 +457,62 @@ fn ros_file_without_distortion_model_is_plumb_bob() {
     assert_eq!(rig.cameras[0].depth.fx, 1168.68);
     assert_eq!(rig.cameras[0].color.distortion.coefficients()[0], -1.04482);
 }
+
+/// `--from openptrack`: ROS camera_info files placed by OpenPTrack's poses; without
+/// `--poses` it is refused before anything is read.
+#[test]
+fn openptrack_network_of_ros_cameras() {
+    let dir = tempdir();
+    let d = dir.path();
+    let ros = format!(
+        "{},{}",
+        arg(&calib_fixture("ros/azure_kinect_depth_nfov_unbinned.yaml")),
+        arg(&calib_fixture("ros/azure_kinect_rgb_720p.yaml"))
+    );
+    let before = files_in(d);
+    let out = bodyseg(
+        d,
+        &[
+            "rig",
+            "import",
+            "--from",
+            "openptrack",
+            &ros,
+            "--name",
+            "kinect02",
+            "--out",
+            "rig.toml",
+        ],
+    );
+    assert_fails(&out, d, &before, &["--from openptrack needs --poses"]);
+    let poses = calib_fixture("openptrack/open_ptrack_v2/camera_poses.yaml");
+    let out = bodyseg(
+        d,
+        &[
+            "rig",
+            "import",
+            "--from",
+            "openptrack",
+            &ros,
+            "--name",
+            "kinect02",
+            "--poses",
+            arg(&poses),
+            "--out",
+            "rig.toml",
+        ],
+    );
+    assert_ok(&out, "rig import --from openptrack");
+    let rig = read_rig(&d.join("rig.toml")).expect("rig.toml reads");
+    assert_eq!(rig.cameras.len(), 1);
+    // kinect02's pose (translation 1.74838, -2.65512, 3.82138) places the colour sensor:
+    // world_from_color = world_from_depth · depth_from_color.
+    let cam = &rig.cameras[0];
+    let world_from_color = cam
+        .world_from_depth
+        .compose(&cam.color_from_depth.inverse());
+    let t = world_from_color.translation_m();
+    for (got, want) in t.iter().zip([1.74838, -2.65512, 3.82138]) {
+        assert!((got - want).abs() < 1e-5, "{t:?}");
+    }
+}

@@ -1101,6 +1101,9 @@ to that sensor (depth_registered): both sensors get its intrinsics.
 4, 5 or 8 values, image_width, image_height), e.g. from cv::FileStorage or `bodyseg \
 calibrate intrinsics`. XML files need bodyseg built with --features opencv.
 
+--from openptrack: an OpenPTrack network: INPUTs as for ros (its sensors' camera_info \
+files), and --poses is required.
+
 World poses: none of these formats holds one. --poses reads OpenPTrack's \
 camera_poses.yaml (opt_calibration's output): each camera's pose is that of the sensor \
 of the same name (name the cameras after OpenPTrack's sensors with --name). OpenPTrack \
@@ -1129,6 +1132,10 @@ Examples:
   # A Kinect v2 and a ROS camera (depth and colour camera_info), two formats:
   bodyseg rig import --from iai_kinect2 --from ros calib/011054343347 \\
       ros/depth.yaml,ros/rgb.yaml --name left --name right --out rig.toml
+  # An OpenPTrack network of ROS cameras (camera_info files named after its sensors):
+  bodyseg rig import --from openptrack cam01_depth.yaml,cam01_rgb.yaml \\
+      cam02_depth.yaml,cam02_rgb.yaml --name cam01 --name cam02 \\
+      --poses opt_calibration/conf/camera_poses.yaml --out rig.toml
   # Check what was imported:
   bodyseg rig show rig.toml";
 
@@ -1202,6 +1209,10 @@ pub enum ImportFormat {
     /// OpenCV FileStorage intrinsics, DEPTH,COLOR
     #[value(name = "opencv")]
     OpenCv,
+    /// An OpenPTrack network: each sensor's ROS camera_info YAML (DEPTH,COLOR, as its
+    /// drivers store them), placed by opt_calibration's camera_poses.yaml (--poses, required)
+    #[value(name = "openptrack")]
+    OpenPTrack,
 }
 
 impl From<ImportFormat> for RigFormat {
@@ -1211,6 +1222,9 @@ impl From<ImportFormat> for RigFormat {
             ImportFormat::AzureKinect => RigFormat::AzureKinect,
             ImportFormat::Ros => RigFormat::Ros,
             ImportFormat::OpenCv => RigFormat::OpenCv,
+            // OpenPTrack's intrinsics are ROS camera_info files; its own part, the world
+            // poses, is --poses (checked in `options`).
+            ImportFormat::OpenPTrack => RigFormat::Ros,
         }
     }
 }
@@ -1219,6 +1233,12 @@ impl RigImportArgs {
     /// The pipeline's options for `import_rig`: each INPUT with its format (`DEPTH,COLOR`
     /// split for one-sensor formats).
     pub fn options(&self) -> Result<RigImportOptions> {
+        if self.from.contains(&ImportFormat::OpenPTrack) && self.poses.is_none() {
+            bail!(
+                "--from openptrack needs --poses camera_poses.yaml (opt_calibration's output, \
+                 e.g. opt_calibration/conf/camera_poses.yaml)"
+            );
+        }
         let formats: Vec<RigFormat> = match self.from.as_slice() {
             [one] => vec![(*one).into(); self.inputs.len()],
             many if many.len() == self.inputs.len() => many.iter().map(|&f| f.into()).collect(),
