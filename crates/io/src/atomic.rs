@@ -66,10 +66,10 @@ where
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    // Dropping `tmp` on any early return deletes the temporary file.
-    let mut tmp = builder.tempfile_in(dir).map_err(wrap)?;
-    // Known to `remove_temporaries` (a signal handler) until renamed or deleted.
-    let _in_flight = InFlight::new(tmp.path());
+    // Dropping `tmp` on any early return deletes the temporary file. Created and
+    // registered in one step, so `remove_temporaries` (a signal handler) sees every
+    // temporary until it is renamed or deleted, and none is created after it ran.
+    let (mut tmp, _in_flight) = tempfile_registered(&builder, dir).map_err(wrap)?;
     {
         let mut w = BufWriter::new(tmp.as_file_mut());
         write(&mut w).map_err(wrap)?;
@@ -110,8 +110,47 @@ pub fn sync_file_system(folder: &Path) -> Result<(), IoError> {
     }
 }
 
-/// The temporary files of [`write_atomic_with`] being written now, process-wide.
-static IN_FLIGHT: std::sync::Mutex<Vec<std::path::PathBuf>> = std::sync::Mutex::new(Vec::new());
+/// The temporary files of [`write_atomic_with`] being written now, process-wide, and
+/// whether [`remove_temporaries`] has run (then no new temporary is created).
+static IN_FLIGHT: std::sync::Mutex<InFlightFiles> = std::sync::Mutex::new(InFlightFiles {
+    paths: Vec::new(),
+    closed: false,
+});
+
+/// What [`IN_FLIGHT`] guards.
+#[derive(Debug)]
+struct InFlightFiles {
+    paths: Vec<std::path::PathBuf>,
+    closed: bool,
+}
+
+fn in_flight() -> std::sync::MutexGuard<'static, InFlightFiles> {
+    match IN_FLIGHT.lock() {
+        Ok(v) => v,
+        Err(poisoned) => poisoned.into_inner(),
+    }
+}
+
+/// Creates a temporary file in `dir` and registers it, under the registry's lock: a
+/// signal handler's [`remove_temporaries`] either sees it or runs before it is created,
+/// and after that handler no temporary is created at all (the write fails instead: the
+/// process is about to exit).
+fn tempfile_registered(
+    builder: &tempfile::Builder<'_, '_>,
+    dir: &Path,
+) -> std::io::Result<(tempfile::NamedTempFile, InFlight)> {
+    let mut state = in_flight();
+    if state.closed {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::Interrupted,
+            "interrupted: the process is ending, no new file is written",
+        ));
+    }
+    let tmp = builder.tempfile_in(dir)?;
+    let path = tmp.path().to_path_buf();
+    state.paths.push(path.clone());
+    Ok((tmp, InFlight(path)))
+}
 
 /// Registers a temporary file in [`IN_FLIGHT`] while it lives (also a folder's lock file,
 /// which [`remove_temporaries`] removes too).
@@ -121,19 +160,16 @@ pub(crate) struct InFlight(std::path::PathBuf);
 impl InFlight {
     pub(crate) fn new(path: &Path) -> InFlight {
         let path = path.to_path_buf();
-        if let Ok(mut v) = IN_FLIGHT.lock() {
-            v.push(path.clone());
-        }
+        in_flight().paths.push(path.clone());
         InFlight(path)
     }
 }
 
 impl Drop for InFlight {
     fn drop(&mut self) {
-        if let Ok(mut v) = IN_FLIGHT.lock()
-            && let Some(i) = v.iter().position(|p| *p == self.0)
-        {
-            v.swap_remove(i);
+        let mut state = in_flight();
+        if let Some(i) = state.paths.iter().position(|p| *p == self.0) {
+            state.paths.swap_remove(i);
         }
     }
 }
@@ -143,18 +179,18 @@ impl Drop for InFlight {
 /// `.bodyseg-*.tmp` behind. Returns how many were removed. A write that finishes
 /// meanwhile is unaffected (its file was renamed: nothing to remove).
 pub fn remove_temporaries() -> usize {
+    in_flight().closed = true;
     remove_temporaries_where(|_| true)
 }
 
 /// [`remove_temporaries`] for the paths `which` selects (the others stay registered).
 fn remove_temporaries_where(which: impl Fn(&Path) -> bool) -> usize {
     let paths: Vec<std::path::PathBuf> = {
-        let mut v = match IN_FLIGHT.lock() {
-            Ok(v) => v,
-            Err(poisoned) => poisoned.into_inner(),
-        };
-        let (take, keep) = std::mem::take(&mut *v).into_iter().partition(|p| which(p));
-        *v = keep;
+        let mut state = in_flight();
+        let (take, keep) = std::mem::take(&mut state.paths)
+            .into_iter()
+            .partition(|p| which(p));
+        state.paths = keep;
         take
     };
     paths
