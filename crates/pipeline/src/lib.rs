@@ -18,6 +18,8 @@
 //! eval_files:      predicted PLY(s) + ground-truth PLY → Report;  merge_reports: reports → Report
 //! run_recording:   a recording, every frame through every stage → clouds, boxes, label images, report
 //! convert_dataset: recordings or 3DPeople, resumable and sharded → clouds (+ reports)
+//! view_run:        a recording + a finished run's files → a Rerun recording (.rrd; feature `rerun`,
+//!                  as `--rerun` on run_recording / convert_dataset)
 //! import_rig, read_rig, describe_rig: calibration files (iai_kinect2, Azure Kinect, ROS, OpenCV;
 //!                  OpenPTrack poses) ⇄ rig.toml
 //! calibrate_*:     chessboard images → intrinsics, colour-from-depth, world poses (feature `opencv`)
@@ -68,6 +70,8 @@ mod run;
 mod stage;
 mod synth;
 mod threedpeople;
+mod view;
+mod viewer;
 
 pub use allocator::keep_freed_memory;
 pub use batch::{
@@ -106,3 +110,4 @@ pub use synth::{SceneSource, SynthOptions, SynthSummary, synth_recording};
 pub use threedpeople::{
     ThreeDPeopleCamera, ThreeDPeopleView, list_3dpeople_views, read_3dpeople_view,
 };
+pub use view::{ViewOptions, ViewSummary, view_run};

@@ -14,6 +14,10 @@
 //! config.resolved.toml             the configuration that made all this
 //! run.json                         this run's log: frames processed, skipped, failed; times
 //! ```
+//!
+//! With `--rerun FILE.rrd` (feature `rerun`) every frame is also logged into a Rerun
+//! recording (bodyseg-view); complete frames are then redone, not skipped, so that the
+//! file has them all (`bodyseg view` writes it from a finished run's outputs instead).
 
 use crate::batch::{BatchFrame, BatchProgress, FrameWriter, Shard};
 use crate::config::PipelineConfig;
@@ -22,6 +26,7 @@ use crate::processor::FrameProcessor;
 use crate::recording::check_stem;
 use crate::report::{ReportTarget, RunSummary, figure_outputs, write_reports};
 use crate::stage::{Stage, plural, timed};
+use crate::viewer::RerunOutput;
 use anyhow::{Result, bail};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -63,6 +68,9 @@ pub struct RunOptions {
     pub label_images: bool,
     /// Redo frames that are already complete.
     pub redo: bool,
+    /// Also log every frame into this Rerun file (`.rrd`, feature `rerun`); complete
+    /// frames are then redone.
+    pub rerun: Option<PathBuf>,
 }
 
 impl RunOptions {
@@ -81,6 +89,7 @@ impl RunOptions {
             figures: FigureChoice::Middle,
             label_images: true,
             redo: false,
+            rerun: None,
         }
     }
 
@@ -132,6 +141,11 @@ pub fn run_recording(
             .with_stage_clouds(opts.write_stages)
             .with_label_images(opts.label_images);
         let all = processor.recording().frames()?.complete;
+        let rerun = match &opts.rerun {
+            Some(path) => Some(RerunOutput::create(path, processor.recording(), &all)?),
+            None => None,
+        };
+        let processor = processor.with_sink(rerun.as_ref().map(RerunOutput::sink));
         let frames = match &opts.frames {
             None => all,
             Some(want) => {
@@ -161,9 +175,9 @@ pub fn run_recording(
         let figures = figure_frames(&opts.figures, &frames);
         let processor = processor.with_figures(figures.clone());
         bodyseg_io::create_folder(&opts.out)?;
-        Ok((frames, figures, processor))
+        Ok((frames, figures, processor, rerun))
     })?;
-    let (frames, figures, processor) = setup;
+    let (frames, figures, processor, rerun) = setup;
     let mut stages = vec![Stage::new(
         "setup",
         took,
@@ -191,7 +205,7 @@ pub fn run_recording(
         &opts.out,
         opts.shard,
         &hash,
-        opts.redo,
+        opts.redo || rerun.is_some(),
         progress,
         &|f: BatchFrame<'_, ()>, writer: &mut FrameWriter, stages: &mut Vec<Stage>| {
             processor.run_frame(f.id, writer, stages)
@@ -199,6 +213,12 @@ pub fn run_recording(
     )?;
     let fps = outcome.frames_per_second();
     stages.extend(outcome.stage_lines());
+    let mut written_rrd = Vec::new();
+    if let Some(rerun) = &rerun {
+        let (path, took) = timed(|| rerun.finish())?;
+        stages.push(Stage::new("rerun", took, path.display().to_string()));
+        written_rrd.push(path);
+    }
 
     let ((report, written), took) =
         timed(|| write_reports(opts.report_target(), &frames, &outcome, &resolved, fps))?;
@@ -216,7 +236,7 @@ pub fn run_recording(
         frames: opts.shard.share(frames.len()),
         outcome,
         report,
-        written,
+        written: written.into_iter().chain(written_rrd).collect(),
         figures,
         stages,
     })

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 /// bodyseg-pipeline's command modules (one per `bodyseg` command), which must not use one
 /// another.
-const PIPELINE_COMMANDS: [&str; 10] = [
+const PIPELINE_COMMANDS: [&str; 11] = [
     "boxes",
     "calibrate",
     "convert",
@@ -29,6 +29,7 @@ const PIPELINE_COMMANDS: [&str; 10] = [
     "rig",
     "run",
     "synth",
+    "view",
 ];
 
 #[derive(Clone, Debug, PartialEq)]
