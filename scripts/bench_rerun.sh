@@ -14,17 +14,24 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 frames="${1:-24}"
 long="${2:-500}"
 short="${3:-100}"
-bin=target/release/bodyseg
+bin="${BODYSEG:-target/release/bodyseg}"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
+# The synthetic recordings are kept in RECS (default: a temporary folder) and reused.
+recs="${RECS:-$tmp}"
+mkdir -p "$recs"
 
-"$bin" synth --preset handover --frames "$frames" --seed 1 --no-preview --out "$tmp/rec" >/dev/null 2>&1
+synth() { # synth NAME ARGS...: the recording $recs/NAME, made once
+    local name="$1"; shift
+    [ -f "$recs/$name/rig.toml" ] || "$bin" synth --no-preview "$@" --out "$recs/$name" >/dev/null 2>&1
+}
+synth "handover$frames" --preset handover --frames "$frames" --seed 1
 
 run() { # run OUT [extra args]: wall-clock seconds of one full run
     local out="$1"; shift
     local t0 t1
     t0=$(date +%s.%N)
-    "$bin" --quiet run --recording "$tmp/rec" --out "$out" --parser recorded --figure none --force "$@" >/dev/null
+    "$bin" --quiet run --recording "$recs/handover$frames" --out "$out" --parser recorded --figure none --force "$@" >/dev/null
     t1=$(date +%s.%N)
     echo "$t1 - $t0" | bc -l
 }
@@ -45,8 +52,8 @@ printf 'run, %d frames, 3 cameras: %.3f s/frame without --rerun, %.3f s/frame wi
 # Memory over a long recording: small images, one camera.
 small=(--set rig.cameras=1 --set rig.color_width=480 --set people.count=1)
 for n in "$short" "$long"; do
-    "$bin" synth --preset single --frames "$n" --seed 2 --no-preview "${small[@]}" --out "$tmp/long$n" >/dev/null 2>&1
-    rss=$( { /usr/bin/time -v "$bin" --quiet run --recording "$tmp/long$n" --out "$tmp/long$n-out" --parser recorded \
+    synth "single$n" --preset single --frames "$n" --seed 2 "${small[@]}"
+    rss=$( { /usr/bin/time -v "$bin" --quiet run --recording "$recs/single$n" --out "$tmp/long$n-out" --parser recorded \
         --figure none --no-label-images --rerun "$tmp/long$n-out/run.rrd" >/dev/null; } 2>&1 | awk '/Maximum resident/ {print $6}')
     printf 'run --rerun, %d frames, 1 camera: max RSS %.1f MB, .rrd %.1f MB\n' "$n" "$(echo "$rss / 1024" | bc -l)" \
         "$(echo "$(stat -c %s "$tmp/long$n-out/run.rrd") / 1000000" | bc -l)"

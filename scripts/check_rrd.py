@@ -133,7 +133,7 @@ def main() -> int:
             got = known + (unknown or 0)
             if got != want:
                 failures.append(
-                    f"frame {stem}: world/{layer} has {known} + {unknown} unknown points, "
+                    f"frame {stem}: world/{layer} has {known} + {unknown or 0} unknown points, "
                     f"the PLY {want}"
                 )
         boxes_file = args.run / "boxes" / f"{stem}.json"
