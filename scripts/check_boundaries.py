@@ -9,7 +9,9 @@
 - only pipeline, the root package (the `bodyseg` binary) and lab (the studies) may depend
   on every crate; no crate depends on lab;
 - testkit is never a normal dependency, and synth is one only of pipeline and the binary:
-  lower crates may use them as dev-dependencies (tests, benches) only.
+  lower crates may use them as dev-dependencies (tests, benches) only;
+- view (the Rerun writer) depends only on core and calib, and it is the only crate that
+  names the Rerun SDK (re_sdk, rerun, re_*), optionally (feature `rerun`).
 
 Prints every violation and exits 1 if there is any; exits 0 and prints a one-line summary
 otherwise. Standard library only; run from anywhere.
@@ -39,6 +41,8 @@ ALLOWED = {
     "ros2": {"core", "calib"},
     "io": {"core"},
     "testkit": {"core"},
+    # The Rerun writer: stage types in, `.rrd` out.
+    "view": {"core", "calib"},
     "pipeline": None,
     # Studies (reports, sweeps, timing tools): may use everything, nothing uses them.
     "lab": None,
@@ -50,6 +54,14 @@ LEAVES = {"lab"}
 
 # Crates that lower crates may use from tests and benches only.
 DEV_ONLY = {"testkit", "synth"}
+# The only crate that may name the Rerun SDK, and only as an optional dependency.
+RERUN_CRATE = "view"
+
+
+def is_rerun(name: str) -> bool:
+    return name in ("rerun", "re_sdk") or name.startswith("re_")
+
+
 # Crates that may have synth as a normal dependency (they "see them all").
 SEES_ALL = {"pipeline", "lab", ROOT_PACKAGE}
 
@@ -90,6 +102,13 @@ def violations(meta: dict) -> list[str]:
             continue
         allowed = ALLOWED[me]
         for dep in pkg["dependencies"]:
+            if is_rerun(dep["name"]):
+                if me != RERUN_CRATE or not dep.get("optional", False):
+                    found.append(
+                        f"{pkg['name']}: depends on {dep['name']}; only {PREFIX}{RERUN_CRATE} "
+                        "may, optionally (feature `rerun`): the default build has no Rerun"
+                    )
+                continue
             if not is_ours(dep["name"]):
                 continue
             other = short(dep["name"])

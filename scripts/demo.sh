@@ -15,6 +15,11 @@
 # labels/ per camera, figures/, report.md, report.json, config.resolved.toml, run.json).
 # Open the PLY files in any point-cloud viewer (MeshLab, CloudCompare): colours are the
 # class palette. Running the demo again reuses the recording's finished frames.
+#
+# run/run.rrd: every stage of every frame as a Rerun recording (cameras, images, 2D labels,
+# clouds, boxes, scores on a timeline): `pip install rerun-sdk==0.36.3`, then
+# `rerun demo_out/run/run.rrd`. Building the `rerun` feature for it adds the Rerun SDK's
+# dependencies to the first build (several minutes); DEMO_RERUN=0 skips it.
 set -euo pipefail
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -29,8 +34,13 @@ fi
 echo "==> ONNX Runtime (once)"
 scripts/setup_onnxruntime.sh
 
-echo "==> building (release)"
-cargo build --release --quiet --bin bodyseg
+rerun="${DEMO_RERUN:-1}"
+features=()
+if [ "$rerun" = 1 ]; then
+    features=(--features rerun)
+fi
+echo "==> building (release${features:+, ${features[*]}})"
+cargo build --release --quiet --bin bodyseg "${features[@]}"
 bodyseg=target/release/bodyseg
 
 mkdir -p "$out"
@@ -40,7 +50,11 @@ if [ ! -f "$out/rec/rig.toml" ] || [ "$(ls "$out/rec/cam0/depth" | wc -l)" -ne "
 fi
 
 echo "==> bodyseg run: people from depth, BlazePose, DSA projection, boxes, refinement, evaluation"
-"$bodyseg" run --recording "$out/rec" --parser model --out "$out/run" "${@:3}" | tee "$out/table.md"
+rrd=()
+if [ "$rerun" = 1 ]; then
+    rrd=(--rerun "$out/run/run.rrd")
+fi
+"$bodyseg" run --recording "$out/rec" --parser model --out "$out/run" "${rrd[@]}" "${@:3}" | tee "$out/table.md"
 
 echo
 echo "The table: $out/run/report.md (also $out/run/report.json)"
@@ -48,3 +62,7 @@ echo "Refined clouds: $out/run/clouds/<frame>.ply; labels drawn back into the ca
 for f in "$out"/run/figures/*.png; do
     echo "Figure (input, clusters, M, N, M-N, M-R-N, truth): $f"
 done
+if [ "$rerun" = 1 ]; then
+    echo "Rerun recording (every stage, every frame): $out/run/run.rrd"
+    echo "  open it: pip install rerun-sdk==0.36.3 && rerun $out/run/run.rrd"
+fi

@@ -72,6 +72,15 @@ else
     echo "skipped: pip install numpy pillow scipy to test the benchmark scripts"
 fi
 
+step "Rerun Python SDK for tests/cli_rerun.rs (rerun-sdk[datafusion]==0.36.3 in .venv-rerun; ~4 min once)"
+# The e2e test of `--rerun` reads the .rrd back with the SDK of the Rust crate's version
+# (Cargo.toml's re_sdk); it skips, saying so, when this Python has no SDK.
+if [ ! -x .venv-rerun/bin/python ] || ! .venv-rerun/bin/python -c "import rerun, datafusion" >/dev/null 2>&1; then
+    python3 -m venv .venv-rerun && .venv-rerun/bin/pip install -q "rerun-sdk[datafusion]==0.36.3" \
+        || echo "warning: rerun-sdk not installed: the .rrd check of tests/cli_rerun.rs is skipped"
+fi
+export BODYSEG_RERUN_PYTHON="$PWD/.venv-rerun/bin/python"
+
 step "cargo test --workspace --all-features --release"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

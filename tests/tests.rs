@@ -16,6 +16,7 @@ mod cli_import_ros2;
 mod cli_parse;
 mod cli_project;
 mod cli_refine;
+mod cli_rerun;
 mod cli_rig;
 mod cli_run;
 mod cli_synth;

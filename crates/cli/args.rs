@@ -126,6 +126,10 @@ pub enum Command {
     /// clouds
     #[command(subcommand)]
     Import(ImportCommand),
+    /// Write a Rerun recording (.rrd) of a finished run from its files: cameras, images,
+    /// 2D labels, clouds, person boxes, scores on a frame timeline (feature `rerun`)
+    #[command(long_about = VIEW_LONG_ABOUT, after_help = VIEW_EXAMPLES)]
+    View(ViewArgs),
 }
 
 const VERSION_LONG_ABOUT: &str = "\
@@ -251,6 +255,47 @@ impl ImportRos2Args {
             world_frame: self.world_frame.clone(),
             max_skew_ms: self.max_skew_ms,
             redo: self.force,
+        }
+    }
+}
+
+const VIEW_LONG_ABOUT: &str = "\
+Write a Rerun recording (.rrd) of a finished `bodyseg run` from its files, without \
+recomputing anything: the recording's colour and depth images and recorded 2D labels, the \
+run's refined clouds (clouds/), projected clouds (stages/, with --write-stages), person \
+boxes (boxes/), label images (labels/) and per-frame scores (frames/). Open it with the \
+Rerun viewer of the same version (`pip install rerun-sdk==0.36.3`, `rerun FILE.rrd`). \
+Entity paths: README \"Rerun\". Needs a build with `--features rerun`.";
+
+const VIEW_EXAMPLES: &str = "\
+Examples:
+  bodyseg run --recording rec --out run1
+  bodyseg view rec --run run1 --rerun run1/run.rrd
+  rerun run1/run.rrd";
+
+/// `bodyseg view`.
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    /// Recording folder (the one the run read)
+    #[arg(value_name = "REC")]
+    pub recording: PathBuf,
+
+    /// The run's output folder (`bodyseg run --out`)
+    #[arg(long, value_name = "OUT")]
+    pub run: PathBuf,
+
+    /// The Rerun file to write
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rerun: PathBuf,
+}
+
+impl ViewArgs {
+    /// The pipeline's options.
+    pub fn options(&self) -> bodyseg_pipeline::ViewOptions {
+        bodyseg_pipeline::ViewOptions {
+            recording: self.recording.clone(),
+            run: self.run.clone(),
+            rerun: self.rerun.clone(),
         }
     }
 }
@@ -1968,6 +2013,12 @@ pub struct BatchArgs {
     /// Also write the projected cloud and one cloud per configuration (stages/)
     #[arg(long)]
     pub write_stages: bool,
+
+    /// Also log every frame processed into a Rerun recording (open it with `rerun
+    /// FILE.rrd`): cameras, images, 2D labels, clouds, person boxes, scores. Needs a build
+    /// with `--features rerun`; convert: one recording only
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rerun: Option<PathBuf>,
 }
 
 impl BatchArgs {
@@ -2054,6 +2105,7 @@ impl RunArgs {
             figures,
             label_images: !self.no_label_images,
             redo: self.batch.force,
+            rerun: self.batch.rerun.clone(),
         })
     }
 }
@@ -2160,6 +2212,7 @@ impl ConvertArgs {
             shard: self.batch.shard.unwrap_or_default(),
             write_stages: self.batch.write_stages,
             redo: self.batch.force,
+            rerun: self.batch.rerun.clone(),
             camera_3dpeople: {
                 let mut camera = match self.intrinsics {
                     Some([w, h, fx, fy, cx, cy]) => {

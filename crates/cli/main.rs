@@ -156,6 +156,15 @@ fn run(cli: &Cli) -> Result<Outcome> {
         }
         Command::Calibrate(cmd) => calibrate(cmd, cli.quiet)?,
         Command::Version(args) => version(args, cli.verbose)?,
+        Command::View(args) => {
+            let summary = bodyseg_pipeline::view_run(&args.options())?;
+            print_stdout(&format!(
+                "rerun: {} ({} frames)\n",
+                summary.written.display(),
+                summary.frames
+            ))?;
+            summary.stages
+        }
     };
     if !cli.quiet {
         for s in stages {

@@ -24,6 +24,7 @@ use crate::recording::{Recording, check_folder_name};
 use crate::report::{ReportTarget, RunSummary, write_reports};
 use crate::stage::{Stage, plural, timed};
 use crate::threedpeople::{ThreeDPeopleCamera, list_3dpeople_views, read_3dpeople_view};
+use crate::viewer::RerunOutput;
 use anyhow::{Context, Result, bail};
 use bodyseg_eval::Report;
 use bodyseg_io::{PlyColors, PlyFormat, PlyWriteOptions};
@@ -59,6 +60,9 @@ pub struct ConvertOptions {
     pub redo: bool,
     /// 3DPeople: intrinsics, depth unit and palette matching.
     pub camera_3dpeople: ThreeDPeopleCamera,
+    /// One recording: also log every frame into this Rerun file (`.rrd`, feature
+    /// `rerun`; complete frames are redone; no label images in it, convert draws none).
+    pub rerun: Option<PathBuf>,
 }
 
 /// What [`convert_dataset`] did: as `bodyseg run` (no figures).
@@ -141,7 +145,15 @@ fn convert_recordings(
 ) -> Result<ConvertSummary> {
     let (setup, took) = timed(|| -> Result<_> {
         let recordings = list_recordings(&opts.input)?;
+        if opts.rerun.is_some() && recordings.len() != 1 {
+            bail!(
+                "--rerun: {} holds {} recordings; a Rerun file is written for one recording",
+                opts.input.display(),
+                recordings.len()
+            );
+        }
         bodyseg_io::create_folder(&opts.out)?;
+        let mut rerun = None;
         let mut processors = Vec::new();
         let mut jobs: Vec<(String, (usize, String))> = Vec::new();
         for (k, (name, path)) in recordings.iter().enumerate() {
@@ -155,15 +167,25 @@ fn convert_recordings(
                 .with_stage_clouds(opts.write_stages)
                 .with_label_images(false)
                 .with_prefix(prefix.clone());
+            let processor = match &opts.rerun {
+                Some(file) => {
+                    let all = processor.recording().frames()?.complete;
+                    let out = RerunOutput::create(file, processor.recording(), &all)?;
+                    let processor = processor.with_sink(Some(out.sink()));
+                    rerun = Some(out);
+                    processor
+                }
+                None => processor,
+            };
             for frame in processor.recording().frames()?.complete {
                 jobs.push((format!("{prefix}{frame}"), (k, frame)));
             }
             processors.push(processor);
         }
         jobs.sort_by(|a, b| a.0.cmp(&b.0));
-        Ok((recordings, processors, jobs))
+        Ok((recordings, processors, jobs, rerun))
     })?;
-    let (recordings, processors, jobs) = setup;
+    let (recordings, processors, jobs, rerun) = setup;
     let _lock = crate::batch::lock_output(&opts.out, opts.shard)?;
     let mut stages = vec![Stage::new(
         "setup",
@@ -184,7 +206,8 @@ fn convert_recordings(
         &opts.out,
         opts.shard,
         &hash,
-        opts.redo,
+        // A Rerun file has every frame: none is skipped as complete.
+        opts.redo || rerun.is_some(),
         progress,
         &|f: BatchFrame<'_, (usize, String)>,
           writer: &mut FrameWriter,
@@ -196,6 +219,10 @@ fn convert_recordings(
     )?;
     let fps = outcome.frames_per_second();
     stages.extend(outcome.stage_lines());
+    if let Some(rerun) = &rerun {
+        let (path, took) = timed(|| rerun.finish())?;
+        stages.push(Stage::new("rerun", took, path.display().to_string()));
+    }
 
     // Reports per recording (its records and failures), then over all recordings.
     let (written_report, took) = timed(|| -> Result<_> {
@@ -274,6 +301,9 @@ fn convert_3dpeople(
     opts: &ConvertOptions,
     progress: &(dyn Fn(BatchProgress) + Sync),
 ) -> Result<ConvertSummary> {
+    if opts.rerun.is_some() {
+        bail!("--rerun: only for a bodyseg recording, not --format 3dpeople");
+    }
     let (views, took) = timed(|| -> Result<_> {
         let views = list_3dpeople_views(&opts.input)?;
         if views.is_empty() {

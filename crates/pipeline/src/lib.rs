@@ -20,6 +20,8 @@
 //! convert_dataset: recordings or 3DPeople, resumable and sharded → clouds (+ reports)
 //! import_ros2:     a ROS 2 bag (MCAP) → bodyseg_ros2 (scan, plan, decode) → a recording
 //! import_cloud:    organised clouds (PCD, PLY) → a one-camera recording (grid-fitted intrinsics, floor-given world frame)
+//! view_run:        a recording + a finished run's files → a Rerun recording (.rrd; feature `rerun`,
+//!                  as `--rerun` on run_recording / convert_dataset)
 //! import_rig, read_rig, describe_rig: calibration files (iai_kinect2, Azure Kinect, ROS, OpenCV;
 //!                  OpenPTrack poses) ⇄ rig.toml
 //! calibrate_*:     chessboard images → intrinsics, colour-from-depth, world poses (feature `opencv`)
@@ -75,6 +77,8 @@ mod sanity;
 mod stage;
 mod synth;
 mod threedpeople;
+mod view;
+mod viewer;
 
 pub use allocator::keep_freed_memory;
 pub use batch::{
@@ -118,3 +122,4 @@ pub use synth::{SceneSource, SynthOptions, SynthSummary, synth_recording};
 pub use threedpeople::{
     ThreeDPeopleCamera, ThreeDPeopleView, list_3dpeople_views, read_3dpeople_view,
 };
+pub use view::{ViewOptions, ViewSummary, view_run};

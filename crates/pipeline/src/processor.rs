@@ -32,7 +32,7 @@ use bodyseg_project::{CameraImages, FrameProjector, Hits};
 use bodyseg_refine::{NoiseMode, PointEvidence, RefinedVariants, Steps, VoteMode};
 use std::collections::BTreeSet;
 use std::path::Path;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 /// The configurations of the paper's table, in its order.
 pub(crate) const ABLATION: [Steps; 5] = Steps::PAPER;
@@ -61,6 +61,8 @@ pub struct FrameProcessor {
     views: Vec<LabelView>,
     /// Prepended to every output path (a recording's folder in a batch of recordings).
     prefix: String,
+    /// Where each processed frame's stages also go (`--rerun`); `None`: nowhere.
+    sink: Option<Arc<dyn bodyseg_view::FrameSink>>,
 }
 
 /// One worker's buffers.
@@ -142,6 +144,7 @@ impl FrameProcessor {
             figure_frames: BTreeSet::new(),
             views,
             prefix: String::new(),
+            sink: None,
         })
     }
 
@@ -167,6 +170,13 @@ impl FrameProcessor {
     /// Writes this recording's files under `OUT/<prefix>` (`prefix` ends with `/`).
     pub fn with_prefix(mut self, prefix: String) -> FrameProcessor {
         self.prefix = prefix;
+        self
+    }
+
+    /// Also hands each processed frame's stages to `sink` (the `.rrd` writer of `--rerun`);
+    /// the colour images are then read and kept.
+    pub fn with_sink(mut self, sink: Option<Arc<dyn bodyseg_view::FrameSink>>) -> FrameProcessor {
+        self.sink = sink;
         self
     }
 
@@ -202,7 +212,7 @@ impl FrameProcessor {
     pub fn needs(&self) -> FrameNeeds {
         FrameNeeds {
             depth: true,
-            color: self.segmenter_needs.color || self.needs_colors(),
+            color: self.segmenter_needs.color || self.needs_colors() || self.sink.is_some(),
             parsing: self.segmenter_needs.parsing,
             truth: self.has_truth,
         }
@@ -237,7 +247,7 @@ impl FrameProcessor {
                 .map_err(|_| anyhow::anyhow!("the parser failed on an earlier frame"))?;
             parse_frame(frame, self.rig(), segmenter.as_mut(), &self.config)
         })?;
-        if !self.needs_colors() {
+        if !self.needs_colors() && self.sink.is_none() {
             parsed.frame.color = None;
         }
         let source = if self.uses_model { "model" } else { "recorded" };
@@ -427,7 +437,7 @@ impl FrameProcessor {
                 &boxes.boxes,
                 &cfg.refine,
                 &steps,
-                figure,
+                figure || self.sink.is_some(),
             )
             .context("refinement")
         })?;
@@ -438,9 +448,9 @@ impl FrameProcessor {
             .unwrap_or(steps.len() - 1);
 
         // The truth of every point, once: scored here, drawn in the figure.
-        let ((gt, scores), took) = timed(|| -> Result<_> {
+        let ((gt, scores, series), took) = timed(|| -> Result<_> {
             let Some(truth) = &inputs.truth else {
-                return Ok((None, None));
+                return Ok((None, None, Vec::new()));
             };
             let gt = truth_labels(cloud, truth)?;
             let mut report = Report::new();
@@ -448,11 +458,17 @@ impl FrameProcessor {
                 report.push(s.to_string(), bodyseg_eval::score_aligned(labels, &gt)?)?;
             }
             let scores: serde_json::Value = serde_json::from_str(&report.to_json()?)?;
-            Ok((Some(gt), Some(scores)))
+            let series = match self.sink {
+                Some(_) => crate::viewer::score_series(&report),
+                None => Vec::new(),
+            };
+            Ok((Some(gt), Some(scores), series))
         })?;
         stages.push(Stage::new("eval", took, String::new()));
 
         let prefix = &self.prefix;
+        // The label images drawn, kept for the sink.
+        let mut drawn: Vec<LabelImage> = Vec::new();
         let ((), took) = timed(|| -> Result<()> {
             // Unsynced: the batch syncs once at its end (see the `batch` module).
             let ply = PlyWriteOptions {
@@ -484,6 +500,9 @@ impl FrameProcessor {
                         self.rig().cameras.iter().zip(&self.views).enumerate()
                     {
                         view.render_into(c, index as u8, Some(hits), keys, label_image);
+                        if self.sink.is_some() {
+                            drawn.push(label_image.clone());
+                        }
                         writer.write(
                             &format!("{prefix}labels/{}/{frame}.png", camera.name),
                             |p| {
@@ -528,6 +547,23 @@ impl FrameProcessor {
                 Ok(())
             })?;
             stages.push(Stage::new("figure", took, String::new()));
+        }
+
+        if let Some(sink) = &self.sink {
+            let ((), took) = timed(|| -> Result<()> {
+                let view = crate::viewer::view_frame(
+                    parsed,
+                    cloud,
+                    &variants.labels[main],
+                    &variants.clusters,
+                    &boxes,
+                    &drawn,
+                    series,
+                );
+                sink.write_frame(&view).context("--rerun")?;
+                Ok(())
+            })?;
+            stages.push(Stage::new("rerun", took, String::new()));
         }
 
         Ok(FrameRecord {

@@ -14,6 +14,10 @@
 //! config.resolved.toml             the configuration that made all this
 //! run.json                         this run's log: frames processed, skipped, failed; times
 //! ```
+//!
+//! With `--rerun FILE.rrd` (feature `rerun`) every frame is also logged into a Rerun
+//! recording (bodyseg-view); complete frames are then redone, not skipped, so that the
+//! file has them all (`bodyseg view` writes it from a finished run's outputs instead).
 
 use crate::batch::{BatchFrame, BatchProgress, FrameWriter, Shard};
 use crate::config::PipelineConfig;
@@ -23,6 +27,7 @@ use crate::processor::FrameProcessor;
 use crate::recording::check_stem;
 use crate::report::{ReportTarget, RunSummary, figure_outputs, write_reports};
 use crate::stage::{Stage, plural, timed};
+use crate::viewer::RerunOutput;
 use anyhow::{Result, bail};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -64,6 +69,9 @@ pub struct RunOptions {
     pub label_images: bool,
     /// Redo frames that are already complete.
     pub redo: bool,
+    /// Also log every frame into this Rerun file (`.rrd`, feature `rerun`); complete
+    /// frames are then redone.
+    pub rerun: Option<PathBuf>,
 }
 
 impl RunOptions {
@@ -82,6 +90,7 @@ impl RunOptions {
             figures: FigureChoice::Middle,
             label_images: true,
             redo: false,
+            rerun: None,
         }
     }
 
@@ -138,6 +147,11 @@ pub fn run_recording(
         let listed = processor.recording().frames()?;
         let incomplete = listed.incomplete;
         let all = listed.complete;
+        let rerun = match &opts.rerun {
+            Some(path) => Some(RerunOutput::create(path, processor.recording(), &all)?),
+            None => None,
+        };
+        let processor = processor.with_sink(rerun.as_ref().map(RerunOutput::sink));
         let frames = match &opts.frames {
             None => all,
             Some(want) => {
@@ -167,9 +181,9 @@ pub fn run_recording(
         let figures = figure_frames(&opts.figures, &frames);
         let processor = processor.with_figures(figures.clone());
         bodyseg_io::create_folder(&opts.out)?;
-        Ok((frames, figures, processor, incomplete))
+        Ok((frames, figures, processor, incomplete, rerun))
     })?;
-    let (frames, figures, processor, incomplete) = setup;
+    let (frames, figures, processor, incomplete, rerun) = setup;
     let _lock = crate::batch::lock_output(&opts.out, opts.shard)?;
     if !incomplete.is_empty() {
         let list: Vec<String> = incomplete
@@ -210,7 +224,7 @@ pub fn run_recording(
         &opts.out,
         opts.shard,
         &hash,
-        opts.redo,
+        opts.redo || rerun.is_some(),
         progress,
         &|f: BatchFrame<'_, ()>, writer: &mut FrameWriter, stages: &mut Vec<Stage>| {
             processor.run_frame(f.id, writer, stages)
@@ -218,6 +232,12 @@ pub fn run_recording(
     )?;
     let fps = outcome.frames_per_second();
     stages.extend(outcome.stage_lines());
+    let mut written_rrd = Vec::new();
+    if let Some(rerun) = &rerun {
+        let (path, took) = timed(|| rerun.finish())?;
+        stages.push(Stage::new("rerun", took, path.display().to_string()));
+        written_rrd.push(path);
+    }
 
     let ((report, written), took) = timed(|| {
         write_reports(
@@ -242,7 +262,7 @@ pub fn run_recording(
         frames: opts.shard.share(frames.len()),
         outcome,
         report,
-        written,
+        written: written.into_iter().chain(written_rrd).collect(),
         figures,
         stages,
     })

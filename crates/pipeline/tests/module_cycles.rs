@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 /// bodyseg-pipeline's command modules (one per `bodyseg` command), which must not use one
 /// another.
-const PIPELINE_COMMANDS: [&str; 12] = [
+const PIPELINE_COMMANDS: [&str; 13] = [
     "boxes",
     "calibrate",
     "convert",
@@ -31,6 +31,7 @@ const PIPELINE_COMMANDS: [&str; 12] = [
     "rig",
     "run",
     "synth",
+    "view",
 ];
 
 #[derive(Clone, Debug, PartialEq)]

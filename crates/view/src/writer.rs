@@ -1,0 +1,460 @@
+//! [`ViewWriter`]: a [`FrameSink`] that streams frames into a `.rrd` file with the Rerun
+//! SDK (`re_sdk`). The rig, the class palette and the blueprint are logged once (static);
+//! each frame on the `frame` timeline (and `time`), then dropped: the SDK's batcher
+//! flushes chunks to the file as they fill, so memory stays flat over a recording.
+
+use crate::paths;
+use crate::{CameraView, CloudView, FrameSink, ViewError, ViewFrame};
+use bodyseg_calib::{Intrinsics, Pose, Rig};
+use bodyseg_core::{Class, Label, LabelImage, PersonBox};
+use re_sdk::blueprint::{
+    Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial2DView, Spatial3DView,
+    TimeSeriesView, Vertical,
+};
+use re_sdk::{RecordingStream, RecordingStreamBuilder};
+use re_sdk_types::archetypes::{
+    AnnotationContext, Boxes3D, DepthImage, Image, Pinhole, Points3D, Scalars, SegmentationImage,
+    Transform3D, ViewCoordinates,
+};
+use re_sdk_types::components::ImageFormat;
+use re_sdk_types::datatypes::{
+    Angle, AnnotationInfo, ChannelDatatype, ClassDescription, Quaternion, Rgba32, RotationAxisAngle,
+};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The application id the files carry (the viewer groups recordings by it).
+const APPLICATION_ID: &str = "bodyseg";
+
+/// Colour of unknown points and pixels (id 255): light grey, apart from every class.
+const UNKNOWN_RGB: [u8; 3] = [200, 200, 200];
+
+/// Radius of logged points, metres: about the spacing of a Kinect v2's points at 2 m
+/// with stride 2, so a cloud reads as a surface.
+const POINT_RADIUS_M: f32 = 0.004;
+
+/// Streams a run's frames into a `.rrd` file (see the crate documentation for what is
+/// logged where). Thread-safe: frames may come from any worker in any order; the
+/// timeline, not the order of calls, orders them.
+///
+/// The file is written to `<path>.partial` and renamed to `path` by
+/// [`ViewWriter::finish`]; a writer dropped without `finish` leaves only the partial file.
+/// Frames given after `finish` are dropped (the stream is disconnected).
+pub struct ViewWriter {
+    rec: RecordingStream,
+    path: PathBuf,
+    partial: PathBuf,
+    /// Camera names, rig order.
+    cameras: Vec<String>,
+    /// Each camera's raw depth units per metre (`depth_scale`), rig order.
+    depth_scales: Vec<f32>,
+    /// Frame stem → (index on the `frame` timeline, time stamp in ns).
+    frames: BTreeMap<String, (i64, Option<i64>)>,
+}
+
+impl std::fmt::Debug for ViewWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ViewWriter")
+            .field("path", &self.path)
+            .field("cameras", &self.cameras)
+            .field("frames", &self.frames.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl ViewWriter {
+    /// Creates the file for a recording named `name` with this rig; `frames` are all the
+    /// recording's frames in order (their index is the `frame` timeline), `stamps` their
+    /// time stamps (ns since the Unix epoch, by stem; frames without one get none).
+    /// Logs the cameras, the class annotation and the blueprint.
+    ///
+    /// # Errors
+    /// [`ViewError::Rerun`] when the file cannot be created or the static data not logged.
+    pub fn create(
+        path: &Path,
+        name: &str,
+        rig: &Rig,
+        frames: &[String],
+        stamps: &[(String, i64)],
+    ) -> Result<ViewWriter, ViewError> {
+        let partial = partial_path(path);
+        let err = |e: &dyn std::fmt::Display| ViewError::Rerun {
+            message: e.to_string(),
+            path: path.to_path_buf(),
+        };
+        let rec = RecordingStreamBuilder::new(APPLICATION_ID)
+            .recording_name(name)
+            .save(&partial)
+            .map_err(|e| err(&e))?;
+        let stamps: BTreeMap<&str, i64> = stamps.iter().map(|(s, t)| (s.as_str(), *t)).collect();
+        let frames = frames
+            .iter()
+            .enumerate()
+            .map(|(i, f)| (f.clone(), (i as i64, stamps.get(f.as_str()).copied())))
+            .collect();
+        let writer = ViewWriter {
+            rec,
+            path: path.to_path_buf(),
+            partial,
+            cameras: rig.cameras.iter().map(|c| c.name.clone()).collect(),
+            depth_scales: rig.cameras.iter().map(|c| c.depth_scale as f32).collect(),
+            frames,
+        };
+        writer.log_static(rig).map_err(|e| err(&e))?;
+        Ok(writer)
+    }
+
+    /// The final path of the file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Flushes everything to the file, closes it and renames it into place. Frames
+    /// written after this are dropped.
+    ///
+    /// # Errors
+    /// [`ViewError::Rerun`] when the flush or the rename fails.
+    pub fn finish(&self) -> Result<PathBuf, ViewError> {
+        let err = |e: &dyn std::fmt::Display| ViewError::Rerun {
+            message: e.to_string(),
+            path: self.path.clone(),
+        };
+        self.rec.flush_blocking().map_err(|e| err(&e))?;
+        // Disconnecting drops the file sink, which joins its writer thread: the file is
+        // complete and closed after this.
+        self.rec.disconnect();
+        std::fs::rename(&self.partial, &self.path).map_err(|e| err(&e))?;
+        Ok(self.path.clone())
+    }
+
+    fn log_static(&self, rig: &Rig) -> re_sdk::RecordingStreamResult<()> {
+        let rec = &self.rec;
+        rec.log_static(paths::WORLD, &ViewCoordinates::RIGHT_HAND_Z_UP())?;
+        rec.log_static(paths::WORLD, &annotation_context())?;
+        for camera in &rig.cameras {
+            let world_from_color = camera
+                .world_from_depth
+                .compose(&camera.color_from_depth.inverse());
+            for (entity, pose, intrinsics) in [
+                (
+                    paths::colour(&camera.name),
+                    &world_from_color,
+                    &camera.color,
+                ),
+                (
+                    paths::depth(&camera.name),
+                    &camera.world_from_depth,
+                    &camera.depth,
+                ),
+            ] {
+                rec.log_static(entity.as_str(), &transform(pose))?;
+                rec.log_static(entity.as_str(), &pinhole(intrinsics))?;
+            }
+        }
+        self.blueprint().send(rec, BlueprintActivation::default())
+    }
+
+    /// The layout: the 3D world (clusters left out: add `world/clusters` back in the
+    /// view's entity list), each camera's colour image with its labels, the scores.
+    fn blueprint(&self) -> Blueprint {
+        let world = Spatial3DView::new("world")
+            .with_origin(paths::WORLD)
+            .with_contents([
+                format!("+ /{}/**", paths::WORLD),
+                format!("- /{}", paths::CLUSTERS),
+            ]);
+        let cameras: Vec<ContainerLike> = self
+            .cameras
+            .iter()
+            .map(|c| {
+                Spatial2DView::new(c.as_str())
+                    .with_origin(paths::colour(c).as_str())
+                    .into()
+            })
+            .collect();
+        let scores = TimeSeriesView::new("scores").with_origin(paths::SCORES);
+        Blueprint::new(Horizontal::new([
+            ContainerLike::from(world),
+            Vertical::new([
+                ContainerLike::from(Vertical::new(cameras)),
+                ContainerLike::from(scores),
+            ])
+            .into(),
+        ]))
+    }
+
+    fn write(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
+        let stem = frame.stem;
+        let &(index, stamp) = self
+            .frames
+            .get(stem)
+            .ok_or_else(|| ViewError::UnknownFrame { stem: stem.into() })?;
+        if !frame.cameras.is_empty() && frame.cameras.len() != self.cameras.len() {
+            return Err(ViewError::CameraCount {
+                stem: stem.into(),
+                got: frame.cameras.len(),
+                want: self.cameras.len(),
+            });
+        }
+        let rec = &self.rec;
+        // Per thread: this worker's logs below go to this frame's time.
+        rec.set_time_sequence(paths::FRAME_TIMELINE, index);
+        match stamp {
+            Some(ns) => rec.set_timestamp_nanos_since_epoch(paths::TIME_TIMELINE, ns),
+            None => rec.disable_timeline(paths::TIME_TIMELINE),
+        }
+        let result = self.write_at_time(frame);
+        rec.reset_time();
+        result
+    }
+
+    fn write_at_time(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
+        let stem = frame.stem;
+        for ((name, scale), camera) in self
+            .cameras
+            .iter()
+            .zip(&self.depth_scales)
+            .zip(&frame.cameras)
+        {
+            self.log_camera(stem, name, *scale, camera)?;
+        }
+        for (layer, known, unknown, cloud) in [
+            (
+                "projected",
+                paths::PROJECTED,
+                paths::PROJECTED_UNKNOWN,
+                &frame.projected,
+            ),
+            (
+                "refined",
+                paths::REFINED,
+                paths::REFINED_UNKNOWN,
+                &frame.refined,
+            ),
+        ] {
+            if let Some(cloud) = cloud {
+                self.log_cloud(stem, layer, known, unknown, cloud)?;
+            }
+        }
+        if let (Some(clusters), Some(cloud)) = (frame.clusters, frame.refined.or(frame.projected)) {
+            if clusters.len() != cloud.positions_m.len() {
+                return Err(ViewError::CloudLength {
+                    stem: stem.into(),
+                    layer: "clusters",
+                    positions: cloud.positions_m.len(),
+                    labels: clusters.len(),
+                });
+            }
+            let colors = clusters.iter().map(|c| cluster_color(*c));
+            self.log(
+                paths::CLUSTERS,
+                &Points3D::new(cloud.positions_m.iter().copied())
+                    .with_colors(colors)
+                    .with_radii([POINT_RADIUS_M]),
+            )?;
+        }
+        if let Some(boxes) = frame.boxes {
+            self.log(paths::BOXES, &boxes_3d(boxes))?;
+        }
+        for (name, value) in &frame.scores {
+            self.log(paths::score(name).as_str(), &Scalars::single(*value))?;
+        }
+        Ok(())
+    }
+
+    fn log_camera(
+        &self,
+        stem: &str,
+        name: &str,
+        depth_scale: f32,
+        camera: &CameraView<'_>,
+    ) -> Result<(), ViewError> {
+        let size_err = |what: &'static str, got: usize, width: u32, height: u32, per: usize| {
+            ViewError::ImageSize {
+                stem: stem.into(),
+                camera: name.into(),
+                what,
+                got,
+                want: width as usize * height as usize * per,
+                width,
+                height,
+            }
+        };
+        if let Some(c) = camera.colour {
+            if c.rgb.len() != c.width as usize * c.height as usize * 3 {
+                return Err(size_err("colour", c.rgb.len(), c.width, c.height, 3));
+            }
+            self.log(
+                paths::colour_image(name).as_str(),
+                &Image::from_rgb24(c.rgb.clone(), [c.width, c.height]),
+            )?;
+        }
+        if let Some(d) = camera.depth {
+            if d.raw.len() != d.width as usize * d.height as usize {
+                return Err(size_err("depth", d.raw.len(), d.width, d.height, 1));
+            }
+            let bytes: Vec<u8> = d.raw.iter().flat_map(|v| v.to_le_bytes()).collect();
+            // Rerun's `meter`: raw units per metre, the rig's depth_scale.
+            self.log(
+                paths::depth_image(name).as_str(),
+                &DepthImage::new(
+                    bytes,
+                    ImageFormat::depth([d.width, d.height], ChannelDatatype::U16),
+                )
+                .with_meter(depth_scale),
+            )?;
+        }
+        for (what, entity, labels) in [
+            ("labels", paths::parsed_labels(name), camera.parsed),
+            (
+                "refined labels",
+                paths::refined_labels(name),
+                camera.refined,
+            ),
+        ] {
+            if let Some(l) = labels {
+                if l.labels.len() != l.width as usize * l.height as usize {
+                    return Err(size_err(what, l.labels.len(), l.width, l.height, 1));
+                }
+                self.log(entity.as_str(), &segmentation(l))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn log_cloud(
+        &self,
+        stem: &str,
+        layer: &'static str,
+        known: &str,
+        unknown: &str,
+        cloud: &CloudView<'_>,
+    ) -> Result<(), ViewError> {
+        if cloud.labels.len() != cloud.positions_m.len() {
+            return Err(ViewError::CloudLength {
+                stem: stem.into(),
+                layer,
+                positions: cloud.positions_m.len(),
+                labels: cloud.labels.len(),
+            });
+        }
+        let n_unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
+        let mut known_p = Vec::with_capacity(cloud.labels.len() - n_unknown);
+        let mut known_id = Vec::with_capacity(cloud.labels.len() - n_unknown);
+        let mut unknown_p = Vec::with_capacity(n_unknown);
+        for (p, l) in cloud.positions_m.iter().zip(cloud.labels) {
+            if l.is_unknown() {
+                unknown_p.push(*p);
+            } else {
+                known_p.push(*p);
+                known_id.push(u16::from(l.id()));
+            }
+        }
+        self.log(
+            known,
+            &Points3D::new(known_p)
+                .with_class_ids(known_id)
+                .with_radii([POINT_RADIUS_M]),
+        )?;
+        self.log(
+            unknown,
+            &Points3D::new(unknown_p)
+                .with_class_ids([u16::from(Label::UNKNOWN_ID)])
+                .with_radii([POINT_RADIUS_M]),
+        )
+    }
+
+    fn log(&self, entity: &str, what: &dyn re_sdk::AsComponents) -> Result<(), ViewError> {
+        self.rec.log(entity, what).map_err(|e| ViewError::Rerun {
+            message: format!("{entity}: {e}"),
+            path: self.path.clone(),
+        })
+    }
+}
+
+impl FrameSink for ViewWriter {
+    fn write_frame(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
+        self.write(frame)
+    }
+}
+
+/// `OUT.rrd` → `OUT.rrd.partial`.
+fn partial_path(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".partial");
+    PathBuf::from(name)
+}
+
+/// Our classes with their names and palette, and unknown (255).
+fn annotation_context() -> AnnotationContext {
+    let mut classes: Vec<ClassDescription> = Class::ALL
+        .iter()
+        .map(|c| {
+            let [r, g, b] = c.color();
+            AnnotationInfo::from((u16::from(c.id()), c.name(), Rgba32::from_rgb(r, g, b))).into()
+        })
+        .collect();
+    let [r, g, b] = UNKNOWN_RGB;
+    classes.push(
+        AnnotationInfo::from((
+            u16::from(Label::UNKNOWN_ID),
+            "unknown",
+            Rgba32::from_rgb(r, g, b),
+        ))
+        .into(),
+    );
+    AnnotationContext::new(classes)
+}
+
+/// A pose as a Rerun transform (child to parent: `a_from_b` logged at b's entity).
+fn transform(pose: &Pose) -> Transform3D {
+    let [w, x, y, z] = pose.quaternion_wxyz();
+    let [tx, ty, tz] = pose.translation_m();
+    Transform3D::from_translation_rotation(
+        [tx as f32, ty as f32, tz as f32],
+        Quaternion::from_xyzw([x as f32, y as f32, z as f32, w as f32]),
+    )
+}
+
+/// A sensor's pinhole (its distortion is not modelled by Rerun).
+fn pinhole(k: &Intrinsics) -> Pinhole {
+    Pinhole::from_focal_length_and_resolution(
+        [k.fx as f32, k.fy as f32],
+        [k.width as f32, k.height as f32],
+    )
+    .with_principal_point([k.cx as f32, k.cy as f32])
+}
+
+fn segmentation(l: &LabelImage) -> SegmentationImage {
+    let ids: Vec<u8> = l.labels.iter().map(|l| l.id()).collect();
+    SegmentationImage::new(
+        ids,
+        ImageFormat::segmentation([l.width, l.height], ChannelDatatype::U8),
+    )
+}
+
+fn boxes_3d(boxes: &[PersonBox]) -> Boxes3D {
+    Boxes3D::from_centers_and_half_sizes(
+        boxes.iter().map(|b| b.center_m),
+        boxes.iter().map(|b| b.half_extents_m),
+    )
+    .with_rotation_axis_angles(
+        boxes
+            .iter()
+            .map(|b| RotationAxisAngle::new([0.0, 0.0, 1.0], Angle::from_radians(b.yaw_rad))),
+    )
+    .with_labels(boxes.iter().map(|b| format!("person {}", b.id)))
+}
+
+/// A cluster's colour: a fixed hash of `(person, cluster)` to a bright hue; noise grey.
+fn cluster_color(c: Option<(u32, u32)>) -> Rgba32 {
+    let Some((person, cluster)) = c else {
+        return Rgba32::from_rgb(90, 90, 90);
+    };
+    let h = (person.wrapping_mul(0x9E37_79B9) ^ cluster.wrapping_mul(0x85EB_CA6B))
+        .wrapping_mul(0xC2B2_AE35);
+    let [r, g, b, _] = h.to_le_bytes();
+    // Lifted so that no cluster is near black (the background class's colour).
+    let lift = |v: u8| 64 + v / 4 * 3;
+    Rgba32::from_rgb(lift(r), lift(g), lift(b))
+}

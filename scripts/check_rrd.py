@@ -1,0 +1,183 @@
+#!/usr/bin/env python3
+"""Checks a bodyseg `.rrd` file with the Rerun Python SDK (a real client, not our reader).
+
+    check_rrd.py FILE.rrd --run OUT [--cameras cam0,cam1,cam2] [--expect-scores]
+
+Reads FILE.rrd with `rerun-sdk` (the version of the Rust SDK that wrote it, see
+Cargo.toml's `re_sdk`) through its dataframe API (`rr.experimental.RrdReader(...)
+.stream().collect().reader(index="frame", ...)`, a DataFusion DataFrame) and checks, against
+the run's files in OUT (a run of the whole recording):
+
+- the `frame` timeline has one row per cloud in OUT/clouds/ (indices 0..n-1, the frames in
+  stem order);
+- per frame, the points of world/refined + world/refined_unknown and of world/projected +
+  world/projected_unknown equal the vertex count of OUT/clouds/<stem>.ply;
+- per frame, the boxes of world/boxes equal those of OUT/boxes/<stem>.json;
+- every camera's colour and depth image, 2D labels and refined labels are there for every
+  frame, and its Pinhole and Transform3D (static) at world/cameras/<name>/color and /depth;
+- the AnnotationContext at world; with --expect-scores, scores/<configuration>/biou.
+
+Exit 0 and one summary line when all hold; exit 1 listing every failure; exit 2 when the
+SDK (or its dataframe extra) is not installed: `pip install "rerun-sdk[datafusion]==0.36.3"`.
+"""
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+RERUN_VERSION = "0.36.3"
+
+
+def ply_vertex_count(path: Path) -> int:
+    with open(path, "rb") as f:
+        for raw in f:
+            line = raw.decode("ascii", "replace").strip()
+            if line.startswith("element vertex"):
+                return int(line.split()[2])
+            if line == "end_header":
+                break
+    raise ValueError(f"{path}: no `element vertex` in the header")
+
+
+def column(df, entity: str, archetype: str, component: str) -> str | None:
+    """The DataFrame column of `entity`'s `archetype:component` (names like
+    `/world/refined:Points3D:positions`)."""
+    want = f"/{entity}:{archetype}:{component}"
+    for name in df.columns:
+        if name == want or name.endswith(want):
+            return name
+    return None
+
+
+def batch_len(value) -> int:
+    """Number of instances in one cell (a list of points/boxes), 0 for null."""
+    if value is None:
+        return 0
+    try:
+        return len(value)
+    except TypeError:
+        return 0
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("rrd", type=Path)
+    ap.add_argument("--run", type=Path, required=True, help="the run's output folder")
+    ap.add_argument("--cameras", default="", help="camera names, comma-separated")
+    ap.add_argument("--expect-scores", action="store_true")
+    args = ap.parse_args()
+
+    try:
+        import rerun as rr
+        import rerun.experimental as rrx
+        import datafusion  # noqa: F401  (the dataframe API's engine)
+    except ImportError as e:
+        print(
+            f"check_rrd: the Rerun SDK is not installed ({e}); "
+            f'pip install "rerun-sdk[datafusion]=={RERUN_VERSION}"',
+            file=sys.stderr,
+        )
+        return 2
+    if rr.__version__ != RERUN_VERSION:
+        print(
+            f"check_rrd: rerun-sdk {rr.__version__} installed, the file was written by "
+            f"{RERUN_VERSION}; checking anyway",
+            file=sys.stderr,
+        )
+
+    failures: list[str] = []
+    stems = sorted(p.stem for p in (args.run / "clouds").glob("*.ply"))
+    if not stems:
+        print(f"check_rrd: {args.run}/clouds: no PLY file", file=sys.stderr)
+        return 1
+    cameras = [c for c in args.cameras.split(",") if c]
+
+    reader = rrx.RrdReader(args.rrd)
+    recordings = reader.recordings()
+    if len(recordings) != 1:
+        failures.append(f"{len(recordings)} recordings in the file, want 1")
+    store = reader.stream().collect()
+
+    df = store.reader(index="frame").to_pandas()
+    frames = sorted(int(v) for v in df["frame"].dropna().unique())
+    if frames != list(range(len(stems))):
+        failures.append(
+            f"frame timeline holds {frames[:5]}... ({len(frames)}), want 0..{len(stems) - 1}"
+        )
+
+    def rows_of(frame: int):
+        return df[df["frame"] == frame]
+
+    def count(frame_rows, entity: str, archetype: str, component: str) -> int | None:
+        name = column(df, entity, archetype, component)
+        if name is None:
+            return None
+        return sum(batch_len(v) for v in frame_rows[name])
+
+    def present(frame_rows, entity: str, archetype: str, component: str) -> bool:
+        name = column(df, entity, archetype, component)
+        return name is not None and frame_rows[name].notna().any()
+
+    total_points = 0
+    for index, stem in enumerate(stems):
+        rows = rows_of(index)
+        want = ply_vertex_count(args.run / "clouds" / f"{stem}.ply")
+        total_points += want
+        for layer in ("refined", "projected"):
+            known = count(rows, f"world/{layer}", "Points3D", "positions")
+            unknown = count(rows, f"world/{layer}_unknown", "Points3D", "positions")
+            if known is None:
+                failures.append(f"frame {stem}: no world/{layer} points")
+                continue
+            got = known + (unknown or 0)
+            if got != want:
+                failures.append(
+                    f"frame {stem}: world/{layer} has {known} + {unknown or 0} unknown points, "
+                    f"the PLY {want}"
+                )
+        boxes_file = args.run / "boxes" / f"{stem}.json"
+        if boxes_file.is_file():
+            want_boxes = len(json.loads(boxes_file.read_text())["boxes"])
+            got_boxes = count(rows, "world/boxes", "Boxes3D", "half_sizes") or 0
+            if got_boxes != want_boxes:
+                failures.append(f"frame {stem}: {got_boxes} boxes, the JSON {want_boxes}")
+        for c in cameras:
+            base = f"world/cameras/{c}"
+            for entity, archetype, component in (
+                (f"{base}/color/image", "Image", "buffer"),
+                (f"{base}/depth/image", "DepthImage", "buffer"),
+                (f"{base}/color/labels", "SegmentationImage", "buffer"),
+                (f"{base}/color/refined_labels", "SegmentationImage", "buffer"),
+            ):
+                if not present(rows, entity, archetype, component):
+                    failures.append(f"frame {stem}: no {entity} ({archetype})")
+        if args.expect_scores:
+            if not any(":Scalars:scalars" in n and "/scores/" in n and "biou" in n
+                       for n in df.columns if rows[n].notna().any()):
+                failures.append(f"frame {stem}: no scores/<configuration>/biou")
+
+    static = store.reader(index=None).to_pandas()
+    for c in cameras:
+        for sensor in ("color", "depth"):
+            entity = f"world/cameras/{c}/{sensor}"
+            for archetype, component in (("Pinhole", "image_from_camera"),
+                                         ("Transform3D", "translation")):
+                if column(static, entity, archetype, component) is None:
+                    failures.append(f"no static {archetype} at {entity}")
+    if column(static, "world", "AnnotationContext", "context") is None:
+        failures.append("no AnnotationContext at world")
+
+    if failures:
+        for f in failures:
+            print(f"check_rrd: {f}", file=sys.stderr)
+        return 1
+    print(
+        f"check_rrd: {args.rrd}: {len(stems)} frames, {total_points} points, "
+        f"{len(cameras)} cameras: all entities present, counts equal the run's files"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
