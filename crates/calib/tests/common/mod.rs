@@ -12,6 +12,7 @@ pub fn seed() -> u64 {
 }
 
 /// xorshift64* (core's): enough randomness to sample pixels, points and depths.
+#[allow(unused_imports)] // not every test binary that includes this module samples
 pub use bodyseg_core::rng::XorShift64Star as Rng;
 
 /// The colour sensor's rational distortion of Azure Kinect 001514394512
