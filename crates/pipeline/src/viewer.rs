@@ -12,7 +12,7 @@ use bodyseg_view::{CameraView, CloudView, DepthView, FrameSink, ViewFrame};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// The file of a recording's time stamps: `stem,nanoseconds` per line.
+/// The file of a recording's time stamps (`stem,nanoseconds`, or what `bodyseg import ros2` writes).
 #[cfg(feature = "rerun")]
 pub(crate) const STAMPS_FILE: &str = "stamps.csv";
 

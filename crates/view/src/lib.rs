@@ -174,17 +174,22 @@ pub enum ViewError {
     },
 }
 
-/// The time stamps of a recording's frames from a `stamps.csv`'s text: one
-/// `stem,nanoseconds` per line (nanoseconds since the Unix epoch), `#` comments and a
-/// `stem,...` header allowed. Sorted by stem.
+/// The time stamps of a recording's frames from a `stamps.csv`'s text (nanoseconds since
+/// the Unix epoch), sorted by stem. Two layouts are read: `stem,nanoseconds` per line, and
+/// the one `bodyseg import ros2` writes, `frame,camera,depth_stamp_ns,colour_stamp_ns` per
+/// frame and camera, where a frame's time is its cameras' earliest depth stamp. `#`
+/// comments and a header line (its first field `stem` or `frame`) are skipped.
 ///
 /// # Errors
 /// [`ViewError::Stamps`] for a line without a comma or with a bad number (the line named).
 pub fn parse_stamps(text: &str, path: &std::path::Path) -> Result<Vec<(String, i64)>, ViewError> {
-    let mut out = Vec::new();
+    let mut by_stem = std::collections::BTreeMap::<String, i64>::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
-        if line.is_empty() || line.starts_with('#') || (i == 0 && line.starts_with("stem,")) {
+        if line.is_empty()
+            || line.starts_with('#')
+            || (i == 0 && (line.starts_with("stem,") || line.starts_with("frame,")))
+        {
             continue;
         }
         let bad = |reason: String| ViewError::Stamps {
@@ -192,17 +197,26 @@ pub fn parse_stamps(text: &str, path: &std::path::Path) -> Result<Vec<(String, i
             reason,
             path: path.to_path_buf(),
         };
-        let (stem, ns) = line
-            .split_once(',')
-            .ok_or_else(|| bad("expected `stem,nanoseconds`".into()))?;
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        // `stem,ns` or `frame,camera,depth_ns,colour_ns`: the stamp is the second field,
+        // or the third when the second is a camera name.
+        let ns = match fields[..] {
+            [_, ns] => ns,
+            [_, _, depth_ns, _] => depth_ns,
+            _ => {
+                return Err(bad(
+                    "expected `stem,nanoseconds` or `frame,camera,depth_stamp_ns,colour_stamp_ns`"
+                        .into(),
+                ));
+            }
+        };
         let ns: i64 = ns
-            .trim()
             .parse()
-            .map_err(|e| bad(format!("nanoseconds {:?}: {e}", ns.trim())))?;
-        out.push((stem.trim().to_string(), ns));
+            .map_err(|e| bad(format!("nanoseconds {ns:?}: {e}")))?;
+        let t = by_stem.entry(fields[0].to_string()).or_insert(ns);
+        *t = (*t).min(ns);
     }
-    out.sort();
-    Ok(out)
+    Ok(by_stem.into_iter().collect())
 }
 
 #[cfg(test)]
@@ -222,8 +236,23 @@ mod tests {
             .map(|e| e.to_string());
         assert_eq!(
             err.as_deref(),
-            Some("time stamps, line 2: expected `stem,nanoseconds`: s.csv")
+            Some(
+                "time stamps, line 2: expected `stem,nanoseconds` or \
+                 `frame,camera,depth_stamp_ns,colour_stamp_ns`: s.csv"
+            )
         );
         assert!(parse_stamps("a,x\n", Path::new("s.csv")).is_err());
+        // What `bodyseg import ros2` writes: the earliest depth stamp of a frame's cameras.
+        let ros = parse_stamps(
+            "frame,camera,depth_stamp_ns,colour_stamp_ns\n000000,a,105,107\n000000,b,100,109\n000001,a,205,206\n",
+            Path::new("stamps.csv"),
+        );
+        assert_eq!(
+            ros.ok(),
+            Some(vec![
+                ("000000".to_string(), 100),
+                ("000001".to_string(), 205)
+            ])
+        );
     }
 }
