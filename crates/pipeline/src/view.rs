@@ -77,7 +77,7 @@ pub fn view_run(opts: &ViewOptions) -> Result<ViewSummary> {
     )];
     let needs = FrameNeeds {
         depth: true,
-        colour: recording.has_layer(Layer::Color),
+        color: recording.has_layer(Layer::Color),
         parsing: recording.has_layer(Layer::Parsing),
         truth: false,
     };
@@ -156,7 +156,7 @@ fn read_run_frame(run: &Path, recording: &Recording, stem: &str) -> Result<RunFr
 fn frame_view<'a>(images: &'a Frame, files: &'a RunFrame) -> ViewFrame<'a> {
     let cameras = (0..images.depth.len())
         .map(|i| CameraView {
-            colour: images.colour.as_ref().and_then(|c| c.get(i)),
+            color: images.color.as_ref().and_then(|c| c.get(i)),
             depth: images.depth.get(i).map(|d| DepthView {
                 width: d.width,
                 height: d.height,

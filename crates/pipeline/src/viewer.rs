@@ -149,7 +149,7 @@ pub(crate) fn view_frame<'a>(
     let frame = &parsed.frame;
     let cameras = (0..frame.depth.len())
         .map(|i| CameraView {
-            colour: frame.colour.as_ref().and_then(|c| c.get(i)),
+            color: frame.color.as_ref().and_then(|c| c.get(i)),
             depth: frame.depth.get(i).map(|d| DepthView {
                 width: d.width,
                 height: d.height,

@@ -44,7 +44,7 @@ use std::path::PathBuf;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CameraView<'a> {
     /// The colour image.
-    pub colour: Option<&'a RgbImage>,
+    pub color: Option<&'a RgbImage>,
     /// The raw depth image (depth sensor pixels; unit: the camera's `depth_scale`).
     pub depth: Option<DepthView<'a>>,
     /// The 2D parser's labels (colour sensor pixels).

@@ -24,12 +24,12 @@ pub const FRAME_TIMELINE: &str = "frame";
 pub const TIME_TIMELINE: &str = "time";
 
 /// The camera's colour sensor: `Transform3D` world_from_color and `Pinhole`.
-pub fn colour(camera: &str) -> String {
+pub fn color(camera: &str) -> String {
     format!("world/cameras/{camera}/color")
 }
 
 /// The colour image (`Image`, RGB).
-pub fn colour_image(camera: &str) -> String {
+pub fn color_image(camera: &str) -> String {
     format!("world/cameras/{camera}/color/image")
 }
 

@@ -137,7 +137,7 @@ impl ViewWriter {
                 .compose(&camera.color_from_depth.inverse());
             for (entity, pose, intrinsics) in [
                 (
-                    paths::colour(&camera.name),
+                    paths::color(&camera.name),
                     &world_from_color,
                     &camera.color,
                 ),
@@ -168,7 +168,7 @@ impl ViewWriter {
             .iter()
             .map(|c| {
                 Spatial2DView::new(c.as_str())
-                    .with_origin(paths::colour(c).as_str())
+                    .with_origin(paths::color(c).as_str())
                     .into()
             })
             .collect();
@@ -280,12 +280,12 @@ impl ViewWriter {
                 height,
             }
         };
-        if let Some(c) = camera.colour {
+        if let Some(c) = camera.color {
             if c.rgb.len() != c.width as usize * c.height as usize * 3 {
                 return Err(size_err("colour", c.rgb.len(), c.width, c.height, 3));
             }
             self.log(
-                paths::colour_image(name).as_str(),
+                paths::color_image(name).as_str(),
                 &Image::from_rgb24(c.rgb.clone(), [c.width, c.height]),
             )?;
         }
