@@ -136,11 +136,7 @@ impl ViewWriter {
                 .world_from_depth
                 .compose(&camera.color_from_depth.inverse());
             for (entity, pose, intrinsics) in [
-                (
-                    paths::color(&camera.name),
-                    &world_from_color,
-                    &camera.color,
-                ),
+                (paths::color(&camera.name), &world_from_color, &camera.color),
                 (
                     paths::depth(&camera.name),
                     &camera.world_from_depth,
