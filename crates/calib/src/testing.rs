@@ -80,15 +80,7 @@ mod tests {
 
     #[test]
     fn ring_rig_cameras_look_at_the_origin_from_2_2_m() {
-        let optics = crate::Intrinsics {
-            width: 4,
-            height: 4,
-            fx: 2.0,
-            fy: 2.0,
-            cx: 2.0,
-            cy: 2.0,
-            distortion: crate::Distortion::NONE,
-        };
+        let optics = crate::Intrinsics::pinhole(4, 4, 2.0, 2.0, 2.0, 2.0);
         let base = RgbdCamera::new("k", optics, optics);
         let rig = ring_rig(&base, 3);
         assert_eq!(rig.cameras.len(), 3);
