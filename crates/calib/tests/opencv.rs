@@ -265,7 +265,7 @@ fn file_storage_written_by_opencv_reads_in_pure_rust_and_back() {
 /// `tests/fixtures/calib/azure_kinect/pyk4a_calibration.json`).
 fn azure_like() -> Intrinsics {
     Intrinsics {
-        distortion: common::AZURE_COLOR_DISTORTION,
+        distortion: bodyseg_calib::testing::AZURE_COLOR_DISTORTION,
         ..color()
     }
 }

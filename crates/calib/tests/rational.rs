@@ -11,7 +11,8 @@ use std::path::Path;
 use bodyseg_calib::{Distortion, Intrinsics, RgbdCamera, Rig, parse_rig_toml, rig_to_toml_string};
 
 mod common;
-use common::{AZURE_COLOR_DISTORTION, Rng, seed};
+use bodyseg_calib::testing::AZURE_COLOR_DISTORTION;
+use common::{Rng, seed};
 
 /// The depth sensor of Azure Kinect 001514394512 (`tests/fixtures/calib/azure_kinect/
 /// pyk4a_calibration.json`) in NFOV unbinned mode, 640×576, as the SDK converts it:
@@ -25,16 +26,7 @@ fn azure_depth_nfov() -> Intrinsics {
         0.5129697918891907 * 1024.0 - 192.0 - 0.5,
         0.5169235467910767 * 1024.0 - 180.0 - 0.5,
     )
-    .with_distortion(Distortion::Rational([
-        0.5479397773742676,
-        -0.020971370860934258,
-        2.0557534298859537e-05,
-        -7.210415787994862e-05,
-        -0.002652231603860855,
-        0.8896790742874146,
-        0.08613020926713943,
-        -0.013910384848713875,
-    ]))
+    .with_distortion(bodyseg_calib::testing::AZURE_DEPTH_DISTORTION)
 }
 
 /// The same depth sensor in WFOV unbinned mode, 1024×1024: the 120° field of view.

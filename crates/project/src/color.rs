@@ -477,16 +477,7 @@ mod tests {
             639.3043212890625,
             365.8529052734375,
         )
-        .with_distortion(Distortion::Rational([
-            0.33012130856513977,
-            -2.489396572113037,
-            -0.00016178244550246745,
-            -0.00012944525224156678,
-            1.453670859336853,
-            0.20891207456588745,
-            -2.302915096282959,
-            1.3751275539398193,
-        ]));
+        .with_distortion(bodyseg_calib::testing::AZURE_COLOR_DISTORTION);
         let proj = ColorProjection::new(&cam);
         let (mut worst, mut inside, mut other_pixel) = (0.0f64, 0usize, 0usize);
         for p in depth_points(&cam, 2) {
