@@ -1,7 +1,7 @@
 //! Bad input: exit status 1, one `error:` line on stderr naming the file or the
 //! configuration field, and no output file (an existing one is left as it was).
 
-use crate::common::{bodyseg, files_in, refine_scene, stderr, tempdir, write_scene};
+use crate::common::{assert_one_error, bodyseg, files_in, refine_scene, tempdir, write_scene};
 use std::path::Path;
 
 /// Runs `bodyseg refine` with the scene's inputs, `extra` args, and `--out out.ply`.
@@ -15,24 +15,16 @@ fn refine(d: &Path, cloud: &str, boxes: &str, extra: &[&str]) -> std::process::O
 /// Asserts exit status 1, exactly one stderr line `error: ...` holding every `needle`,
 /// and that the folder holds the same files as before (no output, no temporary).
 fn assert_fails(out: &std::process::Output, d: &Path, before: &[String], needles: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "want one error line:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    for needle in needles {
-        assert!(lines[0].contains(needle), "{needle:?} not in: {err}");
-    }
+    let err = assert_one_error(out, d, before, needles);
     // Each cause once: an error printing its cause in its message must not also chain it
     // as `source()` (`x.ply: cannot read: No such file ...: No such file ...`).
-    let parts: Vec<&str> = lines[0].split(": ").collect();
+    let parts: Vec<&str> = err.trim_end_matches('\n').split(": ").collect();
     for (i, part) in parts.iter().enumerate() {
         assert!(
             !parts[i + 1..].contains(part),
             "{part:?} printed twice: {err}"
         );
     }
-    assert_eq!(files_in(d), before, "files changed after: {err}");
 }
 
 /// A hand-written ASCII PLY with the given vertex property lines and data lines.

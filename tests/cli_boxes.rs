@@ -3,7 +3,9 @@
 //! pypcd4), labels and file mode on a synthetic recording, and bad input (one `error:`
 //! line naming the file, exit 1, no output file).
 
-use crate::common::{assert_ok, bodyseg, files_in, stderr, tempdir};
+use crate::common::{
+    assert_ok, assert_one_error, bodyseg, bodyseg_line, files_in, stderr, tempdir,
+};
 use bodyseg_io::read_boxes;
 use bodyseg_people::match_boxes;
 use std::path::{Path, PathBuf};
@@ -53,34 +55,12 @@ fn geometry_mode_finds_the_people_of_a_pcd_scene() {
 fn labels_and_file_modes_on_a_recording() {
     let dir = tempdir();
     let d = dir.path();
-    let out = bodyseg(
+    let out = bodyseg_line(
         d,
-        &[
-            "synth",
-            "--preset",
-            "handover",
-            "--frames",
-            "1",
-            "--seed",
-            "5",
-            "--out",
-            "rec",
-            "--no-preview",
-        ],
+        "synth --preset handover --frames 1 --seed 5 --out rec --no-preview",
     );
     assert_ok(&out, "synth");
-    let out = bodyseg(
-        d,
-        &[
-            "boxes",
-            "--recording",
-            "rec",
-            "--frame",
-            "000000",
-            "--out",
-            "found.json",
-        ],
-    );
+    let out = bodyseg_line(d, "boxes --recording rec --frame 000000 --out found.json");
     assert_ok(&out, "boxes --recording");
     let found = read_boxes(&d.join("found.json")).expect("found");
     let truth = read_boxes(&d.join("rec/boxes/000000.json")).expect("truth");
@@ -122,15 +102,7 @@ fn labels_and_file_modes_on_a_recording() {
 fn assert_fails(d: &Path, args: &[&str], needles: &[&str]) {
     let before = files_in(d);
     let out = bodyseg(d, args);
-    let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "want one error line:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    for needle in needles {
-        assert!(lines[0].contains(needle), "{needle:?} not in: {err}");
-    }
-    assert_eq!(files_in(d), before, "files changed after: {err}");
+    assert_one_error(&out, d, &before, needles);
 }
 
 const HEADER: &str = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";

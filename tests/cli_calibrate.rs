@@ -3,7 +3,7 @@
 //! line, exit 1, no output file). Without the `opencv` feature: the clear "built without
 //! OpenCV" error.
 
-use crate::common::{bodyseg, stderr, tempdir};
+use crate::common::{bodyseg, stderr, tempdir, words};
 use std::path::Path;
 
 /// Asserts a failed run: exit 1, one `error:` line containing every `needle`, and `out`
@@ -30,18 +30,7 @@ fn without_the_feature_calibrate_says_how_to_build_it() {
     std::fs::create_dir(dir.path().join("views")).expect("mkdir");
     assert_fails(
         dir.path(),
-        &[
-            "calibrate",
-            "intrinsics",
-            "--images",
-            "views",
-            "--board",
-            "9x6",
-            "--square-m",
-            "0.04",
-            "--out",
-            "cam.toml",
-        ],
+        &words("calibrate intrinsics --images views --board 9x6 --square-m 0.04 --out cam.toml"),
         &["built without OpenCV", "--features opencv"],
         "cam.toml",
     );
@@ -95,18 +84,7 @@ mod with_opencv {
     fn synthetic_views_calibrate_to_the_true_rig() {
         let dir = tempdir();
         let d = dir.path();
-        run_ok(
-            d,
-            &[
-                "-q",
-                "synth",
-                "--chessboard",
-                "--views",
-                "15",
-                "--out",
-                "views",
-            ],
-        );
+        run_ok(d, &words("-q synth --chessboard --views 15 --out views"));
         let truth = read_rig_toml(&d.join("views/rig_true.toml")).expect("rig_true.toml");
         let board = ["--board", "9x6", "--square-m", "0.04"];
         let mut rigs = Vec::new();
@@ -208,17 +186,7 @@ mod with_opencv {
     fn small_views(d: &Path) {
         run_ok(
             d,
-            &[
-                "-q",
-                "synth",
-                "--chessboard",
-                "--views",
-                "4",
-                "--set",
-                "rig.cameras=1",
-                "--out",
-                "views",
-            ],
+            &words("-q synth --chessboard --views 4 --set rig.cameras=1 --out views"),
         );
     }
 

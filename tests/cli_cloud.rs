@@ -6,7 +6,7 @@
 //! the fix, a warning naming the unit, an error naming HEIGHT; and the view above the
 //! floor only: warnings that no floor and no person are found, with the likely cause.
 
-use crate::common::{assert_ok, bodyseg, files_in, stderr, tempdir};
+use crate::common::{assert_ok, bodyseg, bodyseg_line, files_in, stderr, tempdir};
 use bodyseg_core::PersonBoxes;
 use bodyseg_core::math::Vec3;
 use bodyseg_io::{FileLabels, read_boxes, read_cloud_file};
@@ -148,17 +148,9 @@ fn pcls_five_people_in_the_camera_frame_get_five_boxes_then_import_and_run_too()
     assert!(d.join("rec/rig.toml").is_file());
 
     // run on it, geometry-mode boxes: every person gets a box, the same boxes.
-    let out = bodyseg(
+    let out = bodyseg_line(
         d,
-        &[
-            "run",
-            "--recording",
-            "rec",
-            "--out",
-            "run1",
-            "--set",
-            "boxes.mode=geometry",
-        ],
+        "run --recording rec --out run1 --set boxes.mode=geometry",
     );
     assert_ok(&out, "run on the imported recording");
     let run_boxes = read_boxes(&d.join("run1/boxes/000000.json")).expect("run's boxes");
@@ -253,18 +245,7 @@ fn unlabelled_foreign_labelled_millimetre_and_unorganised_clouds() {
         err.contains("note:") && err.contains("not bodyseg's class ids"),
         "{err}"
     );
-    let out = bodyseg(
-        d,
-        &[
-            "boxes",
-            "--cloud",
-            "segments.pcd",
-            "--mode",
-            "labels",
-            "--out",
-            "l.json",
-        ],
-    );
+    let out = bodyseg_line(d, "boxes --cloud segments.pcd --mode labels --out l.json");
     assert!(!out.status.success());
     let err = stderr(&out);
     assert!(

@@ -2,7 +2,9 @@
 //! Slurm scripts (run here as plain bash with the array variables Slurm would set); the
 //! merged shard reports equal the whole conversion's report.
 
-use crate::common::{FRAMES, assert_ok, bodyseg, copy_tree, recording, stderr, tempdir, tree};
+use crate::common::{
+    FRAMES, assert_ok, bodyseg, bodyseg_line, copy_tree, recording, stderr, tempdir, tree,
+};
 use bodyseg_eval::Report;
 use std::path::Path;
 use std::process::Command;
@@ -152,34 +154,16 @@ fn a_folder_of_recordings_converts_whole_and_in_merged_shards_alike() {
 fn convert_errors_name_the_input() {
     let dir = tempdir();
     std::fs::create_dir_all(dir.path().join("empty")).expect("mkdir");
-    let out = bodyseg(
+    let out = bodyseg_line(
         dir.path(),
-        &[
-            "convert",
-            "--input",
-            "empty",
-            "--format",
-            "recording",
-            "--out",
-            "o",
-        ],
+        "convert --input empty --format recording --out o",
     );
     assert_eq!(out.status.code(), Some(1));
     let e = stderr(&out);
     assert!(e.contains("empty") && e.contains("no recording"), "{e}");
-    let out = bodyseg(
+    let out = bodyseg_line(
         dir.path(),
-        &[
-            "convert",
-            "--input",
-            "empty",
-            "--format",
-            "recording",
-            "--out",
-            "o",
-            "--shard",
-            "3/3",
-        ],
+        "convert --input empty --format recording --out o --shard 3/3",
     );
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("K/N"), "{}", stderr(&out));

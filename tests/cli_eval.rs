@@ -1,6 +1,6 @@
 //! `bodyseg eval`: several named predictions, markdown output, report files, merging.
 
-use crate::common::{assert_ok, bodyseg, refine_scene, stdout, tempdir, write_scene};
+use crate::common::{assert_ok, bodyseg_line, refine_scene, stdout, tempdir, write_scene};
 use bodyseg_eval::Report;
 
 #[test]
@@ -12,17 +12,9 @@ fn named_predictions_markdown_json_and_merge() {
     assert_ok(&out, "bodyseg refine");
 
     // Markdown on stdout: the paper's table, one row per configuration and a change row.
-    let out = bodyseg(
+    let out = bodyseg_line(
         d,
-        &[
-            "eval",
-            "--pred",
-            "Reference=in.ply",
-            "--pred",
-            "M-R-N=refined.ply",
-            "--gt",
-            "gt.ply",
-        ],
+        "eval --pred Reference=in.ply --pred M-R-N=refined.ply --gt gt.ply",
     );
     assert_ok(&out, "bodyseg eval (markdown)");
     let md = stdout(&out);
@@ -31,21 +23,9 @@ fn named_predictions_markdown_json_and_merge() {
     assert!(md.contains("Δ vs Reference"), "{md}");
 
     // JSON to a file; then merged with itself: counts double, metrics stay.
-    let out = bodyseg(
+    let out = bodyseg_line(
         d,
-        &[
-            "eval",
-            "--pred",
-            "Reference=in.ply",
-            "--pred",
-            "M-R-N=refined.ply",
-            "--gt",
-            "gt.ply",
-            "--format",
-            "json",
-            "--out",
-            "report.json",
-        ],
+        "eval --pred Reference=in.ply --pred M-R-N=refined.ply --gt gt.ply --format json --out report.json",
     );
     assert_ok(&out, "bodyseg eval --out report.json");
     assert_eq!(stdout(&out), "", "the report went to the file");
@@ -53,17 +33,7 @@ fn named_predictions_markdown_json_and_merge() {
     let report = Report::from_json(&text).expect("a valid report");
     assert_eq!(report.names(), ["Reference", "M-R-N"]);
 
-    let out = bodyseg(
-        d,
-        &[
-            "eval",
-            "--merge",
-            "report.json",
-            "report.json",
-            "--format",
-            "json",
-        ],
-    );
+    let out = bodyseg_line(d, "eval --merge report.json report.json --format json");
     assert_ok(&out, "bodyseg eval --merge");
     let merged = Report::from_json(&stdout(&out)).expect("merged report");
     for (one, two) in report.configurations().iter().zip(merged.configurations()) {
@@ -77,18 +47,7 @@ fn named_predictions_markdown_json_and_merge() {
     }
 
     // --name names a single prediction.
-    let out = bodyseg(
-        d,
-        &[
-            "eval",
-            "--pred",
-            "refined.ply",
-            "--name",
-            "mine",
-            "--gt",
-            "gt.ply",
-        ],
-    );
+    let out = bodyseg_line(d, "eval --pred refined.ply --name mine --gt gt.ply");
     assert_ok(&out, "bodyseg eval --name");
     assert!(stdout(&out).contains("| mine |"));
 }

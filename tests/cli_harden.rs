@@ -3,23 +3,11 @@
 //! `warning:` lines for valid but implausible inputs. Each failed on the code before.
 
 use crate::common::{
-    bodyseg, bodyseg_env, copy_tree, files_in, recording, stderr, tempdir, tree, write_scene,
+    assert_one_error, bodyseg, bodyseg_env, bodyseg_line, copy_tree, files_in, recording, stderr,
+    tempdir, tree, write_scene,
 };
 use std::path::Path;
 use std::process::Output;
-
-/// Exit status 1, one `error:` line holding every needle, and the folder's files as
-/// `before` (nothing written, nothing left).
-fn assert_refused(out: &Output, d: &Path, before: &[String], needles: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.starts_with("error: "), "{err}");
-    for n in needles {
-        assert!(err.contains(n), "{n:?} not in {err}");
-    }
-    assert_eq!(files_in(d), before, "{err}");
-}
 
 /// `bodyseg refine --cloud CLOUD --boxes BOXES --out OUT EXTRA...` in `d`.
 fn refine(d: &Path, cloud: &str, boxes: &str, out: &str, extra: &[&str]) -> Output {
@@ -43,22 +31,22 @@ fn an_output_that_is_an_input_or_not_ours_is_refused() {
     let before = files_in(d);
     let input = std::fs::read(d.join("in.ply")).expect("in.ply");
     let out = refine(d, "in.ply", "boxes.json", "in.ply", &[]);
-    assert_refused(&out, d, &before, &["--out in.ply is the input --cloud"]);
+    assert_one_error(&out, d, &before, &["--out in.ply is the input --cloud"]);
     assert_eq!(std::fs::read(d.join("in.ply")).expect("in.ply"), input);
     // The same file through another name.
     std::os::unix::fs::symlink("in.ply", d.join("link.ply")).expect("symlink");
     let before = files_in(d);
     let out = refine(d, "in.ply", "boxes.json", "link.ply", &[]);
-    assert_refused(&out, d, &before, &["is the input --cloud"]);
+    assert_one_error(&out, d, &before, &["is the input --cloud"]);
     // A report over a cloud; a device.
     let out = eval(d, "in.ply", "gt.ply", &["--out", "in.ply"]);
-    assert_refused(&out, d, &before, &["is the input --pred"]);
+    assert_one_error(&out, d, &before, &["is the input --pred"]);
     let out = eval(d, "in.ply", "gt.ply", &["--out", "link.ply"]);
-    assert_refused(&out, d, &before, &["is the input --pred"]);
+    assert_one_error(&out, d, &before, &["is the input --pred"]);
     std::fs::copy(d.join("in.ply"), d.join("other.ply")).expect("copy");
     let before = files_in(d);
     let out = eval(d, "in.ply", "gt.ply", &["--out", "other.ply"]);
-    assert_refused(
+    assert_one_error(
         &out,
         d,
         &before,
@@ -68,7 +56,7 @@ fn an_output_that_is_an_input_or_not_ours_is_refused() {
     let _socket = std::os::unix::net::UnixListener::bind(d.join("sock.ply")).expect("socket");
     let before = files_in(d);
     let out = refine(d, "in.ply", "boxes.json", "sock.ply", &[]);
-    assert_refused(
+    assert_one_error(
         &out,
         d,
         &before,
@@ -147,19 +135,11 @@ fn values_that_hung_a_command_are_refused_at_once() {
     write_scene(d);
     let before = files_in(d);
     let start = std::time::Instant::now();
-    let out = bodyseg(
+    let out = bodyseg_line(
         d,
-        &[
-            "boxes",
-            "--cloud",
-            "in.ply",
-            "--set",
-            "boxes.head_separation_m=1000",
-            "--out",
-            "b.json",
-        ],
+        "boxes --cloud in.ply --set boxes.head_separation_m=1000 --out b.json",
     );
-    assert_refused(
+    assert_one_error(
         &out,
         d,
         &before,
@@ -251,18 +231,9 @@ fn a_wrong_depth_scale_and_a_frame_a_camera_lacks_are_warned_about() {
     let camera = cam.split('/').next().expect("camera");
     // No ground truth for that camera: evaluation is off, with a warning.
     std::fs::remove_dir_all(rec.join(camera).join("depth_labels")).expect("remove truth");
-    let out = bodyseg(
+    let out = bodyseg_line(
         dir.path(),
-        &[
-            "run",
-            "--recording",
-            "rec",
-            "--out",
-            "out",
-            "--frame",
-            "000001",
-            "-q",
-        ],
+        "run --recording rec --out out --frame 000001 -q",
     );
     let err = stderr(&out);
     assert!(

@@ -1,6 +1,6 @@
 //! `--help` of every command exits 0 and names the key flags.
 
-use crate::common::{assert_ok, bodyseg, stdout, tempdir};
+use crate::common::{assert_ok, bodyseg, stdout, tempdir, words};
 
 fn help(args: &[&str], must_mention: &[&str]) {
     let dir = tempdir();
@@ -24,20 +24,9 @@ fn main_help() {
 fn refine_help() {
     help(
         &["refine", "--help"],
-        &[
-            "--cloud",
-            "--boxes",
-            "--out",
-            "--config",
-            "--steps",
-            "--eps-m",
-            "--min-points",
-            "--keep-outside-boxes",
-            "--ascii",
-            "metres",
-            "Examples:",
-            "configs/default.toml",
-        ],
+        &words(
+            "--cloud --boxes --out --config --steps --eps-m --min-points --keep-outside-boxes --ascii metres Examples: configs/default.toml",
+        ),
     );
 }
 
@@ -45,15 +34,7 @@ fn refine_help() {
 fn eval_help() {
     help(
         &["eval", "--help"],
-        &[
-            "--pred",
-            "--gt",
-            "--format",
-            "--merge",
-            "--out",
-            "--name",
-            "Examples:",
-        ],
+        &words("--pred --gt --format --merge --out --name Examples:"),
     );
 }
 
@@ -61,18 +42,9 @@ fn eval_help() {
 fn parse_help() {
     help(
         &["parse", "--help"],
-        &[
-            "--recording",
-            "--frame",
-            "--model",
-            "--recorded",
-            "--threads",
-            "--out",
-            "ORT_DYLIB_PATH",
-            "scripts/setup_onnxruntime.sh",
-            "bodyseg_parser_small.onnx",
-            "Examples:",
-        ],
+        &words(
+            "--recording --frame --model --recorded --threads --out ORT_DYLIB_PATH scripts/setup_onnxruntime.sh bodyseg_parser_small.onnx Examples:",
+        ),
     );
 }
 
@@ -85,24 +57,11 @@ fn calibrate_help() {
     );
     help(
         &["calibrate", "intrinsics", "--help"],
-        &[
-            "--images",
-            "--board",
-            "--square-m",
-            "--out",
-            ".yaml",
-            "Examples:",
-        ],
+        &words("--images --board --square-m --out .yaml Examples:"),
     );
     help(
         &["calibrate", "stereo", "--help"],
-        &[
-            "--ir",
-            "--color",
-            "--ir-intrinsics",
-            "--fix-intrinsics",
-            "--name",
-        ],
+        &words("--ir --color --ir-intrinsics --fix-intrinsics --name"),
     );
     help(
         &["calibrate", "world", "--help"],

@@ -13,7 +13,7 @@
 //! again, and (`#[ignore]`, slow) `bodyseg run` on the imported recording gives the same
 //! report and labels as on the original.
 
-use crate::common::{assert_ok, bodyseg, copy_tree, stderr, tempdir, tree};
+use crate::common::{assert_ok, bodyseg, copy_tree, stderr, tempdir, tree, words};
 use bodyseg_calib::{Pose, Rig};
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -154,14 +154,7 @@ fn the_fixture_imports_into_the_recording_it_was_written_from() {
         dir.path(),
         &fixture_bag(),
         "rec2",
-        &[
-            "--camera",
-            "right=/cam2",
-            "--camera",
-            "left=/cam0",
-            "--max-skew-ms",
-            "5",
-        ],
+        &words("--camera right=/cam2 --camera left=/cam0 --max-skew-ms 5"),
     );
     assert_ok(&chosen, "import with --camera");
     let names: Vec<String> = read_rig(&dir.path().join("rec2"))

@@ -7,7 +7,7 @@
 //! Needs the ONNX Runtime library (`scripts/setup_onnxruntime.sh`, which scripts/test.sh
 //! runs) and the bundled model `models/bodyseg_parser_small.onnx`.
 
-use crate::common::{assert_ok, bodyseg, bodyseg_env, stderr, tempdir};
+use crate::common::{assert_ok, bodyseg, bodyseg_env, bodyseg_line, stderr, tempdir};
 use bodyseg_core::{Class, Label};
 use bodyseg_io::read_label_png;
 use std::path::{Path, PathBuf};
@@ -17,24 +17,9 @@ const FRAME: &str = "000000";
 
 /// Writes a one-camera, one-frame synthetic recording `rec` in `dir`.
 fn recording(dir: &Path) -> PathBuf {
-    let out = bodyseg(
+    let out = bodyseg_line(
         dir,
-        &[
-            "synth",
-            "--preset",
-            "single",
-            "--seed",
-            "7",
-            "--frames",
-            "1",
-            "--no-preview",
-            "--set",
-            "rig.cameras=1",
-            "--set",
-            "rig.color_width=320",
-            "--out",
-            "rec",
-        ],
+        "synth --preset single --seed 7 --frames 1 --no-preview --set rig.cameras=1 --set rig.color_width=320 --out rec",
     );
     assert_ok(&out, "synth");
     dir.join("rec")

@@ -5,7 +5,7 @@
 //! and bad input: a depth image of the wrong size, an 8-bit depth PNG, a missing camera
 //! folder.
 
-use crate::common::{assert_ok, bodyseg, files_in, stderr, tempdir};
+use crate::common::{assert_ok, assert_one_error, bodyseg, files_in, stderr, tempdir};
 use bodyseg_calib::{Pose, RgbdCamera, Rig, write_rig_toml};
 use bodyseg_core::{Class, Label, LabelImage, LabeledCloud};
 use bodyseg_io::{DepthImage, read_ply, write_depth_png, write_label_png};
@@ -281,15 +281,7 @@ fn assert_project_fails(d: &Path, needles: &[&str]) {
             "cloud.ply",
         ],
     );
-    let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "want one error line:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    for needle in needles {
-        assert!(lines[0].contains(needle), "{needle:?} not in: {err}");
-    }
-    assert_eq!(files_in(d), before, "files changed after: {err}");
+    assert_one_error(&out, d, &before, needles);
 }
 
 #[test]

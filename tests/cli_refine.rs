@@ -1,7 +1,7 @@
 //! `bodyseg refine` on a synthetic person, then `bodyseg eval` of its output.
 
 use crate::common::{
-    SEED, assert_ok, bodyseg, index_origins, refine_scene, stderr, tempdir, write_scene,
+    SEED, assert_ok, bodyseg, index_origins, refine_scene, stderr, tempdir, words, write_scene,
 };
 use bodyseg_io::read_ply;
 use bodyseg_pipeline::PipelineConfig;
@@ -78,18 +78,7 @@ fn flags_override_the_config_file_and_ascii_output_reads_back() {
     .expect("write my.toml");
     let out = refine_scene(
         d,
-        &[
-            "--config",
-            "my.toml",
-            "--steps",
-            "m,n",
-            "--min-points",
-            "20",
-            "--ascii",
-            "--quiet",
-            "--out",
-            "r.ply",
-        ],
+        &words("--config my.toml --steps m,n --min-points 20 --ascii --quiet --out r.ply"),
     );
     assert_ok(&out, "bodyseg refine --config --steps --ascii");
     assert_eq!(stderr(&out), "", "--quiet prints nothing");
@@ -138,20 +127,9 @@ fn config_files_layer_then_set_then_flags() {
     std::fs::write(d.join("b.toml"), "[refine]\neps_m = 0.045\n").expect("b");
     let out = refine_scene(
         d,
-        &[
-            "--config",
-            "a.toml",
-            "--config",
-            "b.toml",
-            "--set",
-            "refine.steps=M-N",
-            "--set",
-            "refine.min_points=25",
-            "--min-points",
-            "20",
-            "--out",
-            "r.ply",
-        ],
+        &words(
+            "--config a.toml --config b.toml --set refine.steps=M-N --set refine.min_points=25 --min-points 20 --out r.ply",
+        ),
     );
     assert_ok(&out, "bodyseg refine --config --config --set");
     let resolved = PipelineConfig::load(&d.join("r.config.resolved.toml")).expect("resolved");

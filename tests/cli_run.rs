@@ -4,7 +4,7 @@
 //! same outputs as an uninterrupted run.
 
 use crate::common::{
-    FRAMES, assert_ok, bodyseg, copy_tree, recording, stderr, stdout, tempdir, tree,
+    FRAMES, assert_ok, bodyseg, bodyseg_line, copy_tree, recording, stderr, stdout, tempdir, tree,
 };
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -141,18 +141,7 @@ fn a_corrupt_depth_png_fails_its_frame_only() {
     let bytes = std::fs::read(&depth).expect("read");
     std::fs::write(&depth, &bytes[..bytes.len() / 3]).expect("truncate");
 
-    let out = bodyseg(
-        dir.path(),
-        &[
-            "run",
-            "--recording",
-            "rec",
-            "--out",
-            "out",
-            "--figure",
-            "none",
-        ],
-    );
+    let out = bodyseg_line(dir.path(), "run --recording rec --out out --figure none");
     assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
     let log = stderr(&out);
     assert!(

@@ -1,6 +1,6 @@
 //! `bodyseg synth`: recordings the readers load, byte-identical per seed, clear errors.
 
-use crate::common::{assert_ok, bodyseg, stderr};
+use crate::common::{assert_ok, bodyseg, bodyseg_line, stderr, tree};
 use bodyseg_calib::read_rig_toml;
 use bodyseg_io::{read_boxes, read_depth_png, read_label_png, read_ply};
 use std::collections::BTreeMap;
@@ -8,24 +8,13 @@ use std::path::Path;
 
 /// Every file under `root` with its bytes, keyed by relative path.
 fn files(root: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![root.to_path_buf()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).expect("read_dir") {
-            let path = entry.expect("entry").path();
-            if path.is_dir() {
-                stack.push(path);
-            } else {
-                let rel = path
-                    .strip_prefix(root)
-                    .expect("prefix")
-                    .to_string_lossy()
-                    .into_owned();
-                out.insert(rel, std::fs::read(&path).expect("read"));
-            }
-        }
-    }
-    out
+    tree(root)
+        .into_iter()
+        .map(|rel| {
+            let bytes = std::fs::read(root.join(&rel)).expect("read");
+            (rel, bytes)
+        })
+        .collect()
 }
 
 #[test]
@@ -71,18 +60,7 @@ fn handover_recording_loads_and_the_seed_fixes_every_byte() {
     assert!(rec.join("scene.toml").is_file());
 
     // …and the pipeline projects a frame of it.
-    let out = bodyseg(
-        d,
-        &[
-            "project",
-            "--recording",
-            "rec",
-            "--frame",
-            "000003",
-            "--out",
-            "p.ply",
-        ],
-    );
+    let out = bodyseg_line(d, "project --recording rec --frame 000003 --out p.ply");
     assert_ok(&out, "project");
     let cloud = read_ply(&d.join("p.ply")).expect("projected cloud");
     assert!(cloud.len() > 100_000, "{}", cloud.len());

@@ -15,15 +15,33 @@ pub const POINTS: usize = 20_000;
 
 /// The finished run of `bodyseg ARGS` in `dir`, with logging at its default (warn).
 pub fn bodyseg(dir: &Path, args: &[&str]) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_bodyseg"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("RUST_LOG")
-        .output();
-    match out {
-        Ok(out) => out,
-        Err(e) => panic!("cannot run bodyseg {args:?}: {e}"),
+    bodyseg_env(dir, args, &[])
+}
+
+/// A command line's words, split at whitespace: `&words("rig show rig.toml")` for
+/// arguments that are all plain words.
+pub fn words(line: &str) -> Vec<&str> {
+    line.split_whitespace().collect()
+}
+
+/// Runs `bodyseg` in `dir` with the words of `line` (see [`words`]).
+pub fn bodyseg_line(dir: &Path, line: &str) -> Output {
+    bodyseg(dir, &words(line))
+}
+
+/// Asserts exit status 1, exactly one stderr line `error: ...` holding every needle, and
+/// the folder's files as `before` (no output, no temporary); returns stderr.
+pub fn assert_one_error(out: &Output, d: &Path, before: &[String], needles: &[&str]) -> String {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "want one error line:\n{err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    for needle in needles {
+        assert!(lines[0].contains(needle), "{needle:?} not in: {err}");
     }
+    assert_eq!(files_in(d), before, "files changed after: {err}");
+    err
 }
 
 /// stderr as text.

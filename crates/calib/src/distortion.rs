@@ -157,18 +157,7 @@ impl Distortion {
 mod tests {
     use super::*;
 
-    /// The depth camera of a real Azure Kinect (pyk4a's `tests/assets/calibration.json`,
-    /// device 001514394512) in OpenCV's order.
-    const AZURE_DEPTH: Distortion = Distortion::Rational([
-        0.5479397773742676,
-        -0.020971370860934258,
-        2.0557534298859537e-05,
-        -7.210415787994862e-05,
-        -0.002652231603860855,
-        0.8896790742874146,
-        0.08613020926713943,
-        -0.013910384848713875,
-    ]);
+    const AZURE_DEPTH: Distortion = crate::testing::AZURE_DEPTH_DISTORTION;
 
     #[test]
     fn jacobian_matches_finite_differences() {

@@ -36,6 +36,26 @@ pub struct Intrinsics {
 }
 
 impl Intrinsics {
+    /// A pinhole camera without distortion: image size (pixels), focal lengths and
+    /// principal point (pixels); add a lens with [`Intrinsics::with_distortion`].
+    pub const fn pinhole(width: u32, height: u32, fx: f64, fy: f64, cx: f64, cy: f64) -> Self {
+        Intrinsics {
+            width,
+            height,
+            fx,
+            fy,
+            cx,
+            cy,
+            distortion: Distortion::NONE,
+        }
+    }
+
+    /// The same camera with lens distortion `distortion`.
+    #[must_use]
+    pub const fn with_distortion(self, distortion: Distortion) -> Self {
+        Intrinsics { distortion, ..self }
+    }
+
     /// Checks sizes > 0, focal lengths finite and > 0, every other value finite.
     /// The error names the field.
     pub fn validate(&self) -> Result<(), CalibError> {
@@ -97,15 +117,10 @@ impl Intrinsics {
         k: &[f64],
         d: &[f64],
     ) -> Option<Self> {
-        Some(Intrinsics {
-            width,
-            height,
-            fx: k[0],
-            fy: k[4],
-            cx: k[2],
-            cy: k[5],
-            distortion: Distortion::from_opencv(d)?,
-        })
+        Some(
+            Intrinsics::pinhole(width, height, k[0], k[4], k[2], k[5])
+                .with_distortion(Distortion::from_opencv(d)?),
+        )
     }
 
     /// Number of pixels, `width * height`.

@@ -299,15 +299,8 @@ fn intrinsics_of(
         }
     };
     let (width, height) = (dim("image_width", 0)?, dim("image_height", 1)?);
-    let intrinsics = Intrinsics {
-        width,
-        height,
-        fx: k[0],
-        fy: k[4],
-        cx: k[2],
-        cy: k[5],
-        distortion,
-    };
+    let intrinsics =
+        Intrinsics::pinhole(width, height, k[0], k[4], k[2], k[5]).with_distortion(distortion);
     intrinsics
         .validate()
         .map_err(|e| e.intrinsics_in_file(k_key, d_key, path))?;

@@ -195,15 +195,9 @@ mod tests {
     use super::*;
 
     fn sensor(fx: f64) -> Intrinsics {
-        Intrinsics {
-            width: 640,
-            height: 480,
-            fx,
-            fy: fx,
-            cx: 320.0,
-            cy: 240.0,
-            distortion: crate::Distortion::BrownConrady([0.05, -0.1, 0.001, -0.001, 0.02]),
-        }
+        Intrinsics::pinhole(640, 480, fx, fx, 320.0, 240.0).with_distortion(
+            crate::Distortion::BrownConrady([0.05, -0.1, 0.001, -0.001, 0.02]),
+        )
     }
 
     fn project_all(board: &Board, i: &Intrinsics, sensor_from_board: &Pose) -> Vec<[f64; 2]> {

@@ -167,15 +167,8 @@ pub fn parse_ros_camera_info(text: &str, path: &Path) -> Result<RosCameraInfo, C
             path.display()
         ));
     }
-    let intrinsics = Intrinsics {
-        width,
-        height,
-        fx: k[0],
-        fy: k[4],
-        cx: k[2],
-        cy: k[5],
-        distortion,
-    };
+    let intrinsics =
+        Intrinsics::pinhole(width, height, k[0], k[4], k[2], k[5]).with_distortion(distortion);
     intrinsics
         .validate()
         .map_err(|e| e.intrinsics_in_file("camera_matrix", "distortion_coefficients", path))?;
@@ -258,15 +251,8 @@ mod tests {
     use super::*;
 
     fn intrinsics() -> Intrinsics {
-        Intrinsics {
-            width: 640,
-            height: 480,
-            fx: 525.123_456_789_012_3,
-            fy: 524.5,
-            cx: 319.5,
-            cy: 239.25,
-            distortion: Distortion::BrownConrady([0.1, -0.25, 1e-7, -3.5e-4, 0.0]),
-        }
+        Intrinsics::pinhole(640, 480, 525.123_456_789_012_3, 524.5, 319.5, 239.25)
+            .with_distortion(Distortion::BrownConrady([0.1, -0.25, 1e-7, -3.5e-4, 0.0]))
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! the Kinect v2 test camera of `shared/data/iai_kinect2/196605135147` and a ring rig
 //! built from it. Not for production code.
 
-use crate::{CalibError, Pose, RgbdCamera, Rig, read_iai_kinect2};
+use crate::{CalibError, Distortion, Pose, RgbdCamera, Rig, read_iai_kinect2};
 use std::path::PathBuf;
 
 /// The iai_kinect2 folder of the test camera: `shared/` beside the repository
@@ -74,21 +74,42 @@ pub fn plane_and_box_depth_mm(width: u32, height: u32, seed: u64) -> Vec<u16> {
     out
 }
 
+/// The colour sensor's rational distortion of Azure Kinect 001514394512
+/// (`tests/fixtures/calib/azure_kinect/pyk4a_calibration.json`, `ModelParameters` 4..13
+/// in OpenCV's order k1 k2 p1 p2 k3 k4 k5 k6).
+#[allow(clippy::excessive_precision)]
+pub const AZURE_COLOR_DISTORTION: Distortion = Distortion::Rational([
+    0.33012130856513977,
+    -2.489396572113037,
+    -0.00016178244550246745,
+    -0.00012944525224156678,
+    1.453670859336853,
+    0.20891207456588745,
+    -2.302915096282959,
+    1.3751275539398193,
+]);
+
+/// The depth sensor's rational distortion of the same Azure Kinect (pyk4a's
+/// `tests/assets/calibration.json`, device 001514394512) in OpenCV's order.
+#[allow(clippy::excessive_precision)]
+pub const AZURE_DEPTH_DISTORTION: Distortion = Distortion::Rational([
+    0.5479397773742676,
+    -0.020971370860934258,
+    2.0557534298859537e-05,
+    -7.210415787994862e-05,
+    -0.002652231603860855,
+    0.8896790742874146,
+    0.08613020926713943,
+    -0.013910384848713875,
+]);
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn ring_rig_cameras_look_at_the_origin_from_2_2_m() {
-        let optics = crate::Intrinsics {
-            width: 4,
-            height: 4,
-            fx: 2.0,
-            fy: 2.0,
-            cx: 2.0,
-            cy: 2.0,
-            distortion: crate::Distortion::NONE,
-        };
+        let optics = crate::Intrinsics::pinhole(4, 4, 2.0, 2.0, 2.0, 2.0);
         let base = RgbdCamera::new("k", optics, optics);
         let rig = ring_rig(&base, 3);
         assert_eq!(rig.cameras.len(), 3);

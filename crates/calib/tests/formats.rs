@@ -36,21 +36,21 @@ fn assert_names(err: &CalibError, key: &str, file: &str) {
 }
 
 fn intrinsics(width: u32, height: u32) -> Intrinsics {
-    Intrinsics {
+    Intrinsics::pinhole(
         width,
         height,
-        fx: 612.345_678_901_234_5,
-        fy: 611.987_654_321_098_7,
-        cx: 638.123_456_789,
-        cy: 367.987_654_321,
-        distortion: Distortion::BrownConrady([
-            0.123_456_789,
-            -0.234_567_891,
-            1.5e-4,
-            -2.25e-5,
-            0.045_678_9,
-        ]),
-    }
+        612.345_678_901_234_5,
+        611.987_654_321_098_7,
+        638.123_456_789,
+        367.987_654_321,
+    )
+    .with_distortion(Distortion::BrownConrady([
+        0.123_456_789,
+        -0.234_567_891,
+        1.5e-4,
+        -2.25e-5,
+        0.045_678_9,
+    ]))
 }
 
 fn camera() -> RgbdCamera {
@@ -69,15 +69,10 @@ fn ros_fixture_reads_exact_values() {
     assert_eq!(info.camera_name, "narrow_stereo");
     assert_eq!(
         info.intrinsics,
-        Intrinsics {
-            width: 640,
-            height: 480,
-            fx: 430.215550,
-            fy: 430.531693,
-            cx: 306.691343,
-            cy: 227.224800,
-            distortion: Distortion::BrownConrady([-0.337586, 0.111612, -0.000218, -0.000030, 0.0]),
-        }
+        Intrinsics::pinhole(640, 480, 430.215550, 430.531693, 306.691343, 227.224800)
+            .with_distortion(Distortion::BrownConrady([
+                -0.337586, 0.111612, -0.000218, -0.000030, 0.0
+            ]))
     );
 }
 

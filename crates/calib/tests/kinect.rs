@@ -349,15 +349,7 @@ fn back_projected_pixels_project_back_to_themselves() {
 
 /// A 4×3 pinhole depth camera without distortion, f = 2 px, centre (1.5, 1).
 fn tiny_camera() -> RgbdCamera {
-    let intr = Intrinsics {
-        width: 4,
-        height: 3,
-        fx: 2.0,
-        fy: 2.0,
-        cx: 1.5,
-        cy: 1.0,
-        distortion: Distortion::NONE,
-    };
+    let intr = Intrinsics::pinhole(4, 3, 2.0, 2.0, 1.5, 1.0);
     RgbdCamera::new("tiny", intr, intr)
 }
 

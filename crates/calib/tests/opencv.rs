@@ -13,27 +13,15 @@ use bodyseg_calib::{
 };
 
 fn kinect_ir() -> Intrinsics {
-    Intrinsics {
-        width: 512,
-        height: 424,
-        fx: 366.9,
-        fy: 364.8,
-        cx: 243.0,
-        cy: 207.7,
-        distortion: Distortion::BrownConrady([0.0966, -0.283, 0.000159, -0.000508, 0.105]),
-    }
+    Intrinsics::pinhole(512, 424, 366.9, 364.8, 243.0, 207.7).with_distortion(
+        Distortion::BrownConrady([0.0966, -0.283, 0.000159, -0.000508, 0.105]),
+    )
 }
 
 fn color() -> Intrinsics {
-    Intrinsics {
-        width: 960,
-        height: 540,
-        fx: 530.0,
-        fy: 527.0,
-        cx: 477.2,
-        cy: 261.6,
-        distortion: Distortion::BrownConrady([0.056, -0.074, 0.0014, -0.0017, 0.024]),
-    }
+    Intrinsics::pinhole(960, 540, 530.0, 527.0, 477.2, 261.6).with_distortion(
+        Distortion::BrownConrady([0.056, -0.074, 0.0014, -0.0017, 0.024]),
+    )
 }
 
 /// Rotation about x, then y, then z (radians).
@@ -277,7 +265,7 @@ fn file_storage_written_by_opencv_reads_in_pure_rust_and_back() {
 /// `tests/fixtures/calib/azure_kinect/pyk4a_calibration.json`).
 fn azure_like() -> Intrinsics {
     Intrinsics {
-        distortion: common::AZURE_COLOR_DISTORTION,
+        distortion: bodyseg_calib::testing::AZURE_COLOR_DISTORTION,
         ..color()
     }
 }

@@ -11,30 +11,22 @@ use std::path::Path;
 use bodyseg_calib::{Distortion, Intrinsics, RgbdCamera, Rig, parse_rig_toml, rig_to_toml_string};
 
 mod common;
-use common::{AZURE_COLOR_DISTORTION, Rng, seed};
+use bodyseg_calib::testing::AZURE_COLOR_DISTORTION;
+use common::{Rng, seed};
 
 /// The depth sensor of Azure Kinect 001514394512 (`tests/fixtures/calib/azure_kinect/
 /// pyk4a_calibration.json`) in NFOV unbinned mode, 640×576, as the SDK converts it:
 /// `fx = fx_n · 1024`, `cx = cx_n · 1024 − 192 − 0.5`, likewise y with 180.
 fn azure_depth_nfov() -> Intrinsics {
-    Intrinsics {
-        width: 640,
-        height: 576,
-        fx: 0.4927808940410614 * 1024.0,
-        fy: 0.49290284514427185 * 1024.0,
-        cx: 0.5129697918891907 * 1024.0 - 192.0 - 0.5,
-        cy: 0.5169235467910767 * 1024.0 - 180.0 - 0.5,
-        distortion: Distortion::Rational([
-            0.5479397773742676,
-            -0.020971370860934258,
-            2.0557534298859537e-05,
-            -7.210415787994862e-05,
-            -0.002652231603860855,
-            0.8896790742874146,
-            0.08613020926713943,
-            -0.013910384848713875,
-        ]),
-    }
+    Intrinsics::pinhole(
+        640,
+        576,
+        0.4927808940410614 * 1024.0,
+        0.49290284514427185 * 1024.0,
+        0.5129697918891907 * 1024.0 - 192.0 - 0.5,
+        0.5169235467910767 * 1024.0 - 180.0 - 0.5,
+    )
+    .with_distortion(bodyseg_calib::testing::AZURE_DEPTH_DISTORTION)
 }
 
 /// The same depth sensor in WFOV unbinned mode, 1024×1024: the 120° field of view.
@@ -50,15 +42,15 @@ fn azure_depth_wfov() -> Intrinsics {
 
 /// The colour sensor of the same device at 3072P (4096×3072, the full sensor).
 fn azure_color_3072p() -> Intrinsics {
-    Intrinsics {
-        width: 4096,
-        height: 3072,
-        fx: 0.4779651165008545 * 4096.0,
-        fy: 0.6374239325523376 * 3072.0,
-        cx: 0.4998471438884735 * 4096.0 - 0.5,
-        cy: 0.5066176056861877 * 3072.0 - 0.5,
-        distortion: AZURE_COLOR_DISTORTION,
-    }
+    Intrinsics::pinhole(
+        4096,
+        3072,
+        0.4779651165008545 * 4096.0,
+        0.6374239325523376 * 3072.0,
+        0.4998471438884735 * 4096.0 - 0.5,
+        0.5066176056861877 * 3072.0 - 0.5,
+    )
+    .with_distortion(AZURE_COLOR_DISTORTION)
 }
 
 /// OpenCV's projection (`cvProjectPoints2Internal`, calib3d/src/calibration.cpp) of a

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use bodyseg_calib::{
-    Distortion, Intrinsics, Pose, RgbdCamera, Rig, parse_rig_toml, read_iai_kinect2, read_rig_toml,
+    Intrinsics, Pose, RgbdCamera, Rig, parse_rig_toml, read_iai_kinect2, read_rig_toml,
     rig_to_toml_string, write_rig_toml,
 };
 
@@ -143,15 +143,7 @@ fn rig_writes_and_rereads_without_loss() {
 
 #[test]
 fn writer_refuses_an_invalid_rig() {
-    let intr = Intrinsics {
-        width: 4,
-        height: 3,
-        fx: 2.0,
-        fy: 2.0,
-        cx: 1.5,
-        cy: 1.0,
-        distortion: Distortion::NONE,
-    };
+    let intr = Intrinsics::pinhole(4, 3, 2.0, 2.0, 1.5, 1.0);
     let cam = RgbdCamera::new("a", intr, intr);
     let rig = Rig {
         cameras: vec![cam.clone(), cam],

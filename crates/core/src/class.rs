@@ -41,14 +41,15 @@ impl Class {
     ];
 
     /// The 6 body classes (everything but background), in id order.
-    pub const BODY: [Class; 6] = [
-        Class::Head,
-        Class::Torso,
-        Class::UpperArms,
-        Class::LowerArms,
-        Class::UpperLegs,
-        Class::LowerLegs,
-    ];
+    pub const BODY: [Class; 6] = {
+        let mut body = [Class::Head; 6];
+        let mut i = 0;
+        while i < body.len() {
+            body[i] = Class::ALL[i + 1];
+            i += 1;
+        }
+        body
+    };
 
     /// The class with this id, if `id < 7`.
     pub fn from_id(id: u8) -> Option<Class> {

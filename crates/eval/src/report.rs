@@ -398,15 +398,15 @@ impl<'de> Deserialize<'de> for Report {
 }
 
 /// Column order of the paper's tables: body classes, then background.
-const TABLE_CLASSES: [Class; 7] = [
-    Class::Head,
-    Class::Torso,
-    Class::UpperArms,
-    Class::LowerArms,
-    Class::UpperLegs,
-    Class::LowerLegs,
-    Class::Background,
-];
+const TABLE_CLASSES: [Class; 7] = {
+    let mut table = [Class::Background; 7];
+    let mut i = 0;
+    while i < Class::BODY.len() {
+        table[i] = Class::BODY[i];
+        i += 1;
+    }
+    table
+};
 
 /// What a table cell shows for a class absent from both clouds, or an empty mean.
 const NONE_CELL: &str = "–";

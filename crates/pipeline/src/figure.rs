@@ -452,15 +452,7 @@ mod tests {
     use bodyseg_core::PointOrigin;
 
     fn camera() -> RgbdCamera {
-        let depth = Intrinsics {
-            width: 64,
-            height: 48,
-            fx: 50.0,
-            fy: 50.0,
-            cx: 32.0,
-            cy: 24.0,
-            distortion: bodyseg_calib::Distortion::NONE,
-        };
+        let depth = Intrinsics::pinhole(64, 48, 50.0, 50.0, 32.0, 24.0);
         let mut color = depth;
         color.width = 128;
         color.height = 96;

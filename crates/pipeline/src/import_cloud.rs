@@ -19,7 +19,7 @@ use crate::outputs::read_cloud_file;
 use crate::recording::{Layer, RecordingWriter};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
-use bodyseg_calib::{Distortion, Intrinsics, Pose, RgbdCamera, Rig};
+use bodyseg_calib::{Intrinsics, Pose, RgbdCamera, Rig};
 use bodyseg_io::{CloudFile, CloudGrid, discard_folder, publish_folder, staging_folder};
 use bodyseg_people::{Floor, FloorHint};
 use std::path::{Path, PathBuf};
@@ -192,15 +192,7 @@ pub fn import_cloud(opts: &ImportCloudOptions) -> Result<ImportCloudSummary> {
         },
     ));
 
-    let sensor = Intrinsics {
-        width,
-        height,
-        fx: fit.fx,
-        fy: fit.fy,
-        cx: fit.cx,
-        cy: fit.cy,
-        distortion: Distortion::NONE,
-    };
+    let sensor = Intrinsics::pinhole(width, height, fit.fx, fit.fy, fit.cx, fit.cy);
     let mut camera = RgbdCamera::new(CAMERA, sensor, sensor);
     camera.world_from_depth = world_from_depth;
     camera.depth_scale = DEPTH_UNITS_PER_M;

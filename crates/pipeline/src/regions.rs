@@ -193,15 +193,8 @@ mod tests {
     /// A 640×480 camera at the world origin looking along world +y (z up): optical
     /// z = world y, optical x = world x, optical y = −world z.
     fn camera() -> RgbdCamera {
-        let intr = Intrinsics {
-            width: 640,
-            height: 480,
-            fx: 500.0,
-            fy: 500.0,
-            cx: 319.5,
-            cy: 239.5,
-            distortion: Distortion::default(),
-        };
+        let intr = Intrinsics::pinhole(640, 480, 500.0, 500.0, 319.5, 239.5)
+            .with_distortion(Distortion::default());
         let mut cam = RgbdCamera::new("cam0", intr, intr);
         // world_from_depth: depth x → world x, depth y → world −z, depth z → world y.
         cam.world_from_depth = Pose::from_rotation_translation(

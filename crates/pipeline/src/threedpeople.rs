@@ -143,15 +143,7 @@ impl ThreeDPeopleCamera {
     /// point in pixels, pixel centres at integers), the other settings at their defaults.
     pub fn pinhole(width: u32, height: u32, fx: f64, fy: f64, cx: f64, cy: f64) -> Self {
         ThreeDPeopleCamera {
-            intrinsics: Intrinsics {
-                width,
-                height,
-                fx,
-                fy,
-                cx,
-                cy,
-                distortion: bodyseg_calib::Distortion::NONE,
-            },
+            intrinsics: Intrinsics::pinhole(width, height, fx, fy, cx, cy),
             depth_scale_m: 1.0,
             max_depth_m: 100.0,
             depth_is_ray_distance: false,

@@ -362,24 +362,11 @@ mod tests {
 
     /// The iai_kinect2 calibration of the bench data (`196605135147`), rounded.
     fn kinect() -> RgbdCamera {
-        let depth = Intrinsics {
-            width: 512,
-            height: 424,
-            fx: 365.4,
-            fy: 365.4,
-            cx: 257.9,
-            cy: 206.8,
-            distortion: Distortion::BrownConrady([0.0905, -0.272, 0.0, 0.0, 0.0967]),
-        };
-        let color = Intrinsics {
-            width: 1920,
-            height: 1080,
-            fx: 1059.9,
-            fy: 1058.6,
-            cx: 968.4,
-            cy: 548.1,
-            distortion: Distortion::BrownConrady([0.0391, -0.0311, 0.00071, 0.00025, 0.0]),
-        };
+        let depth = Intrinsics::pinhole(512, 424, 365.4, 365.4, 257.9, 206.8)
+            .with_distortion(Distortion::BrownConrady([0.0905, -0.272, 0.0, 0.0, 0.0967]));
+        let color = Intrinsics::pinhole(1920, 1080, 1059.9, 1058.6, 968.4, 548.1).with_distortion(
+            Distortion::BrownConrady([0.0391, -0.0311, 0.00071, 0.00025, 0.0]),
+        );
         let mut cam = RgbdCamera::new("k", depth, color);
         let (s, c) = 0.01_f64.sin_cos();
         cam.color_from_depth = Pose::from_rotation_translation(
@@ -482,24 +469,15 @@ mod tests {
         // The Kinect's geometry with an Azure Kinect colour sensor's rational model
         // (tests/fixtures/calib/azure_kinect/pyk4a_calibration.json, 720P).
         let mut cam = kinect();
-        cam.color = Intrinsics {
-            width: 1280,
-            height: 720,
-            fx: 611.7953491210938,
-            fy: 611.927001953125,
-            cx: 639.3043212890625,
-            cy: 365.8529052734375,
-            distortion: Distortion::Rational([
-                0.33012130856513977,
-                -2.489396572113037,
-                -0.00016178244550246745,
-                -0.00012944525224156678,
-                1.453670859336853,
-                0.20891207456588745,
-                -2.302915096282959,
-                1.3751275539398193,
-            ]),
-        };
+        cam.color = Intrinsics::pinhole(
+            1280,
+            720,
+            611.7953491210938,
+            611.927001953125,
+            639.3043212890625,
+            365.8529052734375,
+        )
+        .with_distortion(bodyseg_calib::testing::AZURE_COLOR_DISTORTION);
         let proj = ColorProjection::new(&cam);
         let (mut worst, mut inside, mut other_pixel) = (0.0f64, 0usize, 0usize);
         for p in depth_points(&cam, 2) {

@@ -81,24 +81,8 @@ fn render_labels(camera: &RgbdCamera, scene: &Scene) -> LabelImage {
 /// 64×48 depth, 128×96 colour (twice the focal length: the colour image is denser, as on
 /// a Kinect), no distortion, colour sensor 5 cm to the depth sensor's +x.
 fn simple_camera() -> RgbdCamera {
-    let depth = Intrinsics {
-        width: 64,
-        height: 48,
-        fx: 60.0,
-        fy: 60.0,
-        cx: 31.5,
-        cy: 23.5,
-        distortion: bodyseg_calib::Distortion::NONE,
-    };
-    let color = Intrinsics {
-        width: 128,
-        height: 96,
-        fx: 120.0,
-        fy: 120.0,
-        cx: 63.5,
-        cy: 47.5,
-        distortion: bodyseg_calib::Distortion::NONE,
-    };
+    let depth = Intrinsics::pinhole(64, 48, 60.0, 60.0, 31.5, 23.5);
+    let color = Intrinsics::pinhole(128, 96, 120.0, 120.0, 63.5, 47.5);
     let mut cam = RgbdCamera::new("simple", depth, color);
     cam.color_from_depth = Pose::from_rotation_translation(
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],

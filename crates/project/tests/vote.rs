@@ -21,15 +21,7 @@ const CAMERA_X_M: [f64; 3] = [-0.3, 0.0, 0.3];
 /// One sensor model for depth and colour (64×48, no distortion) and `color_from_depth` =
 /// identity: the projection adds no error of its own, so every wrong label is the parser's.
 fn camera(index: usize) -> RgbdCamera {
-    let intrinsics = Intrinsics {
-        width: 64,
-        height: 48,
-        fx: 40.0,
-        fy: 40.0,
-        cx: 31.5,
-        cy: 23.5,
-        distortion: bodyseg_calib::Distortion::NONE,
-    };
+    let intrinsics = Intrinsics::pinhole(64, 48, 40.0, 40.0, 31.5, 23.5);
     let mut cam = RgbdCamera::new(format!("cam{index}"), intrinsics, intrinsics);
     cam.world_from_depth = Pose::from_rotation_translation(
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],

@@ -48,15 +48,8 @@ pub fn intrinsics_of(info: &CameraInfoMsg, rect: bool) -> Result<Intrinsics, Ros
         }
         (k[0], k[4], k[2], k[5], distortion_of(info)?)
     };
-    let intrinsics = Intrinsics {
-        width: info.width,
-        height: info.height,
-        fx,
-        fy,
-        cx,
-        cy,
-        distortion,
-    };
+    let intrinsics =
+        Intrinsics::pinhole(info.width, info.height, fx, fy, cx, cy).with_distortion(distortion);
     intrinsics.validate().map_err(|e| {
         Ros2Error::invalid(format!(
             "field {}: {e} (width {}, height {})",

@@ -13,21 +13,21 @@ use rand_chacha::ChaCha8Rng;
 /// The depth (IR) sensor of the Kinect v2 in `../shared/data/iai_kinect2/196605135147`
 /// (`calib_ir.yaml`, iai_kinect2's calibration of a real device), 512×424.
 pub fn kinect_v2_depth() -> Intrinsics {
-    Intrinsics {
-        width: 512,
-        height: 424,
-        fx: 3.6694757270064110e+02,
-        fy: 3.6479117165721783e+02,
-        cx: 2.4298551682775121e+02,
-        cy: 2.0769853575457685e+02,
-        distortion: Distortion::BrownConrady([
-            9.6558110377123016e-02,
-            -2.8298244017989416e-01,
-            1.5889951609432634e-04,
-            -5.0751483524871712e-04,
-            1.0523948765859192e-01,
-        ]),
-    }
+    Intrinsics::pinhole(
+        512,
+        424,
+        3.6694757270064110e+02,
+        3.6479117165721783e+02,
+        2.4298551682775121e+02,
+        2.0769853575457685e+02,
+    )
+    .with_distortion(Distortion::BrownConrady([
+        9.6558110377123016e-02,
+        -2.8298244017989416e-01,
+        1.5889951609432634e-04,
+        -5.0751483524871712e-04,
+        1.0523948765859192e-01,
+    ]))
 }
 
 /// The colour sensor of the same device (`calib_color.yaml`), 1920×1080, scaled to
@@ -36,21 +36,21 @@ pub fn kinect_v2_depth() -> Intrinsics {
 pub fn kinect_v2_color(width: u32) -> Intrinsics {
     let s = f64::from(width) / 1920.0;
     let height = (f64::from(width) * 9.0 / 16.0).round() as u32;
-    Intrinsics {
+    Intrinsics::pinhole(
         width,
         height,
-        fx: 1.0599465578241038e+03 * s,
-        fy: 1.0539326808799726e+03 * s,
-        cx: (9.5488326677588441e+02 + 0.5) * s - 0.5,
-        cy: (5.2373858291060583e+02 + 0.5) * s - 0.5,
-        distortion: Distortion::BrownConrady([
-            5.6268441170930321e-02,
-            -7.4199141308694802e-02,
-            1.4250797540545752e-03,
-            -1.6951722389720336e-03,
-            2.4107681263086548e-02,
-        ]),
-    }
+        1.0599465578241038e+03 * s,
+        1.0539326808799726e+03 * s,
+        (9.5488326677588441e+02 + 0.5) * s - 0.5,
+        (5.2373858291060583e+02 + 0.5) * s - 0.5,
+    )
+    .with_distortion(Distortion::BrownConrady([
+        5.6268441170930321e-02,
+        -7.4199141308694802e-02,
+        1.4250797540545752e-03,
+        -1.6951722389720336e-03,
+        2.4107681263086548e-02,
+    ]))
 }
 
 /// The device's colour-from-depth extrinsic (`calib_pose.yaml`: X_c = R·X_ir + T, 5.2 cm

@@ -1,6 +1,9 @@
 //! Labelled point clouds as PLY files (FORMATS.md, "Labelled point cloud").
 
+mod ascii;
+mod binary;
 mod header;
+mod plan;
 mod read;
 mod write;
 

@@ -39,15 +39,7 @@ fn zbuffer_is_the_nearest_point_within_the_radius() {
                 .map(|_| 0.5 + rng.below(1000) as f32 / 250.0)
                 .collect(),
         };
-        let color = bodyseg_calib::Intrinsics {
-            width: 50,
-            height: 30,
-            fx: 1.0,
-            fy: 1.0,
-            cx: 0.0,
-            cy: 0.0,
-            distortion: bodyseg_calib::Distortion::NONE,
-        };
+        let color = bodyseg_calib::Intrinsics::pinhole(50, 30, 1.0, 1.0, 0.0, 0.0);
         let zb = ZBuffer::splat(hits.view(), r, &color, &mut buffer);
         for i in 0..n {
             let (u, v) = (hits.u[i], hits.v[i]);
@@ -115,24 +107,8 @@ fn edge_map_matches_the_per_pixel_test() {
     let (w, h) = (37, 29);
     let mut camera = RgbdCamera::new(
         "e",
-        bodyseg_calib::Intrinsics {
-            width: w as u32,
-            height: h as u32,
-            fx: 30.0,
-            fy: 30.0,
-            cx: 18.0,
-            cy: 14.0,
-            distortion: bodyseg_calib::Distortion::NONE,
-        },
-        bodyseg_calib::Intrinsics {
-            width: 74,
-            height: 58,
-            fx: 60.0,
-            fy: 60.0,
-            cx: 37.0,
-            cy: 29.0,
-            distortion: bodyseg_calib::Distortion::NONE,
-        },
+        bodyseg_calib::Intrinsics::pinhole(w as u32, h as u32, 30.0, 30.0, 18.0, 14.0),
+        bodyseg_calib::Intrinsics::pinhole(74, 58, 60.0, 60.0, 37.0, 29.0),
     );
     camera.depth_shift_mm = -300.0;
     let lut = depth_lut(&camera);

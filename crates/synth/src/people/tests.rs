@@ -1,7 +1,14 @@
 //! Unit tests of `people`.
 
-use super::*;
+use std::f32::consts::{PI, TAU};
+
+use super::clothes::*;
+use super::person::*;
+use super::placement::*;
+use super::pose::*;
 use crate::config::POSE_NAMES;
+use crate::config::PeopleConfig;
+use crate::geometry::*;
 
 fn config(poses: &[&str], count: u32) -> PeopleConfig {
     PeopleConfig {

@@ -1,0 +1,322 @@
+//! Unit tests of `blazepose`.
+
+use super::bone::*;
+use super::decode::*;
+use super::label::*;
+use super::landmark;
+use super::model::*;
+use super::roi::*;
+use bodyseg_core::RgbImage;
+
+// Tolerance for coordinate round trips: a few ulps of values ~ 1e2.
+const EPS: f64 = 1e-9;
+
+#[test]
+fn roi_round_trip_and_centre() {
+    let roi = Roi {
+        centre_px: [100.0, 50.0],
+        side_px: 80.0,
+        angle_rad: 0.7,
+    };
+    for t in [[0.0, 0.0], [128.0, 128.0], [200.5, 31.25]] {
+        let back = roi.image_to_tensor(roi.tensor_to_image(t));
+        assert!((back[0] - t[0]).abs() < EPS && (back[1] - t[1]).abs() < EPS);
+    }
+    let c = roi.tensor_to_image([128.0, 128.0]);
+    assert!((c[0] - 100.0).abs() < EPS && (c[1] - 50.0).abs() < EPS);
+}
+
+#[test]
+fn alignment_roi_points_up() {
+    let roi = Roi::from_alignment([50.0, 100.0], [50.0, 60.0], 1.5);
+    assert!((roi.side_px - 120.0).abs() < EPS);
+    assert!(roi.angle_rad.abs() < EPS);
+    // head to the right: the ROI's up axis is +x
+    let roi = Roi::from_alignment([50.0, 100.0], [90.0, 100.0], 1.0);
+    let (_, down) = roi.axes();
+    assert!((down[0] + 1.0).abs() < EPS && down[1].abs() < EPS);
+}
+
+#[test]
+fn distances() {
+    assert!((segment_distance([5.0, 5.0], [0.0, 0.0], [10.0, 0.0]) - 5.0).abs() < EPS);
+    assert!((segment_distance([12.0, 0.0], [0.0, 0.0], [10.0, 0.0]) - 2.0).abs() < EPS);
+    let sq = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
+    assert_eq!(polygon_distance([5.0, 5.0], &sq), 0.0);
+    assert!((polygon_distance([12.0, 5.0], &sq) - 2.0).abs() < EPS);
+}
+
+#[test]
+fn crop_of_a_uniform_image_is_uniform_and_replicates_the_border() {
+    let img = RgbImage::new(4, 3, [10u8, 20, 30].repeat(12)).expect("4x3x3 bytes");
+    // a ROI mostly outside the image: the border pixels are replicated
+    let roi = Roi {
+        centre_px: [-50.0, -50.0],
+        side_px: 40.0,
+        angle_rad: 0.3,
+    };
+    let t = crop(&img, &roi, 8);
+    for px in t.chunks_exact(3) {
+        assert!((px[0] - 10.0 / 255.0).abs() < 1e-6 && (px[2] - 30.0 / 255.0).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn heatmap_moves_a_landmark_to_its_peak() {
+    let mut heat = vec![-20.0f32; HEATMAP * HEATMAP * NUM_LANDMARKS];
+    // landmark 11's peak at cell (row 10, col 12)
+    heat[(10 * HEATMAP + 12) * NUM_LANDMARKS + 11] = 20.0;
+    let mut lm = vec![[0.0; 5]; NUM_LANDMARKS];
+    lm[11] = [45.0, 38.0, 0.0, 0.0, 0.0]; // cell (row 9, col 11): within the kernel
+    lm[12] = [45.0, 38.0, 0.0, 0.0, 0.0]; // its heatmap is flat and low: unchanged
+    refine_from_heatmap(&mut lm, &heat, 7, 0.5);
+    assert!((lm[11][0] - 12.5 * 4.0).abs() < 1e-3 && (lm[11][1] - 10.5 * 4.0).abs() < 1e-3);
+    assert_eq!(lm[12][0], 45.0);
+}
+
+/// An upright figure (image px), mask 1 everywhere.
+fn figure() -> DecodedPose {
+    use landmark::*;
+    let mut xy = vec![[50.0, 25.0]; NUM_LANDMARKS];
+    xy[LEFT_EYE] = [53.0, 23.0];
+    xy[RIGHT_EYE] = [47.0, 23.0];
+    xy[MOUTH_LEFT] = [52.0, 28.0];
+    xy[MOUTH_RIGHT] = [48.0, 28.0];
+    xy[LEFT_EAR] = [56.0, 24.0];
+    xy[RIGHT_EAR] = [44.0, 24.0];
+    for (i, p) in [
+        (LEFT_SHOULDER, [60.0, 40.0]),
+        (RIGHT_SHOULDER, [40.0, 40.0]),
+        (LEFT_HIP, [58.0, 80.0]),
+        (RIGHT_HIP, [42.0, 80.0]),
+        (LEFT_ELBOW, [70.0, 60.0]),
+        (RIGHT_ELBOW, [30.0, 60.0]),
+        (LEFT_WRIST, [72.0, 78.0]),
+        (RIGHT_WRIST, [28.0, 78.0]),
+        (LEFT_KNEE, [58.0, 110.0]),
+        (RIGHT_KNEE, [42.0, 110.0]),
+        (LEFT_ANKLE, [58.0, 140.0]),
+        (RIGHT_ANKLE, [42.0, 140.0]),
+    ] {
+        xy[i] = p;
+    }
+    for i in LEFT_HAND {
+        xy[i] = [72.0, 84.0];
+    }
+    for i in RIGHT_HAND {
+        xy[i] = [28.0, 84.0];
+    }
+    for i in LEFT_FOOT {
+        xy[i] = [58.0, 146.0];
+    }
+    for i in RIGHT_FOOT {
+        xy[i] = [42.0, 146.0];
+    }
+    DecodedPose {
+        roi: Roi {
+            centre_px: [50.0, 80.0],
+            side_px: 160.0,
+            angle_rad: 0.0,
+        },
+        flag: 1.0,
+        xy,
+        visibility: vec![1.0; NUM_LANDMARKS],
+        presence: vec![1.0; NUM_LANDMARKS],
+        mask: vec![1.0; INPUT * INPUT],
+    }
+}
+
+#[test]
+fn each_bone_labels_its_pixels() {
+    let pose = figure();
+    let p = label_person(&pose, &RuleConfig::default(), 100, 160).expect("in the image");
+    let at = |u: usize, v: usize| p.class[(v - p.v0) * (p.u1 - p.u0) + (u - p.u0)];
+    assert_eq!(at(50, 25), 1, "head");
+    assert_eq!(at(50, 60), 2, "torso");
+    assert_eq!(at(65, 50), 3, "upper arm");
+    assert_eq!(at(71, 70), 4, "lower arm");
+    assert_eq!(at(58, 95), 5, "upper leg");
+    assert_eq!(at(42, 125), 6, "lower leg");
+    assert!(p.prob.iter().all(|&x| (0.0..=1.0).contains(&x)));
+    // the probability is lowest on a border between two parts
+    let k_mid = (60 - p.v0) * (p.u1 - p.u0) + (50 - p.u0);
+    let k_edge = (52 - p.v0) * (p.u1 - p.u0) + (64 - p.u0);
+    assert!(p.prob[k_edge] < p.prob[k_mid]);
+}
+
+/// The Python reference (scripts/blazepose_prototype.py) on the same figure with a
+/// graded mask: tests/data/blazepose_rule_golden.json.
+#[test]
+fn matches_the_python_reference() {
+    let golden: serde_json::Value =
+        serde_json::from_str(include_str!("../../tests/data/blazepose_rule_golden.json"))
+            .expect("golden JSON parses");
+    let mut pose = figure();
+    for j in 0..INPUT {
+        for i in 0..INPUT {
+            let (tx, ty) = (i as f64 + 0.5, j as f64 + 0.5);
+            let m = 1.2 - ((tx - 128.0) / 70.0).hypot((ty - 128.0) / 120.0);
+            pose.mask[j * INPUT + i] = m.clamp(0.0, 1.0) as f32;
+        }
+    }
+    let p = label_person(&pose, &RuleConfig::default(), 100, 160).expect("in the image");
+    let field = |k: &str| golden[k].as_u64().expect("window bound") as usize;
+    assert_eq!(
+        (p.u0, p.u1, p.v0, p.v1),
+        (field("u0"), field("u1"), field("v0"), field("v1"))
+    );
+    let want: Vec<u8> = golden["classes"]
+        .as_str()
+        .expect("classes string")
+        .bytes()
+        .map(|b| b - b'0')
+        .collect();
+    let probs: Vec<f64> = golden["probs"]
+        .as_array()
+        .expect("probs")
+        .iter()
+        .map(|v| v.as_f64().expect("number"))
+        .collect();
+    assert_eq!(want.len(), p.class.len());
+    let same = want.iter().zip(&p.class).filter(|(a, b)| a == b).count();
+    // Pixels exactly on a border between two bones may tie differently in f64 vs
+    // numpy's summation order: allow 0.2 % of the window.
+    assert!(
+        same * 1000 >= want.len() * 998,
+        "{same} of {} agree",
+        want.len()
+    );
+    for k in 0..want.len() {
+        // On the person's pixels; elsewhere the prototype writes 0 where this gives
+        // the background's probability (1 − mask).
+        if want[k] == p.class[k] && want[k] != 0 {
+            // golden probabilities are rounded to 5 decimals
+            assert!((probs[k] - f64::from(p.prob[k])).abs() < 1e-4, "pixel {k}");
+        }
+    }
+}
+
+#[test]
+fn legs_out_of_frame_are_not_invented() {
+    use landmark::*;
+    let mut pose = figure();
+    for i in [LEFT_KNEE, RIGHT_KNEE, LEFT_ANKLE, RIGHT_ANKLE] {
+        pose.presence[i] = 0.1;
+    }
+    let classes: Vec<u8> = bones(&pose, &RuleConfig::default())
+        .iter()
+        .map(|b| b.class)
+        .collect();
+    assert!(!classes.contains(&5) && !classes.contains(&6));
+    assert!(classes.contains(&2) && classes.contains(&4));
+}
+
+#[test]
+fn no_mask_no_person_and_merge_takes_the_nearer_bone() {
+    let mut pose = figure();
+    pose.mask = vec![0.0; INPUT * INPUT];
+    let empty = label_person(&pose, &RuleConfig::default(), 100, 160).expect("window");
+    assert!(empty.class.iter().all(|&c| c == 0));
+
+    let a = PersonLabels {
+        u0: 0,
+        u1: 2,
+        v0: 0,
+        v1: 1,
+        class: vec![1, 2],
+        prob: vec![0.9, 0.8],
+        score: vec![0.5, 2.0],
+        depth_m: None,
+    };
+    let b = PersonLabels {
+        u0: 1,
+        u1: 3,
+        v0: 0,
+        v1: 1,
+        class: vec![3, 4],
+        prob: vec![0.7, 0.6],
+        score: vec![1.0, 1.0],
+        depth_m: None,
+    };
+    let img = merge_people(4, 1, &[a.clone(), b.clone()]);
+    let ids: Vec<u8> = img.labels.iter().map(|l| l.id()).collect();
+    assert_eq!(ids, vec![1, 3, 4, 0]);
+    // Outside every person: background, certain.
+    assert_eq!(img.probs, Some(vec![0.9, 0.7, 0.6, 1.0]));
+
+    // The person in front wins the overlap even with the farther bone...
+    let front = PersonLabels {
+        depth_m: Some(2.0),
+        ..b.clone()
+    };
+    let behind = PersonLabels {
+        depth_m: Some(3.0),
+        ..a.clone()
+    };
+    let img = merge_people(4, 1, &[behind.clone(), front.clone()]);
+    let ids: Vec<u8> = img.labels.iter().map(|l| l.id()).collect();
+    assert_eq!(ids, vec![1, 3, 4, 0], "pixel 1: b is in front");
+    // ...also with a smaller bone score behind it.
+    let close_behind = PersonLabels {
+        score: vec![0.1, 0.1],
+        ..behind.clone()
+    };
+    let img = merge_people(4, 1, &[close_behind, front.clone()]);
+    assert_eq!(img.labels[1].id(), 3);
+    // Side by side (depths within SIDE_BY_SIDE_M): the nearer bone decides.
+    let beside = PersonLabels {
+        depth_m: Some(2.0 + SIDE_BY_SIDE_M / 2.0),
+        score: vec![0.1, 0.1],
+        ..a
+    };
+    let img = merge_people(4, 1, &[beside, front]);
+    assert_eq!(img.labels[1].id(), 2);
+}
+
+/// [`label_person`]'s block culling gives what scoring every bone at every pixel
+/// gives (the reference below), on figures with graded masks and in several poses.
+#[test]
+fn block_culling_equals_scoring_every_bone() {
+    let cfg = RuleConfig::default();
+    for (angle, arm_dx) in [(0.0, 0.0), (0.3, 12.0), (-0.7, -20.0)] {
+        let mut pose = figure();
+        pose.roi.angle_rad = angle;
+        pose.xy[landmark::LEFT_WRIST][0] += arm_dx;
+        for j in 0..INPUT {
+            for i in 0..INPUT {
+                let (tx, ty) = (i as f64 + 0.5, j as f64 + 0.5);
+                let m = 1.3 - ((tx - 128.0) / 60.0).hypot((ty - 128.0) / 110.0);
+                pose.mask[j * INPUT + i] = m.clamp(0.0, 1.0) as f32;
+            }
+        }
+        let got = label_person(&pose, &cfg, 100, 160).expect("in the image");
+        let bl = bones(&pose, &cfg);
+        let axes = pose.roi.axes();
+        let ww = got.u1 - got.u0;
+        let mut labelled = 0;
+        for v in got.v0..got.v1 {
+            for u in got.u0..got.u1 {
+                let k = (v - got.v0) * ww + (u - got.u0);
+                let q = [u as f64, v as f64];
+                let m = mask_at(&pose, axes, q);
+                let mut per_class = [f64::INFINITY; 7];
+                for b in &bl {
+                    let c = usize::from(b.class);
+                    per_class[c] = per_class[c].min(b.score(q, cfg.torso_bias));
+                }
+                let (c1, e1, e2) = best_two(&per_class);
+                if m < cfg.mask_threshold || e1 > cfg.max_score {
+                    assert_eq!(got.class[k], 0, "({u}, {v}) is not the person's");
+                    assert!(got.score[k].is_infinite());
+                    continue;
+                }
+                labelled += 1;
+                assert_eq!(usize::from(got.class[k]), c1, "({u}, {v})");
+                let conf = 1.0 - 0.5 * (-(e2 - e1) / cfg.margin_scale).exp();
+                // f32 storage of an f64 value
+                assert!((f64::from(got.prob[k]) - m * conf).abs() < 1e-6);
+            }
+        }
+        assert!(labelled > 1000, "the figure is labelled: {labelled} px");
+    }
+}
