@@ -400,39 +400,25 @@ fn openptrack_network_of_ros_cameras() {
         arg(&calib_fixture("ros/azure_kinect_depth_nfov_unbinned.yaml")),
         arg(&calib_fixture("ros/azure_kinect_rgb_720p.yaml"))
     );
-    let before = files_in(d);
-    let out = bodyseg(
-        d,
-        &[
+    let import = |extra: &[&str]| {
+        let mut args = vec![
             "rig",
             "import",
             "--from",
             "openptrack",
-            &ros,
+            ros.as_str(),
             "--name",
             "kinect02",
-            "--out",
-            "rig.toml",
-        ],
-    );
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", "rig.toml"]);
+        bodyseg(d, &args)
+    };
+    let before = files_in(d);
+    let out = import(&[]);
     assert_one_error(&out, d, &before, &["--from openptrack needs --poses"]);
     let poses = calib_fixture("openptrack/open_ptrack_v2/camera_poses.yaml");
-    let out = bodyseg(
-        d,
-        &[
-            "rig",
-            "import",
-            "--from",
-            "openptrack",
-            &ros,
-            "--name",
-            "kinect02",
-            "--poses",
-            arg(&poses),
-            "--out",
-            "rig.toml",
-        ],
-    );
+    let out = import(&["--poses", arg(&poses)]);
     assert_ok(&out, "rig import --from openptrack");
     let rig = read_rig(&d.join("rig.toml")).expect("rig.toml reads");
     assert_eq!(rig.cameras.len(), 1);
