@@ -381,24 +381,7 @@ impl Segmenter for BlazePoseSegmenter {
     fn segment(&mut self, views: &[ViewInput<'_>]) -> Result<Vec<ParsedView>, ParsingError> {
         let mut parsed = Vec::with_capacity(views.len());
         for (view, input) in views.iter().enumerate() {
-            let Some(image) = input.image else {
-                return Err(ParsingError::BadImage {
-                    view,
-                    reason: format!("camera {}: no colour image", input.camera),
-                });
-            };
-            if image.width == 0 || image.height == 0 || image.rgb.len() != image.num_pixels() * 3 {
-                return Err(ParsingError::BadImage {
-                    view,
-                    reason: format!(
-                        "camera {}: colour image {}x{} with {} bytes",
-                        input.camera,
-                        image.width,
-                        image.height,
-                        image.rgb.len()
-                    ),
-                });
-            }
+            let image = input.checked_image(view)?;
             let labels = self.segment_image(image, input.regions)?;
             parsed.push(ParsedView {
                 labels,

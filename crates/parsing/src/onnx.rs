@@ -302,24 +302,7 @@ impl Segmenter for OnnxSegmenter {
         let s = self.spec.input_side();
         let mut transforms = Vec::with_capacity(views.len());
         for (view, input) in views.iter().enumerate() {
-            let Some(image) = input.image else {
-                return Err(ParsingError::BadImage {
-                    view,
-                    reason: format!("camera {}: no colour image", input.camera),
-                });
-            };
-            if image.width == 0 || image.height == 0 || image.rgb.len() != image.num_pixels() * 3 {
-                return Err(ParsingError::BadImage {
-                    view,
-                    reason: format!(
-                        "camera {}: colour image {}x{} with {} bytes",
-                        input.camera,
-                        image.width,
-                        image.height,
-                        image.rgb.len()
-                    ),
-                });
-            }
+            let image = input.checked_image(view)?;
             transforms.push((image, InputTransform::new(image.width, image.height, s)));
         }
         let batch = self.fixed_batch.unwrap_or(views.len().max(1));

@@ -49,6 +49,30 @@ pub struct ViewInput<'a> {
     pub regions: Option<&'a [PersonRegion]>,
 }
 
+impl<'a> ViewInput<'a> {
+    /// The view's colour image, checked: present, not empty, its bytes those of its size.
+    /// `view` is the view's index, for the error.
+    ///
+    /// # Errors
+    /// [`ParsingError::BadImage`] naming the camera.
+    pub fn checked_image(&self, view: usize) -> Result<&'a RgbImage, ParsingError> {
+        let bad = |reason| ParsingError::BadImage { view, reason };
+        let image = self
+            .image
+            .ok_or_else(|| bad(format!("camera {}: no colour image", self.camera)))?;
+        if image.width == 0 || image.height == 0 || image.rgb.len() != image.num_pixels() * 3 {
+            return Err(bad(format!(
+                "camera {}: colour image {}x{} with {} bytes",
+                self.camera,
+                image.width,
+                image.height,
+                image.rgb.len()
+            )));
+        }
+        Ok(image)
+    }
+}
+
 /// The parser's output for one view.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParsedView {

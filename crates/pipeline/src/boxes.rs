@@ -188,22 +188,23 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
     boxes.world_from_cloud = world_from_cloud;
     if let Some(cloud) = &cloud {
         let what = match &opts.input {
-            BoxesInput::Cloud(path) => {
-                warn_all(cloud_scale_warning(cloud, &path.display().to_string()));
-                path.display().to_string()
-            }
+            BoxesInput::Cloud(path) => path.display().to_string(),
             BoxesInput::Recording { recording, frame } => {
                 format!("{} frame {frame}", recording.display())
             }
         };
         if boxes.boxes.is_empty() && mode != BoxMode::File {
-            // The cause is more useful than the bare fact: say what is likely wrong.
+            // One warning, with the likely cause (an implausible unit first), rather than
+            // the bare fact and a separate scale warning.
             tracing::warn!(
                 "{what}: no person found (mode {}); likely cause: {}",
                 mode.name(),
                 likely_cause(&cloud.positions_m, floor_found)
             );
         } else {
+            if matches!(opts.input, BoxesInput::Cloud(_)) {
+                warn_all(cloud_scale_warning(cloud, &what));
+            }
             warn_all(boxes_warnings(&boxes.boxes, cloud, &what));
         }
     }

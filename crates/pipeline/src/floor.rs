@@ -8,12 +8,12 @@ use bodyseg_core::math::{RigidTransform, Vec3};
 use bodyseg_people::{Floor, FloorHint, FloorSource};
 use std::time::Instant;
 
-/// The median distance of a cloud's points from its origin above which its unit is
-/// likely millimetres or centimetres, metres: a depth camera sees people 0.5–10 m away,
-/// a room's scan spans a few metres around its origin.
-const MAX_PLAUSIBLE_MEDIAN_M: f32 = 20.0;
-/// ... and below which it is likely a larger unit (or a single object), metres.
-const MIN_PLAUSIBLE_MEDIAN_M: f32 = 0.2;
+// The plausible median distances are the sanity checks' (one range for every warning
+// about a cloud's unit).
+use crate::sanity::{
+    MAX_MEDIAN_DISTANCE_M as MAX_PLAUSIBLE_MEDIAN_M,
+    MIN_MEDIAN_DISTANCE_M as MIN_PLAUSIBLE_MEDIAN_M,
+};
 
 /// Where a cloud's world frame comes from.
 pub(crate) struct CloudFrame {

@@ -8,11 +8,11 @@
 use crate::frame::{Frame, FrameNeeds};
 use crate::recording::{Layer, Recording};
 use crate::stage::{Stage, plural, timed};
-use crate::viewer::{RerunOutput, score_series};
+use crate::viewer::{RerunOutput, camera_views, score_series};
 use anyhow::{Context, Result, bail};
 use bodyseg_core::{LabelImage, LabeledCloud, PersonBoxes};
 use bodyseg_eval::Report;
-use bodyseg_view::{CameraView, CloudView, DepthView, ViewFrame};
+use bodyseg_view::{CloudView, ViewFrame};
 use std::path::{Path, PathBuf};
 
 /// What [`view_run`] reads and writes.
@@ -154,18 +154,11 @@ fn read_run_frame(run: &Path, recording: &Recording, stem: &str) -> Result<RunFr
 }
 
 fn frame_view<'a>(images: &'a Frame, files: &'a RunFrame) -> ViewFrame<'a> {
-    let cameras = (0..images.depth.len())
-        .map(|i| CameraView {
-            color: images.color.as_ref().and_then(|c| c.get(i)),
-            depth: images.depth.get(i).map(|d| DepthView {
-                width: d.width,
-                height: d.height,
-                raw: &d.depth_mm,
-            }),
-            parsed: images.parsing.as_ref().and_then(|p| p.get(i)),
-            refined: files.drawn.get(i),
-        })
-        .collect();
+    let cameras = camera_views(
+        images,
+        images.parsing.as_deref().unwrap_or(&[]),
+        &files.drawn,
+    );
     let cloud = |c: &'a LabeledCloud| CloudView {
         positions_m: &c.positions_m,
         labels: &c.labels,

@@ -3,7 +3,7 @@
 //! the frame loop. Built with the `rerun` feature; without it [`RerunOutput::create`]
 //! says how to build.
 
-use crate::frame::ParsedFrame;
+use crate::frame::{Frame, ParsedFrame};
 use crate::recording::Recording;
 use anyhow::Result;
 use bodyseg_core::{Label, LabelImage, LabeledCloud, PersonBoxes};
@@ -133,6 +133,27 @@ pub(crate) fn score_series(report: &Report) -> Vec<(String, f64)> {
     out
 }
 
+/// Each camera of `frame` as the view takes it: its colour and depth images, the parser's
+/// labels (`parsed`) and the refined labels drawn back (`drawn`), where present.
+pub(crate) fn camera_views<'a>(
+    frame: &'a Frame,
+    parsed: &'a [LabelImage],
+    drawn: &'a [LabelImage],
+) -> Vec<CameraView<'a>> {
+    (0..frame.depth.len())
+        .map(|i| CameraView {
+            color: frame.color.as_ref().and_then(|c| c.get(i)),
+            depth: frame.depth.get(i).map(|d| DepthView {
+                width: d.width,
+                height: d.height,
+                raw: &d.depth_mm,
+            }),
+            parsed: parsed.get(i),
+            refined: drawn.get(i),
+        })
+        .collect()
+}
+
 /// A processed frame as the sink takes it: the images read (colour, depth, the parser's
 /// labels), the projected cloud (`cloud` with its own labels), the refined labels on the
 /// same points, the clusters, the boxes, the label images drawn (`drawn`, one per camera or
@@ -147,18 +168,7 @@ pub(crate) fn view_frame<'a>(
     scores: Vec<(String, f64)>,
 ) -> ViewFrame<'a> {
     let frame = &parsed.frame;
-    let cameras = (0..frame.depth.len())
-        .map(|i| CameraView {
-            color: frame.color.as_ref().and_then(|c| c.get(i)),
-            depth: frame.depth.get(i).map(|d| DepthView {
-                width: d.width,
-                height: d.height,
-                raw: &d.depth_mm,
-            }),
-            parsed: parsed.labels.get(i),
-            refined: drawn.get(i),
-        })
-        .collect();
+    let cameras = camera_views(frame, &parsed.labels, drawn);
     ViewFrame {
         stem: &frame.stem,
         cameras,
