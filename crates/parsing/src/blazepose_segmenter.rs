@@ -97,11 +97,23 @@ pub const REGION_SLACK: f64 = 0.1;
 pub const RETRY_ROI_SCALE: f64 = 1.25;
 
 /// Whether `pose`'s body centre (alignment centre) lies in `bounds` widened by
-/// [`REGION_SLACK`].
-fn centre_inside(pose: &DecodedPose, bounds: &PixelBox) -> bool {
-    let Some(c) = pose.xy.get(landmark::ALIGN_CENTRE) else {
+/// [`REGION_SLACK`], the centre first clamped to the image of `width`×`height` px.
+///
+/// Regions are clipped to the image, so the centre is compared after the same clipping: in
+/// a close-up the mid-hip point lies below the image, outside every clipped region, though
+/// the pose is the region's person (on the real photographs the unclamped test dropped or
+/// re-cropped most close-ups).
+fn centre_inside(pose: &DecodedPose, bounds: &PixelBox, width: usize, height: usize) -> bool {
+    let Some(&[x, y]) = pose.xy.get(landmark::ALIGN_CENTRE) else {
         return false;
     };
+    if !(x.is_finite() && y.is_finite()) {
+        return false;
+    }
+    let c = [
+        x.clamp(0.0, width.saturating_sub(1) as f64),
+        y.clamp(0.0, height.saturating_sub(1) as f64),
+    ];
     let (sx, sy) = (
         REGION_SLACK * (bounds.x1 - bounds.x0).max(1.0),
         REGION_SLACK * (bounds.y1 - bounds.y0).max(1.0),
@@ -292,11 +304,12 @@ impl BlazePoseSegmenter {
         image: &RgbImage,
         bounds: &PixelBox,
     ) -> Result<DecodedPose, ParsingError> {
+        let (w, h) = (image.width as usize, image.height as usize);
         let mut pose = self.run(image, &Roi::from_box(bounds, self.options.roi_scale))?;
-        let inside = centre_inside(&pose, bounds);
+        let inside = centre_inside(&pose, bounds, w, h);
         if !inside || pose.flag < self.options.min_pose_flag {
             let retry = self.run(image, &Roi::from_box(bounds, RETRY_ROI_SCALE))?;
-            if centre_inside(&retry, bounds) && (!inside || retry.flag > pose.flag) {
+            if centre_inside(&retry, bounds, w, h) && (!inside || retry.flag > pose.flag) {
                 return Ok(retry);
             }
             if !inside {
@@ -321,7 +334,7 @@ impl BlazePoseSegmenter {
                 break;
             }
             let next = self.run(image, &roi)?;
-            if next.flag < pose.flag * MIN_FLAG_RATIO || !centre_inside(&next, bounds) {
+            if next.flag < pose.flag * MIN_FLAG_RATIO || !centre_inside(&next, bounds, w, h) {
                 break;
             }
             pose = next;
@@ -423,19 +436,58 @@ mod tests {
             x1: 200.0,
             y1: 450.0,
         };
-        assert!(centre_inside(&pose_centred_at([150.0, 250.0]), &region));
+        assert!(centre_inside(
+            &pose_centred_at([150.0, 250.0]),
+            &region,
+            1000,
+            1000
+        ));
         assert!(
-            centre_inside(&pose_centred_at([209.0, 250.0]), &region),
+            centre_inside(&pose_centred_at([209.0, 250.0]), &region, 1000, 1000),
             "slack"
         );
         assert!(
-            !centre_inside(&pose_centred_at([211.0, 250.0]), &region),
+            !centre_inside(&pose_centred_at([211.0, 250.0]), &region, 1000, 1000),
             "neighbour"
         );
-        assert!(!centre_inside(&pose_centred_at([150.0, 500.0]), &region));
-        assert!(!centre_inside(&pose_centred_at([f64::NAN, 250.0]), &region));
+        assert!(!centre_inside(
+            &pose_centred_at([150.0, 500.0]),
+            &region,
+            1000,
+            1000
+        ));
+        assert!(!centre_inside(
+            &pose_centred_at([f64::NAN, 250.0]),
+            &region,
+            1000,
+            1000
+        ));
         let mut short = pose_centred_at([150.0, 250.0]);
         short.xy.truncate(10);
-        assert!(!centre_inside(&short, &region), "no alignment point");
+        assert!(
+            !centre_inside(&short, &region, 1000, 1000),
+            "no alignment point"
+        );
+    }
+
+    /// A close-up: the region reaches the image's bottom and the mid-hip point lies below
+    /// the image; clamped to the image it is in the region. Beside the region it is not.
+    #[test]
+    fn a_centre_below_the_image_counts_where_it_enters_it() {
+        let region = PixelBox {
+            x0: 100.0,
+            y0: 50.0,
+            x1: 300.0,
+            y1: 479.0,
+        };
+        let below = pose_centred_at([200.0, 700.0]);
+        assert!(centre_inside(&below, &region, 640, 480));
+        assert!(!centre_inside(&below, &region, 640, 1000), "taller image");
+        assert!(!centre_inside(
+            &pose_centred_at([500.0, 700.0]),
+            &region,
+            640,
+            480
+        ));
     }
 }

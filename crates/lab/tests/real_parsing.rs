@@ -1,0 +1,64 @@
+//! BlazePose (full, default options) on the exact-ground-truth real photographs of
+//! `scripts/real_parsing_data.py`, with the index's person boxes as regions: the pooled
+//! person-vs-background IoU must stay at its measured level (0.79 on 2026-12-03,
+//! docs/notes/2026-12-03-blazepose.md). Skips (passes with a message) when .data/real_parsing
+//! is absent: the photographs are not in git.
+
+#[path = "../examples/real_parsing/data.rs"]
+mod data;
+
+use bodyseg_core::Label;
+use bodyseg_parsing::{BlazePoseOptions, BlazePoseSegmenter, Segmenter};
+use std::path::Path;
+
+/// The floor: the measured 0.79 less a margin for ONNX Runtime builds and thread counts
+/// (fp32 summation order moves mask pixels near the threshold).
+const MIN_PERSON_IOU: f64 = 0.75;
+
+#[test]
+fn blazepose_finds_the_people_of_real_photographs() {
+    let dir = data::default_dir();
+    if !dir.join("index.json").is_file() {
+        eprintln!(
+            "skipped: {} absent (.venv/bin/python scripts/real_parsing_data.py)",
+            dir.display()
+        );
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let library = std::env::var_os("ORT_DYLIB_PATH")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join(".deps/onnxruntime/libonnxruntime.so"));
+    let model = root.join("models/blazepose_full.onnx");
+    let bytes = std::fs::read(&model).expect("committed model");
+    let mut segmenter =
+        BlazePoseSegmenter::new(&library, &bytes, &model, &BlazePoseOptions::default())
+            .expect("the full model loads");
+    let items = data::read_index(&dir).expect("index");
+    let (mut both, mut either, mut images) = (0u64, 0u64, 0);
+    for item in items.iter().filter(|i| i.scheme == "parts7") {
+        let image =
+            bodyseg_io::read_rgb_image(&dir.join("images").join(format!("{}.jpg", item.name)))
+                .expect("image");
+        let truth =
+            bodyseg_io::read_label_png(&dir.join("labels").join(format!("{}.png", item.name)))
+                .expect("ground truth");
+        let views = [item.view(&image)];
+        let parsed = segmenter.segment(&views).expect("segments");
+        let person = |l: Label| l != Label::BACKGROUND && l != Label::UNKNOWN;
+        for (&p, &t) in parsed[0].labels.labels.iter().zip(&truth.labels) {
+            if t == Label::UNKNOWN {
+                continue; // the ground truth's "ignore" pixels
+            }
+            both += u64::from(person(p) && person(t));
+            either += u64::from(person(p) || person(t));
+        }
+        images += 1;
+    }
+    assert!(images >= 8, "only {images} exact images in the index");
+    let iou = both as f64 / either.max(1) as f64;
+    assert!(
+        iou >= MIN_PERSON_IOU,
+        "person IoU {iou:.3} < {MIN_PERSON_IOU} over {images} images"
+    );
+}
