@@ -128,32 +128,29 @@ def fmt(x):
     return "–" if x is None or np.isnan(x) else f"{x:.3f}"
 
 
+def table(results, scheme, title, classes, mean_name, bold):
+    """Markdown lines of one set's table (none when no image of the set was scored)."""
+    rows = [(n, r) for n, r in results if r["counts"][scheme]]
+    if not rows:
+        return []
+    star = "**" if bold else ""
+    lines = [f"{title}, {rows[0][1]['counts'][scheme]} images)", "",
+             "| segmenter | " + " | ".join(classes[1:]) + f" | {mean_name} | person vs bg |",
+             "|---|" + "---:|" * (len(classes) + 1)]
+    for name, r in rows:
+        s = summarize(scheme, r["cms"][scheme])
+        lines.append(f"| {name} | " + " | ".join(fmt(v) for v in s["iou"][1:])
+                     + f" | {star}{fmt(s['miou_body'])}{star} | {star}{fmt(s['person_iou'])}{star} |")
+    return lines + [""]
+
+
 def tables(results):
     """Markdown: one table for the exact set, one for the coarse set; a row per segmenter."""
-    lines = []
-    exact = [(n, r) for n, r in results if r["counts"]["parts7"]]
-    if exact:
-        n_img = exact[0][1]["counts"]["parts7"]
-        lines += [f"Exact 7-class ground truth (Pascal-Person-Part classes, {n_img} images)", "",
-                  "| segmenter | " + " | ".join(PARTS7[1:]) + " | mIoU (6 parts) | person vs bg |",
-                  "|---|" + "---:|" * 8]
-        for name, r in exact:
-            s = summarize("parts7", r["cms"]["parts7"])
-            lines.append(f"| {name} | " + " | ".join(fmt(v) for v in s["iou"][1:])
-                         + f" | **{fmt(s['miou_body'])}** | **{fmt(s['person_iou'])}** |")
-        lines.append("")
-    coarse = [(n, r) for n, r in results if r["counts"]["super5"]]
-    if coarse:
-        n_img = coarse[0][1]["counts"]["super5"]
-        lines += [f"Coarse ground truth (LIP/CIHP/ATR super-classes, {n_img} images)", "",
-                  "| segmenter | " + " | ".join(SUPER[1:]) + " | mIoU (4) | person vs bg |",
-                  "|---|" + "---:|" * 6]
-        for name, r in coarse:
-            s = summarize("super5", r["cms"]["super5"])
-            lines.append(f"| {name} | " + " | ".join(fmt(v) for v in s["iou"][1:])
-                         + f" | {fmt(s['miou_body'])} | {fmt(s['person_iou'])} |")
-        lines.append("")
-    return "\n".join(lines)
+    return "\n".join(
+        table(results, "parts7", "Exact 7-class ground truth (Pascal-Person-Part classes",
+              PARTS7, "mIoU (6 parts)", True)
+        + table(results, "super5", "Coarse ground truth (LIP/CIHP/ATR super-classes",
+                SUPER, "mIoU (4)", False))
 
 
 def main(argv=None):
