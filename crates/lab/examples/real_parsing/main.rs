@@ -8,7 +8,8 @@
 //! cargo run --release -p bodyseg-lab --example real_parsing -- OUT_DIR onnx:models/bodyseg_parser_small.onnx
 //! ```
 //!
-//! KEY=VALUE (BlazePose only): `roi_scale`, `refine_passes`, `threads`. Time it with
+//! KEY=VALUE (BlazePose only): `roi_scale`, `refine_passes`, `threads`, and the rule's
+//! `min_presence`, `min_visibility`. Time it with
 //! `perf stat -e task-clock,instructions:u` (the machine is shared: wall clock says little).
 
 mod data;
@@ -48,7 +49,14 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Box<dyn Segmenter>> 
                 "roi_scale" => options.roi_scale = value.parse().map_err(|e| bad(&e))?,
                 "refine_passes" => options.refine_passes = value.parse().map_err(|e| bad(&e))?,
                 "threads" => options.threads = value.parse().map_err(|e| bad(&e))?,
-                _ => bail!("{key}: unknown setting (roi_scale, refine_passes, threads)"),
+                "min_presence" => options.rule.min_presence = value.parse().map_err(|e| bad(&e))?,
+                "min_visibility" => {
+                    options.rule.min_visibility = value.parse().map_err(|e| bad(&e))?;
+                }
+                _ => bail!(
+                    "{key}: unknown setting (roi_scale, refine_passes, threads, min_presence, \
+                     min_visibility)"
+                ),
             }
         }
         let model = root().join(format!("models/blazepose_{variant}.onnx"));
