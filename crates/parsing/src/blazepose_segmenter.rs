@@ -7,11 +7,11 @@ use crate::blazepose::{
     DecodedPose, INPUT, NUM_LANDMARKS, Roi, RuleConfig, crop_into, decode, label_person, landmark,
     merge_people,
 };
-use crate::onnx::load_session;
+use crate::onnx::{float_dims, load_session};
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
 use bodyseg_core::{LabelImage, RgbImage};
 use ort::session::Session;
-use ort::value::{TensorRef, ValueType};
+use ort::value::TensorRef;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -146,16 +146,6 @@ impl std::fmt::Debug for BlazePoseSegmenter {
             .field("model_path", &self.model_path)
             .field("options", &self.options)
             .finish_non_exhaustive()
-    }
-}
-
-/// The dims of a float32 tensor outlet; `None` for another type.
-fn float_dims(dtype: &ValueType) -> Option<Vec<i64>> {
-    match dtype {
-        ValueType::Tensor { ty, shape, .. } if *ty == ort::value::TensorElementType::Float32 => {
-            Some(shape.to_vec())
-        }
-        _ => None,
     }
 }
 

@@ -127,7 +127,7 @@ impl std::fmt::Debug for OnnxSegmenter {
 }
 
 /// The dims of a float32 tensor outlet, `-1` for dynamic ones; `None` for another type.
-fn float_dims(dtype: &ValueType) -> Option<Vec<i64>> {
+pub(crate) fn float_dims(dtype: &ValueType) -> Option<Vec<i64>> {
     match dtype {
         ValueType::Tensor { ty, shape, .. } if *ty == ort::value::TensorElementType::Float32 => {
             Some(shape.to_vec())
