@@ -211,6 +211,20 @@ fn legs_out_of_frame_are_not_invented() {
     assert!(classes.contains(&2) && classes.contains(&4));
 }
 
+/// A person of two pixels, columns `u0` and `u0 + 1` of row 0, depth unknown.
+fn two_pixels(u0: usize, class: [u8; 2], prob: [f32; 2], score: [f32; 2]) -> PersonLabels {
+    PersonLabels {
+        u0,
+        u1: u0 + 2,
+        v0: 0,
+        v1: 1,
+        class: class.to_vec(),
+        prob: prob.to_vec(),
+        score: score.to_vec(),
+        depth_m: None,
+    }
+}
+
 #[test]
 fn no_mask_no_person_and_merge_takes_the_nearer_bone() {
     let mut pose = figure();
@@ -218,26 +232,8 @@ fn no_mask_no_person_and_merge_takes_the_nearer_bone() {
     let empty = label_person(&pose, &RuleConfig::default(), 100, 160).expect("window");
     assert!(empty.class.iter().all(|&c| c == 0));
 
-    let a = PersonLabels {
-        u0: 0,
-        u1: 2,
-        v0: 0,
-        v1: 1,
-        class: vec![1, 2],
-        prob: vec![0.9, 0.8],
-        score: vec![0.5, 2.0],
-        depth_m: None,
-    };
-    let b = PersonLabels {
-        u0: 1,
-        u1: 3,
-        v0: 0,
-        v1: 1,
-        class: vec![3, 4],
-        prob: vec![0.7, 0.6],
-        score: vec![1.0, 1.0],
-        depth_m: None,
-    };
+    let a = two_pixels(0, [1, 2], [0.9, 0.8], [0.5, 2.0]);
+    let b = two_pixels(1, [3, 4], [0.7, 0.6], [1.0, 1.0]);
     let img = merge_people(4, 1, &[a.clone(), b.clone()]);
     let ids: Vec<u8> = img.labels.iter().map(|l| l.id()).collect();
     assert_eq!(ids, vec![1, 3, 4, 0]);
