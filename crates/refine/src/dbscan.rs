@@ -527,7 +527,7 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> Vec<bool> 
     let pts = g.grid.pts();
     let mut core = vec![false; pts.len()];
     // The coordinates by axis (structure of arrays), so that the distance tests of a
-    // neighbour cell's run are counted eight lanes at a time (see `Soa::count_within`).
+    // neighbour cell's run are counted [`LANES`] at a time (see `Soa::count_within`).
     let soa = Soa::of(pts);
     let mut nbrs = Neighbours::new();
     let mut cells: Vec<NearCell> = Vec::with_capacity(125);
@@ -593,8 +593,11 @@ struct Soa {
     z: Vec<f32>,
 }
 
-/// Lanes of one branch-free block of distance tests in [`Soa::count_within`].
-const LANES: usize = 8;
+/// Lanes of one branch-free block of distance tests in [`Soa::count_within`]. Four, not
+/// eight: most runs are short (a median of 2–19 points per cell on sensor clouds), and a
+/// run's tail past the last block is tested one point at a time (callgrind, synth 100k:
+/// 170.83M instructions per refinement with 4, 171.45M with 8).
+const LANES: usize = 4;
 
 impl Soa {
     fn of(pts: &[Vec3]) -> Soa {
