@@ -526,6 +526,9 @@ struct NearCell {
 fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> Vec<bool> {
     let pts = g.grid.pts();
     let mut core = vec![false; pts.len()];
+    // The coordinates by axis (structure of arrays), so that the distance tests of a
+    // neighbour cell's run are counted [`LANES`] at a time (see `Soa::count_within`).
+    let soa = Soa::of(pts);
     let mut nbrs = Neighbours::new();
     let mut cells: Vec<NearCell> = Vec::with_capacity(125);
     let record = |d: u32| {
@@ -570,25 +573,74 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> Vec<bool> 
                 if near2 > eps2 {
                     continue;
                 }
-                let run = &pts[n.start as usize..n.end as usize];
+                let run = n.start as usize..n.end as usize;
                 if far2 <= eps2 {
                     count += run.len();
                 } else {
-                    // Branch-free over chunks of 4, stopping once the count is reached.
-                    for chunk in run.chunks(4) {
-                        for &q in chunk {
-                            count += usize::from(dist2(p, q) <= eps2);
-                        }
-                        if count >= min_pts {
-                            break;
-                        }
-                    }
+                    count = soa.count_within(p, run, eps2, count, min_pts);
                 }
             }
             core[i] = count >= min_pts;
         }
     }
     core
+}
+
+/// Point coordinates split by axis, m, in the grid's stored order.
+struct Soa {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+}
+
+/// Lanes of one branch-free block of distance tests in [`Soa::count_within`]. Four, not
+/// eight: most runs are short (a median of 2–19 points per cell on sensor clouds), and a
+/// run's tail past the last block is tested one point at a time (callgrind, synth 100k:
+/// 170.83M instructions per refinement with 4, 171.45M with 8).
+const LANES: usize = 4;
+
+impl Soa {
+    fn of(pts: &[Vec3]) -> Soa {
+        Soa {
+            x: pts.iter().map(|p| p[0]).collect(),
+            y: pts.iter().map(|p| p[1]).collect(),
+            z: pts.iter().map(|p| p[2]).collect(),
+        }
+    }
+
+    /// `count` plus the stored points of `run` within `eps2` of `p`, counted in blocks of
+    /// [`LANES`] and stopping after the block that reaches `need` (a core test only needs
+    /// to know that the count reached it). Each test computes [`dist2`]'s expression in
+    /// its order (`p - q` per axis, `dx² + dy² + dz²`), so the answers are the same bits.
+    #[inline]
+    fn count_within(
+        &self,
+        p: Vec3,
+        run: std::ops::Range<usize>,
+        eps2: f32,
+        mut count: usize,
+        need: usize,
+    ) -> usize {
+        let (xs, ys, zs) = (&self.x[run.clone()], &self.y[run.clone()], &self.z[run]);
+        let within = |x: f32, y: f32, z: f32| usize::from(dist2(p, [x, y, z]) <= eps2);
+        let blocks = xs.len() / LANES;
+        for b in 0..blocks {
+            let s = b * LANES;
+            let (bx, by, bz) = (&xs[s..s + LANES], &ys[s..s + LANES], &zs[s..s + LANES]);
+            let mut hits = 0;
+            for l in 0..LANES {
+                hits += within(bx[l], by[l], bz[l]);
+            }
+            count += hits;
+            if count >= need {
+                return count;
+            }
+        }
+        for t in blocks * LANES..xs.len() {
+            count += within(xs[t], ys[t], zs[t]);
+        }
+        count
+    }
 }
 
 /// True when stored point `i` (in cell `c`, whose neighbours are `nbrs`) has at least

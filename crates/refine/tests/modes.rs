@@ -9,17 +9,7 @@ use bodyseg_refine::{
     GraphMode, NoiseMode, PointEvidence, RefineConfig, RefineError, Steps, TreeMode, VoteMode,
     refine, refine_person, refine_variants, refine_variants_with,
 };
-use common::{Scene, ball, cuboid, l};
-
-/// The test scenes' DBSCAN (lattices of pitch 0.02–0.025 m) with the paper's modes.
-fn paper(steps: &str) -> RefineConfig {
-    RefineConfig {
-        eps_m: 0.03,
-        min_points: 5,
-        steps: steps.parse().expect("valid steps"),
-        ..Default::default()
-    }
-}
+use common::{Scene, ball, cuboid, l, paper};
 
 fn contact(steps: &str) -> RefineConfig {
     RefineConfig {

@@ -6,16 +6,7 @@ use bodyseg_core::{Class, Label, PersonBox};
 use bodyseg_refine::{
     Clustering, PersonRefinement, RefineConfig, Steps, fuse, refine, refine_person,
 };
-use common::{Scene, ball, l};
-
-fn cfg(steps: &str) -> RefineConfig {
-    RefineConfig {
-        eps_m: 0.03,
-        min_points: 5,
-        steps: steps.parse().expect("valid steps"),
-        ..Default::default()
-    }
-}
+use common::{Scene, ball, l, paper};
 
 /// Torso ball (r 0.15 m) with a head ball touching it from above: a valid body tree.
 fn body(scene: &mut Scene) -> (usize, usize) {
@@ -30,12 +21,12 @@ fn m_merges_a_small_lower_arm_cluster_inside_the_torso_sphere_into_torso() {
     let (torso, _) = body(&mut s);
     // Offset from the torso's centre, well inside its bounding sphere.
     let arm = s.add(ball([0.05, 0.0, 1.18], 0.04, 0.02, l(Class::LowerArms)));
-    let r = refine_person(&s.pos, &s.lab, &cfg("M"));
+    let r = refine_person(&s.pos, &s.lab, &paper("M"));
     assert!(s.all_labelled(&r.point_labels, arm, l(Class::Torso)));
     assert!(s.all_labelled(&r.point_labels, torso, l(Class::Torso)));
     assert_eq!(r.merged(), 1);
     // Without M it stays a lower arm.
-    let r = refine_person(&s.pos, &s.lab, &cfg("N"));
+    let r = refine_person(&s.pos, &s.lab, &paper("N"));
     assert!(s.all_labelled(&r.point_labels, arm, l(Class::LowerArms)));
 }
 
@@ -44,13 +35,13 @@ fn r_turns_a_head_cluster_floating_1m_from_the_body_into_background() {
     let mut s = Scene::default();
     let (_, head) = body(&mut s);
     let ghost = s.add(ball([1.0, 0.0, 1.4], 0.05, 0.02, l(Class::Head)));
-    let r = refine_person(&s.pos, &s.lab, &cfg("M-R-N"));
+    let r = refine_person(&s.pos, &s.lab, &paper("M-R-N"));
     assert!(r.tree.is_valid());
     assert!(s.all_labelled(&r.point_labels, ghost, Label::BACKGROUND));
     assert!(s.all_labelled(&r.point_labels, head, l(Class::Head)));
     assert_eq!(r.removed(), 1);
     // M-N keeps it: only R removes.
-    let r = refine_person(&s.pos, &s.lab, &cfg("M-N"));
+    let r = refine_person(&s.pos, &s.lab, &paper("M-N"));
     assert!(s.all_labelled(&r.point_labels, ghost, l(Class::Head)));
 }
 
@@ -60,7 +51,7 @@ fn r_does_nothing_without_a_valid_tree() {
     // No torso: no root, no valid tree.
     let head = s.add(ball([0.0, 0.0, 1.4], 0.06, 0.02, l(Class::Head)));
     let far = s.add(ball([1.0, 0.0, 1.4], 0.06, 0.02, l(Class::LowerArms)));
-    let r = refine_person(&s.pos, &s.lab, &cfg("M-R-N"));
+    let r = refine_person(&s.pos, &s.lab, &paper("M-R-N"));
     assert!(!r.tree.is_valid());
     assert!(s.all_labelled(&r.point_labels, head, l(Class::Head)));
     assert!(s.all_labelled(&r.point_labels, far, l(Class::LowerArms)));
@@ -74,7 +65,7 @@ fn a_tree_node_never_changes_even_inside_another_cluster() {
     // kept; the smaller is not a tree node and M merges it.
     let head_big = s.add(ball([0.0, 0.0, 1.33], 0.07, 0.02, l(Class::Head)));
     let head_small = s.add(ball([0.0, 0.12, 1.15], 0.04, 0.02, l(Class::Head)));
-    let r = refine_person(&s.pos, &s.lab, &cfg("M-R-N"));
+    let r = refine_person(&s.pos, &s.lab, &paper("M-R-N"));
     let tree_head = r.tree.slots[0].expect("head slot filled");
     assert_eq!(r.features[tree_head as usize].label, l(Class::Head));
     assert_eq!(r.labels_after_merge[tree_head as usize], l(Class::Head));
@@ -92,7 +83,7 @@ fn n_gives_noise_points_the_label_of_the_nearest_clustered_point() {
     let unknown_near_torso = s.point([-0.19, 0.0, 1.2], Label::UNKNOWN);
     let near_head = s.point([0.0, 0.0, 1.55], Label::UNKNOWN);
     let far_flying = s.point([0.0, 0.9, 1.9], l(Class::LowerLegs));
-    let r = refine_person(&s.pos, &s.lab, &cfg("N"));
+    let r = refine_person(&s.pos, &s.lab, &paper("N"));
     for i in [near_torso, unknown_near_torso, near_head, far_flying] {
         assert_eq!(
             r.clustering.cluster_of[i], None,
@@ -121,7 +112,7 @@ fn n_gives_noise_points_the_label_of_the_nearest_clustered_point() {
         );
     }
     // Without N, noise keeps its label, and unknown becomes background.
-    let r = refine_person(&s.pos, &s.lab, &cfg("M"));
+    let r = refine_person(&s.pos, &s.lab, &paper("M"));
     assert_eq!(r.point_labels[near_torso], l(Class::UpperLegs));
     assert_eq!(r.point_labels[unknown_near_torso], Label::BACKGROUND);
 }
@@ -132,7 +123,7 @@ fn n_follows_the_labels_after_m_and_r() {
     body(&mut s);
     let ghost = s.add(ball([1.0, 0.0, 1.4], 0.05, 0.02, l(Class::Head)));
     let near_ghost = s.point([1.08, 0.0, 1.4], Label::UNKNOWN);
-    let r = refine_person(&s.pos, &s.lab, &cfg("M-R-N"));
+    let r = refine_person(&s.pos, &s.lab, &paper("M-R-N"));
     assert!(s.all_labelled(&r.point_labels, ghost, Label::BACKGROUND));
     assert_eq!(r.point_labels[near_ghost], Label::BACKGROUND);
 }

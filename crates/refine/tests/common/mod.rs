@@ -5,6 +5,18 @@
 
 use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label, LabeledCloud, PointOrigin};
+use bodyseg_refine::RefineConfig;
+
+/// The test scenes' DBSCAN (lattices of pitch 0.02–0.025 m) with the steps `steps`
+/// (e.g. "M-R-N") and the paper's modes.
+pub fn paper(steps: &str) -> RefineConfig {
+    RefineConfig {
+        eps_m: 0.03,
+        min_points: 5,
+        steps: steps.parse().expect("valid steps"),
+        ..Default::default()
+    }
+}
 
 pub fn l(c: Class) -> Label {
     Label::from(c)
