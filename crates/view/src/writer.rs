@@ -4,7 +4,8 @@
 //! for its file-writer thread in a channel bounded by count (1024 chunks, not bytes): a
 //! run that logs faster than the writer encodes would queue nearly the whole file in
 //! memory, so [`ViewWriter`] waits for the writer after every [`FLUSH_EVERY_BYTES`]
-//! logged (back-pressure), which keeps memory flat over a recording.
+//! logged (back-pressure), which bounds what is queued (memory still grows slowly over a
+//! long recording: docs/notes/2026-12-02-rerun.md).
 
 use crate::paths;
 use crate::{CameraView, CloudView, FrameSink, ViewError, ViewFrame};
