@@ -2,6 +2,7 @@
 """Checks a bodyseg `.rrd` file with the Rerun Python SDK (a real client, not our reader).
 
     check_rrd.py FILE.rrd --run OUT [--cameras cam0,cam1,cam2] [--expect-scores]
+                 [--clusters yes|no]
 
 Reads FILE.rrd with `rerun-sdk` (the version of the Rust SDK that wrote it, see
 Cargo.toml's `re_sdk`) through its dataframe API (`rr.experimental.RrdReader(...)
@@ -15,7 +16,9 @@ the run's files in OUT (a run of the whole recording):
 - per frame, the boxes of world/boxes equal those of OUT/boxes/<stem>.json;
 - every camera's colour and depth image, 2D labels and refined labels are there for every
   frame, and its Pinhole and Transform3D (static) at world/cameras/<name>/color and /depth;
-- the AnnotationContext at world; with --expect-scores, scores/<configuration>/biou.
+- the AnnotationContext at world; with --expect-scores, scores/<configuration>/biou;
+- with --clusters yes, per frame world/clusters has as many points as the PLY (`run
+  --rerun-clusters`); with --clusters no, world/clusters is not in the file (the default).
 
 Exit 0 and one summary line when all hold; exit 1 listing every failure; exit 2 when the
 SDK (or its dataframe extra) is not installed: `pip install "rerun-sdk[datafusion]==0.36.3"`.
@@ -66,6 +69,7 @@ def main() -> int:
     ap.add_argument("--run", type=Path, required=True, help="the run's output folder")
     ap.add_argument("--cameras", default="", help="camera names, comma-separated")
     ap.add_argument("--expect-scores", action="store_true")
+    ap.add_argument("--clusters", choices=("yes", "no"), help="whether world/clusters is there")
     args = ap.parse_args()
 
     try:
@@ -136,6 +140,11 @@ def main() -> int:
                     f"frame {stem}: world/{layer} has {known} + {unknown or 0} unknown points, "
                     f"the PLY {want}"
                 )
+        clusters = count(rows, "world/clusters", "Points3D", "positions")
+        if args.clusters == "yes" and clusters != want:
+            failures.append(f"frame {stem}: world/clusters has {clusters} points, the PLY {want}")
+        if args.clusters == "no" and clusters is not None:
+            failures.append(f"frame {stem}: world/clusters is there ({clusters} points)")
         boxes_file = args.run / "boxes" / f"{stem}.json"
         if boxes_file.is_file():
             want_boxes = len(json.loads(boxes_file.read_text())["boxes"])

@@ -8,7 +8,7 @@
 
 #[cfg(feature = "rerun")]
 use crate::common::{FRAMES, assert_ok, stdout};
-use crate::common::{bodyseg, recording, stderr, tempdir};
+use crate::common::{bodyseg, recording, run_recording, stderr, tempdir};
 #[cfg(feature = "rerun")]
 use std::path::Path;
 #[cfg(feature = "rerun")]
@@ -63,20 +63,17 @@ fn run_rerun_writes_a_file_the_rerun_sdk_reads_with_every_entity() {
         assert!(rig.contains(c), "the shared recording has camera {c}");
     }
     let dir = tempdir();
-    let run = bodyseg(
+    // With the clusters layer (off by default: `bodyseg view`'s file below has none).
+    let run = run_recording(
         dir.path(),
         &[
-            "run",
-            "--recording",
-            rec.to_str().expect("utf-8"),
-            "--out",
-            "out",
             "--write-stages",
             "--rerun",
             "out/run.rrd",
+            "--rerun-clusters",
         ],
     );
-    assert_ok(&run, "bodyseg run --rerun");
+    assert_ok(&run, "bodyseg run --rerun --rerun-clusters");
     let out = dir.path().join("out");
     let rrd = out.join("run.rrd");
     assert!(rrd.is_file(), "{}", rrd.display());
@@ -112,9 +109,13 @@ fn run_rerun_writes_a_file_the_rerun_sdk_reads_with_every_entity() {
         );
         return;
     }
-    let text = check(&rrd, &out, &["--expect-scores"]);
+    let text = check(&rrd, &out, &["--expect-scores", "--clusters", "yes"]);
     assert!(text.contains(&format!("{FRAMES} frames")), "{text}");
-    let text = check(&dir.path().join("view.rrd"), &out, &["--expect-scores"]);
+    let text = check(
+        &dir.path().join("view.rrd"),
+        &out,
+        &["--expect-scores", "--clusters", "no"],
+    );
     assert!(text.contains(&format!("{FRAMES} frames")), "{text}");
 }
 
@@ -149,20 +150,8 @@ fn rerun_on_several_recordings_is_refused() {
 #[cfg(not(feature = "rerun"))]
 #[test]
 fn rerun_without_the_feature_says_how_to_build() {
-    let rec = recording();
     let dir = tempdir();
-    let o = bodyseg(
-        dir.path(),
-        &[
-            "run",
-            "--recording",
-            rec.to_str().expect("utf-8"),
-            "--out",
-            "out",
-            "--rerun",
-            "run.rrd",
-        ],
-    );
+    let o = run_recording(dir.path(), &["--rerun", "run.rrd"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("--features rerun"), "{}", stderr(&o));
     assert!(!dir.path().join("run.rrd").exists());

@@ -178,6 +178,19 @@ pub fn recording() -> &'static Path {
     rec
 }
 
+/// `bodyseg run` of the shared [`recording`] into `dir/out`, with `extra` arguments.
+pub fn run_recording(dir: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "run",
+        "--recording",
+        recording().to_str().expect("utf-8"),
+        "--out",
+        "out",
+    ];
+    args.extend_from_slice(extra);
+    bodyseg(dir, &args)
+}
+
 /// Every file under `dir`, relative, sorted.
 pub fn tree(dir: &Path) -> Vec<String> {
     let mut out = Vec::new();

@@ -2019,6 +2019,11 @@ pub struct BatchArgs {
     /// with `--features rerun`; convert: one recording only
     #[arg(long, value_name = "FILE.rrd")]
     pub rerun: Option<PathBuf>,
+
+    /// With --rerun: also log the refinement's clusters (`world/clusters`, one colour per
+    /// cluster; a third copy of each cloud, so off by default)
+    #[arg(long, requires = "rerun")]
+    pub rerun_clusters: bool,
 }
 
 impl BatchArgs {
@@ -2106,6 +2111,7 @@ impl RunArgs {
             label_images: !self.no_label_images,
             redo: self.batch.force,
             rerun: self.batch.rerun.clone(),
+            rerun_clusters: self.batch.rerun_clusters,
         })
     }
 }
@@ -2213,6 +2219,7 @@ impl ConvertArgs {
             write_stages: self.batch.write_stages,
             redo: self.batch.force,
             rerun: self.batch.rerun.clone(),
+            rerun_clusters: self.batch.rerun_clusters,
             camera_3dpeople: {
                 let mut camera = match self.intrinsics {
                     Some([w, h, fx, fy, cx, cy]) => {

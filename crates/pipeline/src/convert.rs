@@ -63,6 +63,8 @@ pub struct ConvertOptions {
     /// One recording: also log every frame into this Rerun file (`.rrd`, feature
     /// `rerun`; complete frames are redone; no label images in it, convert draws none).
     pub rerun: Option<PathBuf>,
+    /// With `rerun`: also log the clusters layer (`world/clusters`).
+    pub rerun_clusters: bool,
 }
 
 /// What [`convert_dataset`] did: as `bodyseg run` (no figures).
@@ -170,7 +172,12 @@ fn convert_recordings(
             let processor = match &opts.rerun {
                 Some(file) => {
                     let all = processor.recording().frames()?.complete;
-                    let out = RerunOutput::create(file, processor.recording(), &all)?;
+                    let out = RerunOutput::create(
+                        file,
+                        processor.recording(),
+                        &all,
+                        opts.rerun_clusters,
+                    )?;
                     let processor = processor.with_sink(Some(out.sink()));
                     rerun = Some(out);
                     processor

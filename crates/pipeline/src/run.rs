@@ -72,6 +72,8 @@ pub struct RunOptions {
     /// Also log every frame into this Rerun file (`.rrd`, feature `rerun`); complete
     /// frames are then redone.
     pub rerun: Option<PathBuf>,
+    /// With `rerun`: also log the clusters layer (`world/clusters`).
+    pub rerun_clusters: bool,
 }
 
 impl RunOptions {
@@ -91,6 +93,7 @@ impl RunOptions {
             label_images: true,
             redo: false,
             rerun: None,
+            rerun_clusters: false,
         }
     }
 
@@ -148,7 +151,12 @@ pub fn run_recording(
         let incomplete = listed.incomplete;
         let all = listed.complete;
         let rerun = match &opts.rerun {
-            Some(path) => Some(RerunOutput::create(path, processor.recording(), &all)?),
+            Some(path) => Some(RerunOutput::create(
+                path,
+                processor.recording(),
+                &all,
+                opts.rerun_clusters,
+            )?),
             None => None,
         };
         let processor = processor.with_sink(rerun.as_ref().map(RerunOutput::sink));

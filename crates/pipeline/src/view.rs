@@ -82,7 +82,7 @@ pub fn view_run(opts: &ViewOptions) -> Result<ViewSummary> {
         truth: false,
     };
     let ((), took) = timed(|| -> Result<()> {
-        let out = RerunOutput::create(&opts.rerun, &recording, &all)?;
+        let out = RerunOutput::create(&opts.rerun, &recording, &all, false)?;
         let sink = out.sink();
         for stem in &frames {
             let images = Frame::read(&recording, stem, needs)?;

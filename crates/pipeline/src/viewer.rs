@@ -25,12 +25,18 @@ pub(crate) struct RerunOutput {
 impl RerunOutput {
     /// Creates `path` for `recording`, whose frames (all of them, in order: their index is
     /// the `frame` timeline) are `frames`; reads `stamps.csv` when the recording has one.
+    /// `clusters`: also log the clusters layer.
     ///
     /// # Errors
     /// Built without the `rerun` feature; the stamps file is malformed; the file cannot be
     /// created.
     #[cfg(feature = "rerun")]
-    pub(crate) fn create(path: &Path, recording: &Recording, frames: &[String]) -> Result<Self> {
+    pub(crate) fn create(
+        path: &Path,
+        recording: &Recording,
+        frames: &[String],
+        clusters: bool,
+    ) -> Result<Self> {
         use anyhow::Context;
         let stamps_path = recording.root().join(STAMPS_FILE);
         let stamps = if stamps_path.is_file() {
@@ -49,7 +55,8 @@ impl RerunOutput {
         }
         let writer =
             bodyseg_view::ViewWriter::create(path, &name, recording.rig(), frames, &stamps)
-                .with_context(|| format!("--rerun {}", path.display()))?;
+                .with_context(|| format!("--rerun {}", path.display()))?
+                .with_clusters(clusters);
         Ok(RerunOutput {
             writer: Arc::new(writer),
         })
@@ -60,7 +67,12 @@ impl RerunOutput {
     /// # Errors
     /// Always.
     #[cfg(not(feature = "rerun"))]
-    pub(crate) fn create(path: &Path, _recording: &Recording, _frames: &[String]) -> Result<Self> {
+    pub(crate) fn create(
+        path: &Path,
+        _recording: &Recording,
+        _frames: &[String],
+        _clusters: bool,
+    ) -> Result<Self> {
         anyhow::bail!(
             "--rerun {}: this bodyseg was built without Rerun support; build it with \
              `cargo build --release --features rerun`",

@@ -85,6 +85,7 @@ pub struct ViewFrame<'a> {
     /// The refined cloud (what `clouds/<frame>.ply` holds).
     pub refined: Option<CloudView<'a>>,
     /// Per point of the refined cloud, `(person index, cluster id)`; `None` = noise.
+    /// Logged only by a `ViewWriter` made `with_clusters(true)` (feature `rerun`).
     pub clusters: Option<&'a [Option<(u32, u32)>]>,
     /// The person boxes.
     pub boxes: Option<&'a [PersonBox]>,

@@ -1,7 +1,11 @@
 //! [`ViewWriter`]: a [`FrameSink`] that streams frames into a `.rrd` file with the Rerun
 //! SDK (`re_sdk`). The rig, the class palette and the blueprint are logged once (static);
-//! each frame on the `frame` timeline (and `time`), then dropped: the SDK's batcher
-//! flushes chunks to the file as they fill, so memory stays flat over a recording.
+//! each frame on the `frame` timeline (and `time`), then dropped. The SDK queues chunks
+//! for its file-writer thread in a channel bounded by count (1024 chunks, not bytes): a
+//! run that logs faster than the writer encodes would queue nearly the whole file in
+//! memory, so [`ViewWriter`] waits for the writer after every [`FLUSH_EVERY_BYTES`]
+//! logged (back-pressure), which bounds what is queued (memory still grows slowly over a
+//! long recording: docs/notes/2026-12-02-rerun.md).
 
 use crate::paths;
 use crate::{CameraView, CloudView, FrameSink, ViewError, ViewFrame};
@@ -22,6 +26,7 @@ use re_sdk_types::datatypes::{
 };
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The application id the files carry (the viewer groups recordings by it).
 const APPLICATION_ID: &str = "bodyseg";
@@ -32,6 +37,11 @@ const UNKNOWN_RGB: [u8; 3] = [200, 200, 200];
 /// Radius of logged points, metres: about the spacing of a Kinect v2's points at 2 m
 /// with stride 2, so a cloud reads as a surface.
 const POINT_RADIUS_M: f32 = 0.004;
+
+/// Bytes of logged data (as sent: pixels, positions, class ids) after which the writer
+/// waits for the file to catch up. 64 MiB: several frames of the 3-camera scene (~12 MB
+/// each) in flight, so the frame workers rarely wait, and a bound on what is queued.
+const FLUSH_EVERY_BYTES: u64 = 64 << 20;
 
 /// Streams a run's frames into a `.rrd` file (see the crate documentation for what is
 /// logged where). Thread-safe: frames may come from any worker in any order; the
@@ -50,6 +60,10 @@ pub struct ViewWriter {
     depth_scales: Vec<f32>,
     /// Frame stem → (index on the `frame` timeline, time stamp in ns).
     frames: BTreeMap<String, (i64, Option<i64>)>,
+    /// Whether the clusters layer is written (off by default: a third copy of the cloud).
+    clusters: bool,
+    /// Bytes logged since the last wait for the file writer (see [`FLUSH_EVERY_BYTES`]).
+    unflushed_bytes: AtomicU64,
 }
 
 impl std::fmt::Debug for ViewWriter {
@@ -99,9 +113,20 @@ impl ViewWriter {
             cameras: rig.cameras.iter().map(|c| c.name.clone()).collect(),
             depth_scales: rig.cameras.iter().map(|c| c.depth_scale as f32).collect(),
             frames,
+            clusters: false,
+            unflushed_bytes: AtomicU64::new(0),
         };
         writer.log_static(rig).map_err(|e| err(&e))?;
         Ok(writer)
+    }
+
+    /// Also writes the clusters layer (`world/clusters`: the refined cloud's positions once
+    /// more, coloured by cluster). Off by default: it adds about half again to the file and
+    /// to the time spent writing it.
+    #[must_use]
+    pub fn with_clusters(mut self, on: bool) -> ViewWriter {
+        self.clusters = on;
+        self
     }
 
     /// The final path of the file.
@@ -201,7 +226,23 @@ impl ViewWriter {
         }
         let result = self.write_at_time(frame);
         rec.reset_time();
-        result
+        result?;
+        self.back_pressure(frame_bytes(frame, self.clusters))
+    }
+
+    /// Counts `bytes` as logged; past [`FLUSH_EVERY_BYTES`], waits until the file writer
+    /// has written everything logged so far (this worker waits, the others go on logging).
+    fn back_pressure(&self, bytes: u64) -> Result<(), ViewError> {
+        let before = self.unflushed_bytes.fetch_add(bytes, Ordering::Relaxed);
+        if before + bytes < FLUSH_EVERY_BYTES {
+            return Ok(());
+        }
+        // Only the worker that crossed the bound waits; the count starts again.
+        self.unflushed_bytes.store(0, Ordering::Relaxed);
+        self.rec.flush_blocking().map_err(|e| ViewError::Rerun {
+            message: format!("waiting for the file writer: {e}"),
+            path: self.path.clone(),
+        })
     }
 
     fn write_at_time(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
@@ -232,7 +273,11 @@ impl ViewWriter {
                 self.log_cloud(stem, layer, known, unknown, cloud)?;
             }
         }
-        if let (Some(clusters), Some(cloud)) = (frame.clusters, frame.refined.or(frame.projected)) {
+        if let (true, Some(clusters), Some(cloud)) = (
+            self.clusters,
+            frame.clusters,
+            frame.refined.or(frame.projected),
+        ) {
             if clusters.len() != cloud.positions_m.len() {
                 return Err(ViewError::CloudLength {
                     stem: stem.into(),
@@ -289,7 +334,10 @@ impl ViewWriter {
             if d.raw.len() != d.width as usize * d.height as usize {
                 return Err(size_err("depth", d.raw.len(), d.width, d.height, 1));
             }
-            let bytes: Vec<u8> = d.raw.iter().flat_map(|v| v.to_le_bytes()).collect();
+            let mut bytes = Vec::with_capacity(d.raw.len() * 2);
+            for v in d.raw {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
             // Rerun's `meter`: raw units per metre, the rig's depth_scale.
             self.log(
                 paths::depth_image(name).as_str(),
@@ -372,6 +420,29 @@ impl FrameSink for ViewWriter {
     fn write_frame(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
         self.write(frame)
     }
+}
+
+/// About how many bytes of data a frame logs (pixels, positions and class ids; the few
+/// boxes and scores left out): what [`ViewWriter::back_pressure`] counts.
+fn frame_bytes(frame: &ViewFrame<'_>, clusters: bool) -> u64 {
+    let mut bytes = 0;
+    for c in &frame.cameras {
+        bytes += c.color.map_or(0, |i| i.rgb.len());
+        bytes += c.depth.map_or(0, |d| d.raw.len() * 2);
+        bytes += [c.parsed, c.refined]
+            .iter()
+            .flatten()
+            .map(|l| l.labels.len())
+            .sum::<usize>();
+    }
+    // Positions (3 x f32) and a u16 class id per point; clusters: positions and a colour.
+    for cloud in [frame.projected, frame.refined].iter().flatten() {
+        bytes += cloud.positions_m.len() * 14;
+    }
+    if clusters && let Some(c) = frame.clusters {
+        bytes += c.len() * 16;
+    }
+    bytes as u64
 }
 
 /// `OUT.rrd` → `OUT.rrd.partial`.
