@@ -95,6 +95,20 @@ fn boxes_geometry(dir: &Path, cloud: &Path, extra: &[&str]) -> std::process::Out
     bodyseg(dir, &args)
 }
 
+/// Asserts that `boxes --mode labels` on `cloud` in `dir` fails with `why` and names the
+/// fix (`--mode geometry`), writing nothing.
+fn labels_mode_is_refused(dir: &Path, cloud: &str, why: &str) {
+    let line = format!("boxes --cloud {cloud} --mode labels --out l.json");
+    let out = bodyseg_line(dir, &line);
+    assert!(!out.status.success(), "{line}");
+    let err = stderr(&out);
+    assert!(
+        err.contains(why) && err.contains("--mode geometry"),
+        "{err}"
+    );
+    assert!(!dir.join("l.json").exists(), "{line}");
+}
+
 #[test]
 fn pcls_five_people_in_the_camera_frame_get_five_boxes_then_import_and_run_too() {
     let dir = tempdir();
@@ -218,19 +232,7 @@ fn unlabelled_foreign_labelled_millimetre_and_unorganised_clouds() {
     let out = boxes_geometry(d, &ply, &[]);
     assert_ok(&out, "geometry mode on a PLY without labels");
     assert!(stderr(&out).contains("5 person boxes"), "{}", stderr(&out));
-    let out = bodyseg(
-        d,
-        &[
-            "boxes", "--cloud", "bare.ply", "--mode", "labels", "--out", "l.json",
-        ],
-    );
-    assert!(!out.status.success());
-    let err = stderr(&out);
-    assert!(
-        err.contains("no 'label' field") && err.contains("--mode geometry"),
-        "{err}"
-    );
-    assert!(!d.join("l.json").exists());
+    labels_mode_is_refused(d, "bare.ply", "no 'label' field");
 
     // PCL's segment ids (PointXYZRGBL): ignored with a note in geometry mode, refused in
     // labels mode with the fix named.
@@ -245,14 +247,7 @@ fn unlabelled_foreign_labelled_millimetre_and_unorganised_clouds() {
         err.contains("note:") && err.contains("not bodyseg's class ids"),
         "{err}"
     );
-    let out = bodyseg_line(d, "boxes --cloud segments.pcd --mode labels --out l.json");
-    assert!(!out.status.success());
-    let err = stderr(&out);
-    assert!(
-        err.contains("label is 40, not a bodyseg class id") && err.contains("--mode geometry"),
-        "{err}"
-    );
-    assert!(!d.join("l.json").exists());
+    labels_mode_is_refused(d, "segments.pcd", "label is 40, not a bodyseg class id");
 
     // The same cloud in millimetres: a warning that names the unit.
     let mm: Vec<Vec3> = points.iter().map(|p| p.map(|v| v * 1000.0)).collect();

@@ -27,11 +27,7 @@ fn slurm_script(dir: &Path, script: &str, args: &[&str], env: &[(&str, String)])
         .envs(env.iter().map(|(k, v)| (*k, v.as_str())))
         .output()
         .expect("run bash");
-    assert!(
-        out.status.success(),
-        "{script} {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out, &format!("{script} {args:?}"));
 }
 
 /// `bodyseg convert --input data --format recording --out OUT EXTRA...` in `dir`.
@@ -215,18 +211,9 @@ fn a_3dpeople_dataset_converts_to_labelled_clouds_and_reports_the_broken_view() 
     assert_eq!(again.status.code(), Some(3));
     assert!(stderr(&again).contains("4 skipped"), "{}", stderr(&again));
     // Without the fixture's intrinsics every view has the wrong size: each one is named.
-    let wrong = bodyseg(
-        dir.path(),
-        &[
-            "convert",
-            "--input",
-            fixture.to_str().expect("utf-8"),
-            "--format",
-            "3dpeople",
-            "--out",
-            "o2",
-        ],
-    );
+    let mut without_intrinsics = args[..args.len() - 3].to_vec();
+    without_intrinsics.push("o2");
+    let wrong = bodyseg(dir.path(), &without_intrinsics);
     assert_eq!(wrong.status.code(), Some(3));
     assert!(
         stderr(&wrong).contains("5 frames failed"),

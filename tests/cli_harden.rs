@@ -2,10 +2,7 @@
 //! would replace an input or something not ours, values that hung a command, and the
 //! `warning:` lines for valid but implausible inputs. Each failed on the code before.
 
-use crate::common::{
-    assert_one_error, bodyseg, bodyseg_env, bodyseg_line, copy_tree, files_in, recording, stderr,
-    tempdir, tree, write_scene,
-};
+use crate::common::{SceneDir, bodyseg, bodyseg_env, bodyseg_line, recording_copy, stderr, tree};
 use std::path::Path;
 use std::process::Output;
 
@@ -25,43 +22,26 @@ fn eval(d: &Path, pred: &str, gt: &str, extra: &[&str]) -> Output {
 
 #[test]
 fn an_output_that_is_an_input_or_not_ours_is_refused() {
-    let dir = tempdir();
-    let d = dir.path();
-    write_scene(d);
-    let before = files_in(d);
+    let s = SceneDir::new();
+    let d = s.path();
     let input = std::fs::read(d.join("in.ply")).expect("in.ply");
-    let out = refine(d, "in.ply", "boxes.json", "in.ply", &[]);
-    assert_one_error(&out, d, &before, &["--out in.ply is the input --cloud"]);
+    let refine_to = |out: &str| format!("refine --cloud in.ply --boxes boxes.json --out {out}");
+    let eval_to = |out: &str| format!("eval --pred in.ply --gt gt.ply --out {out}");
+    s.fails_line(&refine_to("in.ply"), &["--out in.ply is the input --cloud"]);
     assert_eq!(std::fs::read(d.join("in.ply")).expect("in.ply"), input);
     // The same file through another name.
     std::os::unix::fs::symlink("in.ply", d.join("link.ply")).expect("symlink");
-    let before = files_in(d);
-    let out = refine(d, "in.ply", "boxes.json", "link.ply", &[]);
-    assert_one_error(&out, d, &before, &["is the input --cloud"]);
+    s.fails_line(&refine_to("link.ply"), &["is the input --cloud"]);
     // A report over a cloud; a device.
-    let out = eval(d, "in.ply", "gt.ply", &["--out", "in.ply"]);
-    assert_one_error(&out, d, &before, &["is the input --pred"]);
-    let out = eval(d, "in.ply", "gt.ply", &["--out", "link.ply"]);
-    assert_one_error(&out, d, &before, &["is the input --pred"]);
+    s.fails_line(&eval_to("in.ply"), &["is the input --pred"]);
+    s.fails_line(&eval_to("link.ply"), &["is the input --pred"]);
     std::fs::copy(d.join("in.ply"), d.join("other.ply")).expect("copy");
-    let before = files_in(d);
-    let out = eval(d, "in.ply", "gt.ply", &["--out", "other.ply"]);
-    assert_one_error(
-        &out,
-        d,
-        &before,
-        &["exists and is not a file this command writes"],
-    );
+    let not_ours = ["exists and is not a file this command writes"];
+    s.fails_line(&eval_to("other.ply"), &not_ours);
     // A socket (not /dev/null: a bodyseg without the guard would replace the device).
     let _socket = std::os::unix::net::UnixListener::bind(d.join("sock.ply")).expect("socket");
-    let before = files_in(d);
-    let out = refine(d, "in.ply", "boxes.json", "sock.ply", &[]);
-    assert_one_error(
-        &out,
-        d,
-        &before,
-        &["sock.ply: is a socket, not a regular file"],
-    );
+    let socket = ["sock.ply: is a socket, not a regular file"];
+    s.fails_line(&refine_to("sock.ply"), &socket);
     use std::os::unix::fs::FileTypeExt;
     assert!(
         std::fs::symlink_metadata(d.join("sock.ply"))
@@ -73,9 +53,7 @@ fn an_output_that_is_an_input_or_not_ours_is_refused() {
 
 #[test]
 fn run_refuses_to_write_into_its_recording() {
-    let dir = tempdir();
-    let rec = dir.path().join("rec");
-    copy_tree(recording(), &rec);
+    let (dir, rec) = recording_copy();
     let before = tree(&rec);
     for out in ["rec", "rec/out", "rec/../rec"] {
         let o = bodyseg(
@@ -99,9 +77,7 @@ fn run_refuses_to_write_into_its_recording() {
 
 #[test]
 fn a_camera_name_that_leads_out_of_the_recording_is_refused() {
-    let dir = tempdir();
-    let rec = dir.path().join("rec");
-    copy_tree(recording(), &rec);
+    let (dir, rec) = recording_copy();
     let rig = std::fs::read_to_string(rec.join("rig.toml")).expect("rig.toml");
     let first = rig
         .lines()
@@ -130,19 +106,10 @@ fn a_camera_name_that_leads_out_of_the_recording_is_refused() {
 
 #[test]
 fn values_that_hung_a_command_are_refused_at_once() {
-    let dir = tempdir();
-    let d = dir.path();
-    write_scene(d);
-    let before = files_in(d);
+    let s = SceneDir::new();
     let start = std::time::Instant::now();
-    let out = bodyseg_line(
-        d,
+    s.fails_line(
         "boxes --cloud in.ply --set boxes.head_separation_m=1000 --out b.json",
-    );
-    assert_one_error(
-        &out,
-        d,
-        &before,
         &["boxes.head_separation_m must be in (0, 2] metres, got 1000"],
     );
     assert!(start.elapsed().as_secs() < 10);
@@ -150,9 +117,8 @@ fn values_that_hung_a_command_are_refused_at_once() {
 
 #[test]
 fn implausible_inputs_are_warned_about() {
-    let dir = tempdir();
-    let d = dir.path();
-    let scene = write_scene(d);
+    let s = SceneDir::new();
+    let (d, scene) = (s.path(), &s.scene);
     // A box far from the cloud: refinement would turn every body label into background.
     let mut far = scene.person.person_box.clone();
     far.center_m[0] += 500.0;
@@ -212,9 +178,7 @@ fn implausible_inputs_are_warned_about() {
 
 #[test]
 fn a_wrong_depth_scale_and_a_frame_a_camera_lacks_are_warned_about() {
-    let dir = tempdir();
-    let rec = dir.path().join("rec");
-    copy_tree(recording(), &rec);
+    let (dir, rec) = recording_copy();
     let rig = std::fs::read_to_string(rec.join("rig.toml")).expect("rig.toml");
     assert!(rig.contains("depth_scale = 1000.0"), "{rig}");
     std::fs::write(

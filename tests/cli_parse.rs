@@ -44,10 +44,8 @@ fn assert_fails(dir: &Path, out: &std::process::Output, want: &str) {
     assert!(!dir.join("parsed").exists(), "nothing written on failure");
 }
 
-/// Parses [`FRAME`] of `rec` in `d` into `parsed` with `extra` arguments, checks the
-/// outputs and the model named on stderr, and returns the person-vs-background IoU
-/// against the recording's exact 2D truth.
-fn parse_person_iou(d: &Path, rec: &Path, extra: &[&str], model: &str) -> f64 {
+/// `parse --recording rec --frame FRAME --out parsed EXTRA...`.
+fn parse_args<'a>(extra: &[&'a str]) -> Vec<&'a str> {
     let mut args = vec![
         "parse",
         "--recording",
@@ -58,7 +56,14 @@ fn parse_person_iou(d: &Path, rec: &Path, extra: &[&str], model: &str) -> f64 {
         "parsed",
     ];
     args.extend_from_slice(extra);
-    let out = bodyseg(d, &args);
+    args
+}
+
+/// Parses [`FRAME`] of `rec` in `d` into `parsed` with `extra` arguments, checks the
+/// outputs and the model named on stderr, and returns the person-vs-background IoU
+/// against the recording's exact 2D truth.
+fn parse_person_iou(d: &Path, rec: &Path, extra: &[&str], model: &str) -> f64 {
+    let out = bodyseg(d, &parse_args(extra));
     assert_ok(&out, "parse");
     let err = stderr(&out);
     assert!(err.contains(&format!("model {model}")), "{err}");
@@ -113,19 +118,7 @@ fn recorded_labels_come_back_unchanged() {
     let dir = tempdir();
     let d = dir.path();
     let rec = recording(d);
-    let out = bodyseg(
-        d,
-        &[
-            "parse",
-            "--recording",
-            "rec",
-            "--frame",
-            FRAME,
-            "--recorded",
-            "--out",
-            "parsed",
-        ],
-    );
+    let out = bodyseg(d, &parse_args(&["--recorded"]));
     assert_ok(&out, "parse --recorded");
     let got = read_label_png(&d.join("parsed/cam0/parsing/000000.png")).expect("written");
     let want = read_label_png(&rec.join("cam0/parsing/000000.png")).expect("recorded");
@@ -137,39 +130,14 @@ fn bad_inputs_are_one_line_errors() {
     let dir = tempdir();
     let d = dir.path();
     recording(d);
-    let parse = |model: &str| {
-        bodyseg(
-            d,
-            &[
-                "parse",
-                "--recording",
-                "rec",
-                "--frame",
-                FRAME,
-                "--model",
-                model,
-                "--out",
-                "parsed",
-            ],
-        )
-    };
+    let parse = |model: &str| bodyseg(d, &parse_args(&["--model", model]));
 
     // ONNX Runtime library missing.
     std::fs::copy(test_data("tiny.onnx"), d.join("tiny.onnx")).expect("copy");
     std::fs::copy(test_data("tiny.json"), d.join("tiny.json")).expect("copy");
     let out = bodyseg_env(
         d,
-        &[
-            "parse",
-            "--recording",
-            "rec",
-            "--frame",
-            FRAME,
-            "--model",
-            "tiny.onnx",
-            "--out",
-            "parsed",
-        ],
+        &parse_args(&["--model", "tiny.onnx"]),
         &[("ORT_DYLIB_PATH", "/nonexistent/libonnxruntime.so")],
     );
     assert_fails(

@@ -9,6 +9,7 @@ use crate::common::{
 };
 use bodyseg_pipeline::read_rig;
 use std::path::{Path, PathBuf};
+use std::process::Output;
 
 /// The real iai_kinect2 folder of a Kinect v2 (serial 196605135147).
 fn kinect2_folder() -> PathBuf {
@@ -27,6 +28,19 @@ fn copy_folder(dir: &Path, name: &str) -> PathBuf {
     to
 }
 
+/// Asserts a successful `rig import` whose stderr has its `import ...` timing line
+/// holding `summary`; returns stderr.
+fn assert_imported(out: &Output, summary: &str) -> String {
+    assert_ok(out, "bodyseg rig import");
+    let err = stderr(out);
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("import ") && l.contains(summary)),
+        "{summary:?} not in: {err}"
+    );
+    err
+}
+
 #[test]
 fn import_two_cameras_then_show() {
     let dir = tempdir();
@@ -37,13 +51,7 @@ fn import_two_cameras_then_show() {
         d,
         "rig import --from iai_kinect2 kinect_a kinect_b --out rig.toml",
     );
-    assert_ok(&out, "bodyseg rig import");
-    let err = stderr(&out);
-    assert!(
-        err.lines()
-            .any(|l| l.starts_with("import ") && l.contains(" ms  2 cameras → rig.toml")),
-        "{err}"
-    );
+    let err = assert_imported(&out, " ms  2 cameras → rig.toml");
     assert!(
         err.contains("note:") && err.contains("world_from_depth"),
         "{err}"
@@ -238,13 +246,7 @@ fn every_format_in_one_rig_placed_by_openptrack() {
             "rig.toml",
         ],
     );
-    assert_ok(&out, "bodyseg rig import (every format)");
-    let err = stderr(&out);
-    assert!(
-        err.lines()
-            .any(|l| l.starts_with("import ") && l.contains("5 cameras → rig.toml")),
-        "{err}"
-    );
+    let err = assert_imported(&out, "5 cameras → rig.toml");
     // The defaults taken, one note each, naming the camera.
     for needle in [
         "note: camera kinectBB: no calib_depth.yaml: depth shift 0 mm",

@@ -4,7 +4,8 @@
 //! same outputs as an uninterrupted run.
 
 use crate::common::{
-    FRAMES, assert_ok, bodyseg, bodyseg_line, copy_tree, recording, stderr, stdout, tempdir, tree,
+    FRAMES, assert_ok, bodyseg, bodyseg_line, recording, recording_copy, stderr, stdout, tempdir,
+    tree, words,
 };
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -22,18 +23,29 @@ fn metrics(report: &bodyseg_eval::Report, name: &str) -> bodyseg_eval::Metrics {
         .clone()
 }
 
+/// `COMMAND --recording REC --out OUT EXTRA...`: the command line of these tests.
+fn on_recording<'a>(
+    command: &'a str,
+    rec: &'a Path,
+    out: &'a str,
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let mut args = vec![
+        command,
+        "--recording",
+        rec.to_str().expect("utf-8"),
+        "--out",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    args
+}
+
 #[test]
 fn run_writes_every_output_and_a_second_run_skips_every_frame() {
     let rec = recording();
     let dir = tempdir();
-    let args = [
-        "run",
-        "--recording",
-        rec.to_str().expect("utf-8"),
-        "--out",
-        "out",
-        "--write-stages",
-    ];
+    let args = on_recording("run", &rec, "out", &["--write-stages"]);
     let first = bodyseg(dir.path(), &args);
     assert_ok(&first, "bodyseg run");
     let out = dir.path().join("out");
@@ -71,15 +83,12 @@ fn run_writes_every_output_and_a_second_run_skips_every_frame() {
         let alone = dir.path().join(format!("{f}.ply"));
         let p = bodyseg(
             dir.path(),
-            &[
+            &on_recording(
                 "project",
-                "--recording",
-                rec.to_str().expect("utf-8"),
-                "--frame",
-                &f,
-                "--out",
+                &rec,
                 alone.to_str().expect("utf-8"),
-            ],
+                &["--frame", &f],
+            ),
         );
         assert_ok(&p, "bodyseg project");
         let alone = bodyseg_io::read_ply(&alone).expect("ply");
@@ -133,9 +142,7 @@ fn run_writes_every_output_and_a_second_run_skips_every_frame() {
 
 #[test]
 fn a_corrupt_depth_png_fails_its_frame_only() {
-    let dir = tempdir();
-    let rec = dir.path().join("rec");
-    copy_tree(recording(), &rec);
+    let (dir, rec) = recording_copy();
     let bad = stem(2);
     let depth = rec.join("cam1").join("depth").join(format!("{bad}.png"));
     let bytes = std::fs::read(&depth).expect("read");
@@ -179,16 +186,10 @@ fn a_killed_run_finishes_when_started_again_with_identical_outputs() {
     let rec = recording();
     let dir = tempdir();
     let args = |out: &str| -> Vec<String> {
-        [
-            "run",
-            "--recording",
-            rec.to_str().expect("utf-8"),
-            "--out",
-            out,
-            "-q",
-        ]
-        .map(String::from)
-        .to_vec()
+        on_recording("run", &rec, out, &["-q"])
+            .into_iter()
+            .map(String::from)
+            .collect()
     };
     let whole = bodyseg(
         dir.path(),
@@ -248,19 +249,8 @@ fn run_two_frames(
     out: &str,
     extra: &[&str],
 ) -> (bodyseg_eval::Report, String) {
-    let mut args = vec![
-        "run",
-        "--recording",
-        rec.to_str().expect("utf-8"),
-        "--out",
-        out,
-        "--limit",
-        "2",
-        "--figure",
-        "none",
-        "--no-label-images",
-        "-q",
-    ];
+    let quick = words("--limit 2 --figure none --no-label-images -q");
+    let mut args = on_recording("run", rec, out, &quick);
     args.extend_from_slice(extra);
     let o = bodyseg(dir, &args);
     assert_ok(&o, "bodyseg run");
@@ -354,14 +344,7 @@ fn sigterm_and_sigint_leave_no_temporary_and_the_run_resumes() {
     for (signal, status) in [("-TERM", 143), ("-INT", 130)] {
         let out = format!("out{status}");
         let child = Command::new(env!("CARGO_BIN_EXE_bodyseg"))
-            .args([
-                "run",
-                "--recording",
-                rec.to_str().expect("utf-8"),
-                "--out",
-                &out,
-                "-q",
-            ])
+            .args(on_recording("run", &rec, &out, &["-q"]))
             .current_dir(dir.path())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -392,17 +375,7 @@ fn sigterm_and_sigint_leave_no_temporary_and_the_run_resumes() {
             .filter(|f| f.rsplit('/').next().is_some_and(|n| n.starts_with('.')))
             .collect();
         assert!(hidden.is_empty(), "left behind: {hidden:?}");
-        let again = bodyseg(
-            dir.path(),
-            &[
-                "run",
-                "--recording",
-                rec.to_str().expect("utf-8"),
-                "--out",
-                &out,
-                "-q",
-            ],
-        );
+        let again = bodyseg(dir.path(), &on_recording("run", &rec, &out, &["-q"]));
         assert_ok(&again, "resumed run");
     }
 }

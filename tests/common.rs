@@ -98,6 +98,47 @@ pub fn write_scene(dir: &Path) -> Scene {
     scene
 }
 
+/// A temporary folder holding the files of [`write_scene`], for tests that add a file or
+/// two and run one command after another in it.
+pub struct SceneDir {
+    dir: tempfile::TempDir,
+    /// The scene written in the folder.
+    pub scene: Scene,
+}
+
+impl SceneDir {
+    /// A new temporary folder with `in.ply`, `gt.ply` and `boxes.json`.
+    pub fn new() -> Self {
+        let dir = tempdir();
+        let scene = write_scene(dir.path());
+        Self { dir, scene }
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &Path {
+        self.dir.path()
+    }
+
+    /// Writes `contents` to the file `name` in the folder.
+    pub fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> &Self {
+        std::fs::write(self.path().join(name), contents).expect("write a test file");
+        self
+    }
+
+    /// Runs `bodyseg ARGS` in the folder and asserts [`assert_one_error`] against the
+    /// folder's files just before the run; returns stderr.
+    pub fn fails(&self, args: &[&str], needles: &[&str]) -> String {
+        let before = files_in(self.path());
+        let out = bodyseg(self.path(), args);
+        assert_one_error(&out, self.path(), &before, needles)
+    }
+
+    /// [`SceneDir::fails`] with the words of `line` (see [`words`]).
+    pub fn fails_line(&self, line: &str, needles: &[&str]) -> String {
+        self.fails(&words(line), needles)
+    }
+}
+
 /// The origins `human_cloud` gives its points: camera 0, pixel = index.
 pub fn index_origins(n: usize) -> Vec<PointOrigin> {
     (0..n as u32)
@@ -156,21 +197,9 @@ pub fn recording() -> &'static Path {
     static REC: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
     let (_, rec) = REC.get_or_init(|| {
         let dir = tempdir();
-        let out = bodyseg(
-            dir.path(),
-            &[
-                "synth",
-                "--preset",
-                "handover",
-                "--frames",
-                &FRAMES.to_string(),
-                "--seed",
-                "5",
-                "--no-preview",
-                "--out",
-                "rec",
-            ],
-        );
+        let line =
+            format!("synth --preset handover --frames {FRAMES} --seed 5 --no-preview --out rec");
+        let out = bodyseg_line(dir.path(), &line);
         assert_ok(&out, "bodyseg synth");
         let rec = dir.path().join("rec");
         (dir, rec)
@@ -189,6 +218,15 @@ pub fn run_recording(dir: &Path, extra: &[&str]) -> Output {
     ];
     args.extend_from_slice(extra);
     bodyseg(dir, &args)
+}
+
+/// A temporary folder with a copy of [`recording`] in `rec`, for a test that changes it;
+/// returns the folder and the copy's path.
+pub fn recording_copy() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempdir();
+    let rec = dir.path().join("rec");
+    copy_tree(recording(), &rec);
+    (dir, rec)
 }
 
 /// Every file under `dir`, relative, sorted.

@@ -13,6 +13,8 @@
 //! A cached frame is its cloud's positions (f32), labels and colours, raw little-endian,
 //! and its true boxes as JSON. A frame file of the wrong size is an error.
 
+mod common;
+
 use anyhow::{Context, Result, bail};
 use bodyseg_core::{Label, LabeledCloud, PersonBoxes, PointOrigin};
 use bodyseg_lab::{BoxStats, describe_box as describe, match_boxes, study_frame};
@@ -79,12 +81,7 @@ fn read_frame(path: &Path) -> Result<(LabeledCloud, PersonBoxes)> {
 }
 
 fn main() -> Result<()> {
-    tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
-        .with_writer(std::io::stderr)
-        .without_time()
-        .with_ansi(false)
-        .init();
+    common::init_logging();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [verb, dir, name, first, count, rest @ ..] = args.as_slice() else {
         bail!("usage: boxes_cache write|score DIR PRESET FIRST_SEED SEEDS [FRAMES|MODE]");

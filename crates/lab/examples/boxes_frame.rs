@@ -4,19 +4,15 @@
 //! `cargo run --release -p bodyseg-lab --example boxes_frame PRESET SEED FRAME...`
 //! (`RUST_LOG=bodyseg_people=trace` for the finder's reasons).
 
+mod common;
+
 use bodyseg_lab::{describe_box as describe, match_boxes, study_frame};
 use bodyseg_people::{BoxMode, BoxesConfig, box_iou, find_boxes};
 use bodyseg_project::FrameProjector;
 use bodyseg_synth::{Synth, preset};
 
 fn main() -> anyhow::Result<()> {
-    // `RUST_LOG=bodyseg_people=trace` shows the head candidates and why each was dropped.
-    tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
-        .with_writer(std::io::stderr)
-        .without_time()
-        .with_ansi(false)
-        .init();
+    common::init_logging();
     let mut args = std::env::args().skip(1);
     let name = args.next().unwrap_or_else(|| "handover".into());
     let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(100);

@@ -3,7 +3,7 @@
 //! the exact per-depth-pixel truth, and more than naive projection does; with a
 //! calibration error it still makes fewer mistakes than naive.
 
-use bodyseg_lab::{camera_images, parsing_images, projection_stats};
+use bodyseg_lab::{ProjectionStats, camera_images, parsing_images, projection_stats};
 use bodyseg_project::ProjectConfig;
 use bodyseg_synth::{ParserMistakesConfig, Synth, preset};
 
@@ -17,16 +17,25 @@ fn synth(name: &str, calibration_error: bool) -> Synth {
     Synth::new(config, 11).expect("synth")
 }
 
+/// The statistics of naive and of DSA projection over `frames` of [`synth`]`(name, ...)`.
+fn naive_and_dsa(
+    name: &str,
+    calibration_error: bool,
+    frames: &[usize],
+) -> (ProjectionStats, ProjectionStats) {
+    let stats = projection_stats(
+        &synth(name, calibration_error),
+        frames,
+        &[ProjectConfig::naive(), ProjectConfig::default()],
+    )
+    .expect("projection");
+    (stats[0], stats[1])
+}
+
 #[test]
 fn dsa_labels_at_least_99_5_percent_correctly_and_beats_naive() {
     for name in ["single", "handover", "robot_cell"] {
-        let stats = projection_stats(
-            &synth(name, false),
-            &[0, 5],
-            &[ProjectConfig::naive(), ProjectConfig::default()],
-        )
-        .expect("projection");
-        let (naive, dsa) = (stats[0], stats[1]);
+        let (naive, dsa) = naive_and_dsa(name, false, &[0, 5]);
         eprintln!(
             "{name}: naive {:.4} correct of labelled, DSA {:.4} ({:.1}% unknown)",
             naive.labelled_accuracy(),
@@ -45,13 +54,7 @@ fn dsa_labels_at_least_99_5_percent_correctly_and_beats_naive() {
 
 #[test]
 fn with_calibration_error_dsa_still_makes_fewer_mistakes() {
-    let stats = projection_stats(
-        &synth("handover", true),
-        &[2],
-        &[ProjectConfig::naive(), ProjectConfig::default()],
-    )
-    .expect("projection");
-    let (naive, dsa) = (stats[0], stats[1]);
+    let (naive, dsa) = naive_and_dsa("handover", true, &[2]);
     eprintln!(
         "naive wrong {:.4}, DSA wrong {:.4}",
         naive.wrong_fraction(),

@@ -579,6 +579,18 @@ mod tests {
         assert_ne!(text_hash("a"), text_hash("b"));
     }
 
+    /// Jobs `000`, `001`, ... each holding its index.
+    fn numbered_jobs(n: u32) -> Vec<(String, u32)> {
+        (0..n).map(|i| (format!("{i:03}"), i)).collect()
+    }
+
+    /// Writes the frame's output `a/<id>.txt`, which a failed frame must not leave behind.
+    fn write_marker(id: &str, w: &mut FrameWriter) -> Result<std::path::PathBuf> {
+        w.write(&format!("a/{id}.txt"), |p| {
+            Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
+        })
+    }
+
     fn record_of(id: &str) -> Result<FrameRecord> {
         Ok(FrameRecord {
             frame: id.to_string(),
@@ -596,11 +608,9 @@ mod tests {
     fn complete_frames_are_skipped_failed_ones_leave_nothing() {
         let dir = tempfile::tempdir().expect("temp dir");
         let out = dir.path();
-        let jobs: Vec<(String, u32)> = (0..6).map(|i| (format!("{i:03}"), i)).collect();
+        let jobs = numbered_jobs(6);
         let process = |f: BatchFrame<'_, u32>, w: &mut FrameWriter, _: &mut Vec<Stage>| {
-            w.write(&format!("a/{}.txt", f.id), |p| {
-                Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
-            })?;
+            write_marker(f.id, w)?;
             if *f.job == 4 {
                 bail!("frame {} is bad", f.id);
             }
@@ -650,11 +660,9 @@ mod tests {
     fn a_panicking_frame_fails_alone_and_leaves_nothing() {
         let dir = tempfile::tempdir().expect("temp dir");
         let out = dir.path();
-        let jobs: Vec<(String, u32)> = (0..4).map(|i| (format!("{i:03}"), i)).collect();
+        let jobs = numbered_jobs(4);
         let process = |f: BatchFrame<'_, u32>, w: &mut FrameWriter, _: &mut Vec<Stage>| {
-            w.write(&format!("a/{}.txt", f.id), |p| {
-                Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
-            })?;
+            write_marker(f.id, w)?;
             if *f.job == 2 {
                 let cells: Vec<u32> = Vec::new();
                 // A bug: an index out of bounds.

@@ -489,50 +489,26 @@ impl SceneConfig {
         check_interval("depth.range_m", d.range_m, 0.0, 65.0)?;
         check_range("depth.dropout", d.dropout, 0.0, 1.0)?;
 
-        let e = &self.parsing;
-        check_range(
-            "parsing.small_part_dilation_px",
-            e.small_part_dilation_px,
-            0.0,
-            100.0,
-        )?;
-        check_range("parsing.part_dilation_px", e.part_dilation_px, 0.0, 100.0)?;
-        check_range(
-            "parsing.boundary_jitter_px",
-            e.boundary_jitter_px,
-            0.0,
-            100.0,
-        )?;
-        check_range("parsing.swap_prob", e.swap_prob, 0.0, 1.0)?;
-        check_range("parsing.swap_band_px", e.swap_band_px, 0.0, 500.0)?;
-        check_range("parsing.miss_prob", e.miss_prob, 0.0, 1.0)?;
-
-        let a = &self.dsa;
-        check_range(
-            "dsa.color_from_depth_rotation_deg",
-            a.color_from_depth_rotation_deg,
-            0.0,
-            30.0,
-        )?;
-        check_range(
-            "dsa.color_from_depth_translation_m",
-            a.color_from_depth_translation_m,
-            0.0,
-            1.0,
-        )?;
-        check_range(
-            "dsa.world_from_depth_rotation_deg",
-            a.world_from_depth_rotation_deg,
-            0.0,
-            30.0,
-        )?;
-        check_range(
-            "dsa.world_from_depth_translation_m",
-            a.world_from_depth_translation_m,
-            0.0,
-            1.0,
-        )?;
-        check_range("dsa.color_time_offset_s", a.color_time_offset_s, -1.0, 1.0)?;
+        // Simulated-mistake sizes and probabilities, and the DSA perturbations: each a value
+        // with its inclusive range, checked in this order (a table: one line a field).
+        let (e, a) = (&self.parsing, &self.dsa);
+        #[rustfmt::skip]
+        let ranges = [
+            ("parsing.small_part_dilation_px", e.small_part_dilation_px, 0.0, 100.0),
+            ("parsing.part_dilation_px", e.part_dilation_px, 0.0, 100.0),
+            ("parsing.boundary_jitter_px", e.boundary_jitter_px, 0.0, 100.0),
+            ("parsing.swap_prob", e.swap_prob, 0.0, 1.0),
+            ("parsing.swap_band_px", e.swap_band_px, 0.0, 500.0),
+            ("parsing.miss_prob", e.miss_prob, 0.0, 1.0),
+            ("dsa.color_from_depth_rotation_deg", a.color_from_depth_rotation_deg, 0.0, 30.0),
+            ("dsa.color_from_depth_translation_m", a.color_from_depth_translation_m, 0.0, 1.0),
+            ("dsa.world_from_depth_rotation_deg", a.world_from_depth_rotation_deg, 0.0, 30.0),
+            ("dsa.world_from_depth_translation_m", a.world_from_depth_translation_m, 0.0, 1.0),
+            ("dsa.color_time_offset_s", a.color_time_offset_s, -1.0, 1.0),
+        ];
+        for (field, value, lo, hi) in ranges {
+            check_range(field, value, lo, hi)?;
+        }
         Ok(())
     }
 }
