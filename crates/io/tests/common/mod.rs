@@ -97,6 +97,29 @@ impl PlyBuilder {
         self
     }
 
+    /// One entry that opens with `float x, y, z` (the usual vertex), then `rest` as in
+    /// [`Self::row`].
+    pub fn xyz_row(&mut self, xyz: [f64; 3], rest: &[(&str, f64)]) -> &mut Self {
+        let mut values = vec![("float", xyz[0]), ("float", xyz[1]), ("float", xyz[2])];
+        values.extend_from_slice(rest);
+        self.row(&values)
+    }
+
+    /// A file of one vertex per value of `labels`, each at the origin with its label
+    /// stored as `label_type` (`uchar`, `uint`).
+    pub fn labels_at_origin(enc: Enc, label_type: &str, labels: &[f64]) -> PlyBuilder {
+        let header = format!(
+            "element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+             property {label_type} label\n",
+            labels.len()
+        );
+        let mut b = PlyBuilder::new(enc, &header);
+        for &label in labels {
+            b.xyz_row([0.0; 3], &[(label_type, label)]);
+        }
+        b
+    }
+
     fn value(&mut self, ty: &str, v: f64) {
         macro_rules! bin {
             ($x:expr) => {{
