@@ -290,6 +290,7 @@ mod tests {
                 .expect_err(what)
                 .to_string()
         };
+        let assert_starts = |msg: &str, prefix: &str| assert!(msg.starts_with(prefix), "{msg}");
         let fisheye = text.replace("plumb_bob", "equidistant");
         let msg = error_of(&fisheye, "fisheye");
         assert!(
@@ -303,23 +304,17 @@ mod tests {
             1,
         );
         let msg = error_of(&skewed, "skew");
-        assert!(msg.starts_with("camera_matrix.data[1]: skew"), "{msg}");
+        assert_starts(&msg, "camera_matrix.data[1]: skew");
         let binned = format!("{text}binning_x: 2\n");
         let msg = error_of(&binned, "binning");
-        assert!(
-            msg.starts_with("binning_x: binning is not supported"),
-            "{msg}"
-        );
+        assert_starts(&msg, "binning_x: binning is not supported");
         let twelve = text.replace(
             "cols: 5\n  data: [0.1, -0.25, 1e-7, -0.00035, 0.0]",
             "cols: 12\n  data: [0.1, -0.25, 1e-7, -0.00035, 0.0, 0, 0, 0, 0, 0, 0, 0]",
         );
         assert_ne!(twelve, text, "the replacement applies");
         let msg = error_of(&twelve, "thin prism");
-        assert!(
-            msg.starts_with("distortion_coefficients: has 12 values"),
-            "{msg}"
-        );
+        assert_starts(&msg, "distortion_coefficients: has 12 values");
     }
 
     #[test]

@@ -83,16 +83,18 @@ fn naive_match(pred: &[(PointOrigin, Label)], gt: &[(PointOrigin, Label)]) -> Ma
     s
 }
 
-/// The Markdown table row right under the row of configuration `name` (its change row).
-fn row_under<'a>(md: &'a str, name: &str) -> &'a str {
+/// The Markdown table row right under the row of configuration `name` (its change row)
+/// starts with `want`.
+fn assert_row_under(md: &str, name: &str, want: &str) {
     let mut lines = md.lines();
     let start = format!("| {name} |");
     lines
         .position(|l| l.starts_with(&start))
         .unwrap_or_else(|| panic!("a {name} row: {md}"));
-    lines
+    let row = lines
         .next()
-        .unwrap_or_else(|| panic!("a row under {name}: {md}"))
+        .unwrap_or_else(|| panic!("a row under {name}: {md}"));
+    assert!(row.starts_with(want), "{row}");
 }
 
 #[test]
@@ -320,12 +322,9 @@ fn markdown_has_paper_layout_and_signed_change_rows() {
         md.contains("| Reference | 100.00 | 90.00 | – | – | – | – | 95.24 |"),
         "{md}"
     );
-    let delta = row_under(&md, "M");
     // Head 100 → 90 (-10.00), torso 90 → 90.91 (+0.91), background 20/21 → 100 (+4.76).
-    assert!(
-        delta.starts_with("| Δ vs Reference | -10.00 | +0.91 | – | – | – | – | +4.76 |"),
-        "{delta}"
-    );
+    let delta = "| Δ vs Reference | -10.00 | +0.91 | – | – | – | – | +4.76 |";
+    assert_row_under(&md, "M", delta);
     // Only one change row: none under the reference itself.
     assert_eq!(md.matches("Δ vs Reference").count(), 1);
     // Both configurations lack the same classes: named once.
@@ -353,11 +352,7 @@ fn markdown_names_absent_classes_per_configuration_when_they_differ() {
     );
     // N's upper-arms IoU is 0 and has no reference to compare with.
     assert!(md.contains("| N | 100.00 | 100.00 | 0.00 | – |"), "{md}");
-    let delta = row_under(&md, "N");
-    assert!(
-        delta.starts_with("| Δ vs Reference | 0.00 | +10.00 | – | – |"),
-        "{delta}"
-    );
+    assert_row_under(&md, "N", "| Δ vs Reference | 0.00 | +10.00 | – | – |");
 }
 
 #[test]
