@@ -16,13 +16,7 @@ fn a_ply_without_label_reads_unlabelled() {
                   property uchar red\nproperty uchar green\nproperty uchar blue\n";
     for enc in Enc::ALL {
         let mut b = PlyBuilder::new(enc, header);
-        for k in 0..2 {
-            let k = f64::from(k);
-            b.xyz_row(
-                [k, 1.0, 2.0],
-                &[("uchar", 10.0), ("uchar", 20.0), ("uchar", 30.0)],
-            );
-        }
+        b.xyz_rgb_rows(2, |k| ([k, 1.0, 2.0], [10.0, 20.0, 30.0]));
         let file = parse_ply_file(&b.bytes(), Path::new(P)).expect("no label is fine");
         assert_eq!(file.labels, FileLabels::Absent, "{enc:?}");
         assert_eq!(file.cloud.labels, vec![Label::UNKNOWN; 2]);
@@ -81,13 +75,7 @@ fn a_pcl_organised_ply_keeps_its_grid_through_the_range_grid() {
                   element range_grid 6\nproperty list uchar int vertex_indices\n";
     for enc in Enc::ALL {
         let mut b = PlyBuilder::new(enc, header);
-        for k in 0..4 {
-            let k = f64::from(k);
-            b.xyz_row(
-                [k, 0.0, 1.0],
-                &[("uchar", 10.0 * k), ("uchar", 0.0), ("uchar", 0.0)],
-            );
-        }
+        b.xyz_rgb_rows(4, |k| ([k, 0.0, 1.0], [10.0 * k, 0.0, 0.0]));
         for cell in [Some(0.0), None, Some(1.0), Some(2.0), None, Some(3.0)] {
             match cell {
                 Some(v) => b.row(&[("uchar", 1.0), ("int", v)]),

@@ -105,6 +105,20 @@ impl PlyBuilder {
         self.row(&values)
     }
 
+    /// `n` vertices (`k = 0..n`) of `float x, y, z, uchar red, green, blue`, each at the
+    /// position and of the colour that `vertex(k)` gives.
+    pub fn xyz_rgb_rows(
+        &mut self,
+        n: u32,
+        vertex: impl Fn(f64) -> ([f64; 3], [f64; 3]),
+    ) -> &mut Self {
+        for k in 0..n {
+            let (xyz, [r, g, b]) = vertex(f64::from(k));
+            self.xyz_row(xyz, &[("uchar", r), ("uchar", g), ("uchar", b)]);
+        }
+        self
+    }
+
     /// A file of one vertex per value of `labels`, each at the origin with its label
     /// stored as `label_type` (`uchar`, `uint`).
     pub fn labels_at_origin(enc: Enc, label_type: &str, labels: &[f64]) -> PlyBuilder {
