@@ -12,39 +12,16 @@
 
 use std::hint::black_box;
 
-use bodyseg_calib::{BackProjectOptions, RgbdCamera, Rig, RigBackProjector, testing};
+use bodyseg_calib::{BackProjectOptions, RigBackProjector, testing};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-/// Fixed seed of the hole pattern.
-const SEED: u64 = 0x00B0_D15E_6BEC_0001;
-
-fn kinect() -> RgbdCamera {
-    testing::kinect_v2_test_camera().unwrap_or_else(|e| panic!("bench data: {e}"))
-}
-
-/// Three cameras 2.2 m up on a circle of radius 3 m around the world origin, looking at
-/// it 30° down.
-fn rig() -> Rig {
-    testing::ring_rig(&kinect(), 3)
-}
-
-/// A depth image (mm) of a slanted plane with a box in front of it, ~15% holes.
-fn depth_image(width: u32, height: u32, seed: u64) -> Vec<u16> {
-    testing::plane_and_box_depth_mm(width, height, seed)
-}
-
 fn bench(c: &mut Criterion) {
-    let rig = rig();
+    let rig = testing::bench_ring_rig();
     let projector = RigBackProjector::new(&rig).expect("a valid rig");
-    let images: Vec<Vec<u16>> = rig
-        .cameras
-        .iter()
-        .enumerate()
-        .map(|(i, cam)| depth_image(cam.depth.width, cam.depth.height, SEED + i as u64))
-        .collect();
+    let images = testing::bench_depth_images(&rig);
     let depths: Vec<&[u16]> = images.iter().map(Vec::as_slice).collect();
     let opts = BackProjectOptions::default();
     let pixels: usize = rig.cameras.iter().map(|c| c.depth.num_pixels()).sum();
@@ -53,17 +30,11 @@ fn bench(c: &mut Criterion) {
         "back_project bench: {pixels} depth pixels, {:.1}% valid",
         100.0 * valid as f64 / pixels as f64
     );
-    let size = format!(
-        "3x{}x{}",
-        rig.cameras[0].depth.width, rig.cameras[0].depth.height
-    );
+    let size = testing::bench_frame_size(&rig);
 
     let mut group = c.benchmark_group("back_project_rig_world");
     group.throughput(Throughput::Elements(pixels as u64));
-    let two = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .expect("a 2-thread pool");
+    let two = testing::two_thread_pool();
     group.bench_with_input(
         BenchmarkId::new("rayon_2_threads", &size),
         &depths,

@@ -529,16 +529,7 @@ fn camera_json(intr: &Intrinsics, location: &str, purpose: &str, rt: &Pose) -> V
 /// Intrinsics go through the normalisation of the module doc, so a round trip gives
 /// them back within a few ulps (≤ 1e-9 px), not bit for bit; the rest is exact.
 pub fn azure_kinect_json_to_string(camera: &RgbdCamera) -> Result<String, CalibError> {
-    camera.validate()?;
-    if camera.depth_scale != DEFAULT_DEPTH_SCALE {
-        return Err(CalibError::invalid(
-            "depth_scale",
-            format!(
-                "must be {DEFAULT_DEPTH_SCALE} (Azure Kinect depth is in millimetres), got {}",
-                camera.depth_scale
-            ),
-        ));
-    }
+    camera.validate_millimetre_depth("(Azure Kinect depth is in millimetres)")?;
     if camera.depth_shift_mm != 0.0 {
         return Err(CalibError::invalid(
             "depth_shift_mm",

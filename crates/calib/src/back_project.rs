@@ -91,6 +91,22 @@ pub struct BackProjected {
     pub origins: Vec<PointOrigin>,
 }
 
+impl BackProjected {
+    /// The parts one after another, in order: one cloud from row chunks or from cameras.
+    fn concat(parts: Vec<BackProjected>) -> Self {
+        let n = parts.iter().map(|p| p.points_m.len()).sum();
+        let mut out = BackProjected {
+            points_m: Vec::with_capacity(n),
+            origins: Vec::with_capacity(n),
+        };
+        for part in parts {
+            out.points_m.extend_from_slice(&part.points_m);
+            out.origins.extend_from_slice(&part.origins);
+        }
+        out
+    }
+}
+
 /// The undistorted normalised ray `(x', y')` of every pixel of a sensor, row-major;
 /// `None` where undistortion does not converge.
 #[derive(Debug, Clone, PartialEq)]
@@ -199,16 +215,7 @@ impl DepthBackProjector {
             .into_par_iter()
             .map(|range| self.project_rows(depth_raw, opts, &rows[range]))
             .collect();
-        let n = parts.iter().map(|p| p.points_m.len()).sum();
-        let mut out = BackProjected {
-            points_m: Vec::with_capacity(n),
-            origins: Vec::with_capacity(n),
-        };
-        for part in parts {
-            out.points_m.extend_from_slice(&part.points_m);
-            out.origins.extend_from_slice(&part.origins);
-        }
-        Ok(out)
+        Ok(BackProjected::concat(parts))
     }
 
     /// [`Self::back_project`] on the calling thread only: the reference the parallel
@@ -359,16 +366,7 @@ impl RigBackProjector {
             ));
         }
         let parts = self.back_project_each(depths, opts)?;
-        let n = parts.iter().map(|p| p.points_m.len()).sum();
-        let mut out = BackProjected {
-            points_m: Vec::with_capacity(n),
-            origins: Vec::with_capacity(n),
-        };
-        for part in parts {
-            out.points_m.extend_from_slice(&part.points_m);
-            out.origins.extend_from_slice(&part.origins);
-        }
-        Ok(out)
+        Ok(BackProjected::concat(parts))
     }
 }
 

@@ -67,6 +67,23 @@ impl RgbdCamera {
         Ok(())
     }
 
+    /// [`Self::validate`], then `depth_scale` must be [`DEFAULT_DEPTH_SCALE`]: for writers
+    /// of formats that store depth in millimetres with no scale; `why` ends the message
+    /// after "must be 1000" (the format and its reason).
+    pub(crate) fn validate_millimetre_depth(&self, why: &str) -> Result<(), CalibError> {
+        self.validate()?;
+        if self.depth_scale != DEFAULT_DEPTH_SCALE {
+            return Err(CalibError::invalid(
+                "depth_scale",
+                format!(
+                    "must be {DEFAULT_DEPTH_SCALE} {why}, got {}",
+                    self.depth_scale
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Depth in metres of a raw depth value: `raw / depth_scale + depth_shift_mm / 1000`.
     /// `None` for 0 (no measurement).
     pub fn depth_m(&self, raw: u16) -> Option<f64> {

@@ -111,16 +111,9 @@ pub fn import_iai_kinect2(dir: &Path) -> Result<ImportedCamera, CalibError> {
 /// whose `depth_scale` is not 1000 is refused (error on `depth_scale`). All written
 /// values are printed with 17 significant digits, so a round trip is bit-exact.
 pub fn write_iai_kinect2(dir: &Path, camera: &RgbdCamera) -> Result<(), CalibError> {
-    camera.validate()?;
-    if camera.depth_scale != DEFAULT_DEPTH_SCALE {
-        return Err(CalibError::invalid(
-            "depth_scale",
-            format!(
-                "must be {DEFAULT_DEPTH_SCALE} for an iai_kinect2 folder (Kinect v2 depth is in millimetres), got {}",
-                camera.depth_scale
-            ),
-        ));
-    }
+    camera.validate_millimetre_depth(
+        "for an iai_kinect2 folder (Kinect v2 depth is in millimetres)",
+    )?;
     std::fs::create_dir_all(dir).map_err(|cause| CalibError::Write {
         cause,
         path: dir.to_path_buf(),

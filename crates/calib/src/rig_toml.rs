@@ -260,18 +260,9 @@ fn read_camera(t: &Table, unnamed: &str, path: &Path) -> Result<RgbdCamera, Cali
     };
     let depth = read_intrinsics(top.table(t, "depth")?, &name, "depth", path)?;
     let color = read_intrinsics(top.table(t, "color")?, &name, "color", path)?;
-    let color_from_depth = read_pose(
-        top.table(t, "color_from_depth")?,
-        &name,
-        "color_from_depth",
-        path,
-    )?;
-    let world_from_depth = read_pose(
-        top.table(t, "world_from_depth")?,
-        &name,
-        "world_from_depth",
-        path,
-    )?;
+    let pose = |key: &str| read_pose(top.table(t, key)?, &name, key, path);
+    let color_from_depth = pose("color_from_depth")?;
+    let world_from_depth = pose("world_from_depth")?;
     let cam = RgbdCamera {
         depth_scale: top.f64_or(t, "depth_scale", DEFAULT_DEPTH_SCALE)?,
         depth_shift_mm: top.f64_or(t, "depth_shift_mm", 0.0)?,

@@ -285,10 +285,14 @@ mod tests {
     #[test]
     fn other_models_and_skew_are_rejected() {
         let text = ros_camera_info_to_string("c", &intrinsics()).expect("valid");
+        let error_of = |text: &str, what: &str| {
+            parse_ros_camera_info(text, Path::new("c.yaml"))
+                .expect_err(what)
+                .to_string()
+        };
+        let assert_starts = |msg: &str, prefix: &str| assert!(msg.starts_with(prefix), "{msg}");
         let fisheye = text.replace("plumb_bob", "equidistant");
-        let msg = parse_ros_camera_info(&fisheye, Path::new("c.yaml"))
-            .expect_err("fisheye")
-            .to_string();
+        let msg = error_of(&fisheye, "fisheye");
         assert!(
             msg.starts_with("distortion_model: \"equidistant\" is not supported")
                 && msg.ends_with("c.yaml"),
@@ -299,30 +303,18 @@ mod tests {
             "data: [525.1234567890123, 0.5",
             1,
         );
-        let msg = parse_ros_camera_info(&skewed, Path::new("c.yaml"))
-            .expect_err("skew")
-            .to_string();
-        assert!(msg.starts_with("camera_matrix.data[1]: skew"), "{msg}");
+        let msg = error_of(&skewed, "skew");
+        assert_starts(&msg, "camera_matrix.data[1]: skew");
         let binned = format!("{text}binning_x: 2\n");
-        let msg = parse_ros_camera_info(&binned, Path::new("c.yaml"))
-            .expect_err("binning")
-            .to_string();
-        assert!(
-            msg.starts_with("binning_x: binning is not supported"),
-            "{msg}"
-        );
+        let msg = error_of(&binned, "binning");
+        assert_starts(&msg, "binning_x: binning is not supported");
         let twelve = text.replace(
             "cols: 5\n  data: [0.1, -0.25, 1e-7, -0.00035, 0.0]",
             "cols: 12\n  data: [0.1, -0.25, 1e-7, -0.00035, 0.0, 0, 0, 0, 0, 0, 0, 0]",
         );
         assert_ne!(twelve, text, "the replacement applies");
-        let msg = parse_ros_camera_info(&twelve, Path::new("c.yaml"))
-            .expect_err("thin prism")
-            .to_string();
-        assert!(
-            msg.starts_with("distortion_coefficients: has 12 values"),
-            "{msg}"
-        );
+        let msg = error_of(&twelve, "thin prism");
+        assert_starts(&msg, "distortion_coefficients: has 12 values");
     }
 
     #[test]

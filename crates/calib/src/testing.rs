@@ -74,6 +74,46 @@ pub fn plane_and_box_depth_mm(width: u32, height: u32, seed: u64) -> Vec<u16> {
     out
 }
 
+/// Fixed seed of the benches' hole pattern (camera `i` uses `BENCH_SEED + i`).
+pub const BENCH_SEED: u64 = 0x00B0_D15E_6BEC_0001;
+
+/// The benches' rig: three copies of the Kinect v2 test camera on [`ring_rig`]'s circle.
+/// Panics naming the error when `shared/` is missing (benches only).
+pub fn bench_ring_rig() -> Rig {
+    let kinect = kinect_v2_test_camera().unwrap_or_else(|e| panic!("bench data: {e}"));
+    ring_rig(&kinect, 3)
+}
+
+/// The benches' name of a frame of `rig`: cameras × depth width × height (`3x512x424`),
+/// from the first camera's depth sensor.
+pub fn bench_frame_size(rig: &Rig) -> String {
+    let (w, h) = rig
+        .cameras
+        .first()
+        .map_or((0, 0), |c| (c.depth.width, c.depth.height));
+    format!("{}x{w}x{h}", rig.cameras.len())
+}
+
+/// A rayon pool of 2 threads: the per-frame budget's machine (issue 4) has 2 cores.
+pub fn two_thread_pool() -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("a 2-thread pool")
+}
+
+/// One [`plane_and_box_depth_mm`] image per camera of `rig`, camera `i` with holes drawn
+/// from `BENCH_SEED + i`.
+pub fn bench_depth_images(rig: &Rig) -> Vec<Vec<u16>> {
+    rig.cameras
+        .iter()
+        .enumerate()
+        .map(|(i, cam)| {
+            plane_and_box_depth_mm(cam.depth.width, cam.depth.height, BENCH_SEED + i as u64)
+        })
+        .collect()
+}
+
 /// The colour sensor's rational distortion of Azure Kinect 001514394512
 /// (`tests/fixtures/calib/azure_kinect/pyk4a_calibration.json`, `ModelParameters` 4..13
 /// in OpenCV's order k1 k2 p1 p2 k3 k4 k5 k6).

@@ -287,53 +287,45 @@ fn azure_write_then_read_round_trips() {
 #[test]
 fn azure_bad_input_names_file_and_key() {
     let text = fixture_text("azure_kinect_calibration.json");
-    let file = Path::new("bad_k4a.json");
-    let err = parse_azure_kinect_json(
-        &text.replace(
-            "\"ModelParameters\": [0.50114387273788452, ",
-            "\"ModelParameters\": [",
+    let parse = |text: &str| {
+        parse_azure_kinect_json(
+            text,
+            "k",
+            Path::new("bad_k4a.json"),
+            AzureKinectMode::default(),
+        )
+    };
+    // (edit of the fixture, what is wrong, the key the error must name)
+    let cases = [
+        (
+            (
+                "\"ModelParameters\": [0.50114387273788452, ",
+                "\"ModelParameters\": [",
+            ),
+            "13 parameters",
+            "CalibrationInformation.Cameras[0].Intrinsics.ModelParameters: needs 14 values",
         ),
-        "k",
-        file,
-        AzureKinectMode::default(),
-    )
-    .expect_err("13 parameters");
-    assert_names(
-        &err,
-        "CalibrationInformation.Cameras[0].Intrinsics.ModelParameters: needs 14 values",
-        "bad_k4a.json",
-    );
-    let err = parse_azure_kinect_json(
-        &text.replace("LocationPV0", "LocationPV1"),
-        "k",
-        file,
-        AzureKinectMode::default(),
-    )
-    .expect_err("no colour camera");
-    assert_names(&err, "CameraLocationPV0", "bad_k4a.json");
-    let err = parse_azure_kinect_json(
-        &text.replace("0.9999832459018021", "0.9"),
-        "k",
-        file,
-        AzureKinectMode::default(),
-    )
-    .expect_err("not a rotation");
-    assert_names(&err, "Cameras[1].Rt.Rotation", "bad_k4a.json");
-    let err = parse_azure_kinect_json(
-        &text.replace("\"SensorWidth\": 1024", "\"SensorWidth\": 0"),
-        "k",
-        file,
-        AzureKinectMode::default(),
-    )
-    .expect_err("zero width");
-    assert_names(&err, "Cameras[0].SensorWidth", "bad_k4a.json");
-    let err = parse_azure_kinect_json(
-        "{\"CalibrationInformation\": [",
-        "k",
-        file,
-        AzureKinectMode::default(),
-    )
-    .expect_err("syntax");
+        (
+            ("LocationPV0", "LocationPV1"),
+            "no colour camera",
+            "CameraLocationPV0",
+        ),
+        (
+            ("0.9999832459018021", "0.9"),
+            "not a rotation",
+            "Cameras[1].Rt.Rotation",
+        ),
+        (
+            ("\"SensorWidth\": 1024", "\"SensorWidth\": 0"),
+            "zero width",
+            "Cameras[0].SensorWidth",
+        ),
+    ];
+    for ((from, to), what, key) in cases {
+        let err = parse(&text.replace(from, to)).expect_err(what);
+        assert_names(&err, key, "bad_k4a.json");
+    }
+    let err = parse("{\"CalibrationInformation\": [").expect_err("syntax");
     assert!(matches!(err, CalibError::Syntax { .. }), "{err}");
 }
 

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{Rng, seed};
+use common::{Rng, assert_round_trip, outer_corners, seed};
 
 use bodyseg_calib::{
     BackProjectOptions, CalibError, CloudFrame, DepthBackProjector, Distortion, Intrinsics, Pose,
@@ -137,6 +137,19 @@ fn load_error(file: &str, contents: Option<&str>) -> (CalibError, String) {
     (err, msg)
 }
 
+fn assert_starts(msg: &str, prefix: &str) {
+    assert!(msg.starts_with(prefix), "{msg}");
+}
+
+/// [`load_error`]'s message for the test camera's `file` with its first `from` replaced
+/// by `to` (which must be there).
+fn edited_error(file: &str, from: &str, to: &str) -> String {
+    let text = std::fs::read_to_string(kinect_dir().join(file)).expect("read");
+    let broken = text.replacen(from, to, 1);
+    assert_ne!(text, broken, "{from} is not in {file}");
+    load_error(file, Some(&broken)).1
+}
+
 #[test]
 fn missing_file_is_named() {
     let (err, msg) = load_error("calib_pose.yaml", None);
@@ -151,48 +164,35 @@ fn missing_folder_is_named() {
 
 #[test]
 fn matrix_with_wrong_number_of_values_is_named() {
-    let text = std::fs::read_to_string(kinect_dir().join("calib_pose.yaml")).expect("read");
-    let broken = text.replace("8.8806735554907584e-04 ]", "]");
-    assert_ne!(text, broken);
-    let (_, msg) = load_error("calib_pose.yaml", Some(&broken));
-    assert!(
-        msg.starts_with("translation: a 3x1 matrix needs 3 values, data has 2"),
-        "{msg}"
-    );
+    let msg = edited_error("calib_pose.yaml", "8.8806735554907584e-04 ]", "]");
+    assert_starts(&msg, "translation: a 3x1 matrix needs 3 values, data has 2");
 }
 
 #[test]
 fn non_numeric_entry_is_named() {
-    let text = std::fs::read_to_string(kinect_dir().join("calib_color.yaml")).expect("read");
-    let broken = text.replacen("1.0599465578241038e+03", "1.05e+O3", 1);
-    let (_, msg) = load_error("calib_color.yaml", Some(&broken));
-    assert!(
-        msg.starts_with("cameraMatrix: data[0] = \"1.05e+O3\" is not a finite number"),
-        "{msg}"
+    let msg = edited_error("calib_color.yaml", "1.0599465578241038e+03", "1.05e+O3");
+    assert_starts(
+        &msg,
+        "cameraMatrix: data[0] = \"1.05e+O3\" is not a finite number",
     );
     let (_, msg) = load_error("calib_depth.yaml", Some("%YAML:1.0\ndepthShift: abc\n"));
-    assert!(
-        msg.starts_with("depthShift: \"abc\" is not a finite number"),
-        "{msg}"
-    );
+    assert_starts(&msg, "depthShift: \"abc\" is not a finite number");
 }
 
 #[test]
 fn bad_values_are_named() {
-    let text = std::fs::read_to_string(kinect_dir().join("calib_ir.yaml")).expect("read");
-    let broken = text.replacen("3.6694757270064110e+02", "-3.6694757270064110e+02", 1);
-    let (_, msg) = load_error("calib_ir.yaml", Some(&broken));
-    assert!(
-        msg.starts_with("cameraMatrix: fx must be finite and > 0"),
-        "{msg}"
+    let msg = edited_error(
+        "calib_ir.yaml",
+        "3.6694757270064110e+02",
+        "-3.6694757270064110e+02",
     );
-    let text = std::fs::read_to_string(kinect_dir().join("calib_pose.yaml")).expect("read");
-    let broken = text.replacen("9.9979883926593693e-01", "1.9979883926593693e-01", 1);
-    let (_, msg) = load_error("calib_pose.yaml", Some(&broken));
-    assert!(
-        msg.starts_with("rotation: rotation is not orthonormal"),
-        "{msg}"
+    assert_starts(&msg, "cameraMatrix: fx must be finite and > 0");
+    let msg = edited_error(
+        "calib_pose.yaml",
+        "9.9979883926593693e-01",
+        "1.9979883926593693e-01",
     );
+    assert_starts(&msg, "rotation: rotation is not orthonormal");
     let (_, msg) = load_error("calib_depth.yaml", Some("%YAML:1.0\nshift: 1\n"));
     assert_eq!(msg.split(':').next(), Some("missing key depthShift"));
 }
@@ -212,20 +212,13 @@ fn worst_round_trip(cam: &Intrinsics, pixels: impl Iterator<Item = ([f64; 2], f6
     worst
 }
 
-/// The crate's promise for undistortion, pixels.
-const ROUND_TRIP_TOL_PX: f64 = 1e-6;
-
 #[test]
 fn round_trip_every_pixel_centre_of_both_kinect_sensors() {
     let cam = kinect();
     for (name, intr) in [("depth", cam.depth), ("color", cam.color)] {
         let pixels = (0..intr.height)
             .flat_map(move |v| (0..intr.width).map(move |u| ([f64::from(u), f64::from(v)], 1.7)));
-        let worst = worst_round_trip(&intr, pixels);
-        assert!(
-            worst < ROUND_TRIP_TOL_PX,
-            "{name}: worst round trip {worst:e} px"
-        );
+        assert_round_trip(worst_round_trip(&intr, pixels), name);
     }
 }
 
@@ -237,21 +230,15 @@ fn round_trip_random_subpixel_points_and_depths() {
     for (name, intr) in [("depth", cam.depth), ("color", cam.color)] {
         let (w, h) = (f64::from(intr.width), f64::from(intr.height));
         // The image's outer edges (pixel borders at -0.5 and size - 0.5) are included.
-        let corners = [
-            [-0.5, -0.5],
-            [w - 0.5, -0.5],
-            [-0.5, h - 0.5],
-            [w - 0.5, h - 0.5],
-        ];
+        let corners = outer_corners(&intr);
         let mut samples: Vec<([f64; 2], f64)> = corners.iter().map(|&c| (c, 2.0)).collect();
         for _ in 0..50_000 {
             let uv = [rng.range_f64(-0.5, w - 0.5), rng.range_f64(-0.5, h - 0.5)];
             samples.push((uv, rng.range_f64(0.3, 10.0)));
         }
-        let worst = worst_round_trip(&intr, samples.into_iter());
-        assert!(
-            worst < ROUND_TRIP_TOL_PX,
-            "{name}: worst round trip {worst:e} px (seed {seed}, BODYSEG_TEST_SEED to rerun)"
+        assert_round_trip(
+            worst_round_trip(&intr, samples.into_iter()),
+            &format!("{name} (seed {seed}, BODYSEG_TEST_SEED to rerun)"),
         );
     }
 }

@@ -12,7 +12,7 @@ use bodyseg_calib::{Distortion, Intrinsics, RgbdCamera, Rig, parse_rig_toml, rig
 
 mod common;
 use bodyseg_calib::testing::AZURE_COLOR_DISTORTION;
-use common::{Rng, seed};
+use common::{Rng, assert_round_trip, outer_corners, seed};
 
 /// The depth sensor of Azure Kinect 001514394512 (`tests/fixtures/calib/azure_kinect/
 /// pyk4a_calibration.json`) in NFOV unbinned mode, 640×576, as the SDK converts it:
@@ -126,21 +126,12 @@ fn brown_conrady_as_rational_projects_bit_for_bit() {
     }
 }
 
-/// The crate's promise for undistortion, pixels.
-const ROUND_TRIP_TOL_PX: f64 = 1e-6;
-
 /// Largest |project(z · unproject(u, v)) − (u, v)| over every pixel centre and the outer
 /// pixel borders, and the pixels within `max_radius` (normalised, undistorted: the
 /// SDK's metric radius) that did not undistort. Pixels farther out must either undistort
 /// exactly or give no ray.
 fn worst_round_trip(intr: &Intrinsics, max_radius: f64) -> (f64, usize) {
-    let (w, h) = (f64::from(intr.width), f64::from(intr.height));
-    let border = [
-        [-0.5, -0.5],
-        [w - 0.5, -0.5],
-        [-0.5, h - 0.5],
-        [w - 0.5, h - 0.5],
-    ];
+    let border = outer_corners(intr);
     // Distorted radius of the metric radius (the distortion is radially monotonic there).
     let rim = intr
         .distort([max_radius, 0.0])
@@ -181,10 +172,7 @@ fn round_trip_every_pixel_of_an_azure_kinect() {
             failed, 0,
             "{name}: pixels without a ray inside the metric radius"
         );
-        assert!(
-            worst < ROUND_TRIP_TOL_PX,
-            "{name}: worst round trip {worst:e} px"
-        );
+        assert_round_trip(worst, name);
     }
 }
 

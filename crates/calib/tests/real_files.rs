@@ -310,71 +310,38 @@ const SDK_TOL_PX: f64 = 0.01;
 
 #[test]
 fn azure_kinect_matches_the_sdk_projection_in_every_mode() {
+    use {AzureColorResolution as C, AzureDepthMode as D};
     let json = text("azure_kinect/pyk4a_calibration.json");
     let (depth_p, depth_size) = model_parameters(&json, "CALIBRATION_CameraLocationD0");
     let (color_p, color_size) = model_parameters(&json, "CALIBRATION_CameraLocationPV0");
-    let mut worst_all = 0.0f64;
     // (mode, binned, crop) as in the SDK's tables.
     let depth_modes = [
         (None, [1024.0, 1024.0], [0.0, 0.0]),
-        (
-            Some(AzureDepthMode::NfovUnbinned),
-            [1024.0, 1024.0],
-            [192.0, 180.0],
-        ),
-        (
-            Some(AzureDepthMode::Nfov2x2Binned),
-            [512.0, 512.0],
-            [96.0, 90.0],
-        ),
-        (
-            Some(AzureDepthMode::Wfov2x2Binned),
-            [512.0, 512.0],
-            [0.0, 0.0],
-        ),
-    ];
-    for (depth_mode, binned, crop) in depth_modes {
-        let mode = AzureKinectMode {
-            depth: depth_mode,
-            color: None,
-        };
-        let cam = parse_azure_kinect_json(&json, "k", Path::new("c.json"), mode)
-            .expect("reads")
-            .camera;
-        let sdk = sdk_mode_params(&depth_p, depth_size, binned, crop, false);
-        let worst = worst_vs_sdk(&cam.depth, &sdk);
-        assert!(worst < SDK_TOL_PX, "depth {depth_mode:?}: {worst:e} px");
-        worst_all = worst_all.max(worst);
-    }
+        (Some(D::NfovUnbinned), [1024.0, 1024.0], [192.0, 180.0]),
+        (Some(D::Nfov2x2Binned), [512.0, 512.0], [96.0, 90.0]),
+        (Some(D::Wfov2x2Binned), [512.0, 512.0], [0.0, 0.0]),
+    ]
+    .map(|(depth, b, c)| (AzureKinectMode { depth, color: None }, b, c, false));
     let color_modes = [
         (None, [4096.0, 3072.0], [0.0, 0.0]),
-        (
-            Some(AzureColorResolution::R720p),
-            [1280.0, 960.0],
-            [0.0, 120.0],
-        ),
-        (
-            Some(AzureColorResolution::R1080p),
-            [1920.0, 1440.0],
-            [0.0, 180.0],
-        ),
-        (
-            Some(AzureColorResolution::R1536p),
-            [2048.0, 1536.0],
-            [0.0, 0.0],
-        ),
-    ];
-    for (color_mode, binned, crop) in color_modes {
-        let mode = AzureKinectMode {
-            depth: None,
-            color: color_mode,
-        };
+        (Some(C::R720p), [1280.0, 960.0], [0.0, 120.0]),
+        (Some(C::R1080p), [1920.0, 1440.0], [0.0, 180.0]),
+        (Some(C::R1536p), [2048.0, 1536.0], [0.0, 0.0]),
+    ]
+    .map(|(color, b, c)| (AzureKinectMode { depth: None, color }, b, c, true));
+    // Our intrinsics of the depth (or colour) sensor in `mode` against the SDK's.
+    let mut worst_all = 0.0f64;
+    for (mode, binned, crop, is_color) in depth_modes.into_iter().chain(color_modes) {
         let cam = parse_azure_kinect_json(&json, "k", Path::new("c.json"), mode)
             .expect("reads")
             .camera;
-        let sdk = sdk_mode_params(&color_p, color_size, binned, crop, true);
-        let worst = worst_vs_sdk(&cam.color, &sdk);
-        assert!(worst < SDK_TOL_PX, "colour {color_mode:?}: {worst:e} px");
+        let (params, size, ours) = if is_color {
+            (&color_p, color_size, &cam.color)
+        } else {
+            (&depth_p, depth_size, &cam.depth)
+        };
+        let worst = worst_vs_sdk(ours, &sdk_mode_params(params, size, binned, crop, is_color));
+        assert!(worst < SDK_TOL_PX, "{mode:?}: {worst:e} px");
         worst_all = worst_all.max(worst);
     }
     eprintln!("Azure Kinect: largest difference to the SDK's f32 projection {worst_all:e} px");

@@ -14,9 +14,10 @@ pub struct PointOrigin {
 }
 
 /// Why a cloud is not usable.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CloudError {
     /// Two of the per-point arrays have different lengths.
+    #[error("cloud has {want} points but {got} {field}")]
     LengthMismatch {
         /// Name of the array whose length is off.
         field: &'static str,
@@ -26,25 +27,11 @@ pub enum CloudError {
         want: usize,
     },
     /// A coordinate is NaN or infinite.
+    #[error("point {index} has a NaN or infinite coordinate")]
     NonFinite {
         /// Index of the first such point.
         index: usize,
     },
-}
-
-impl std::error::Error for CloudError {}
-
-impl std::fmt::Display for CloudError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            CloudError::LengthMismatch { field, got, want } => {
-                write!(f, "cloud has {want} points but {got} {field}")
-            }
-            CloudError::NonFinite { index } => {
-                write!(f, "point {index} has a NaN or infinite coordinate")
-            }
-        }
-    }
 }
 
 /// A point cloud with one label per point, world frame.

@@ -4,9 +4,10 @@
 use crate::class::Label;
 
 /// Why a [`LabelImage`] is not usable.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ImageError {
     /// A per-pixel array does not hold `width * height` values.
+    #[error("label image has {want} pixels but {got} {field}")]
     SizeMismatch {
         /// Name of the array (`labels`, `probs`).
         field: &'static str,
@@ -16,30 +17,13 @@ pub enum ImageError {
         want: usize,
     },
     /// A probability is NaN or outside `[0, 1]`.
+    #[error("label image pixel {index}: probability {value} is not in [0, 1]")]
     BadProbability {
         /// Row-major index of the first such pixel.
         index: usize,
         /// Its value.
         value: f32,
     },
-}
-
-impl std::error::Error for ImageError {}
-
-impl std::fmt::Display for ImageError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ImageError::SizeMismatch { field, got, want } => {
-                write!(f, "label image has {want} pixels but {got} {field}")
-            }
-            ImageError::BadProbability { index, value } => {
-                write!(
-                    f,
-                    "label image pixel {index}: probability {value} is not in [0, 1]"
-                )
-            }
-        }
-    }
 }
 
 /// The label of every pixel of one colour image, row-major (`v * width + u`), with

@@ -83,6 +83,20 @@ fn naive_match(pred: &[(PointOrigin, Label)], gt: &[(PointOrigin, Label)]) -> Ma
     s
 }
 
+/// The Markdown table row right under the row of configuration `name` (its change row)
+/// starts with `want`.
+fn assert_row_under(md: &str, name: &str, want: &str) {
+    let mut lines = md.lines();
+    let start = format!("| {name} |");
+    lines
+        .position(|l| l.starts_with(&start))
+        .unwrap_or_else(|| panic!("a {name} row: {md}"));
+    let row = lines
+        .next()
+        .unwrap_or_else(|| panic!("a row under {name}: {md}"));
+    assert!(row.starts_with(want), "{row}");
+}
+
 #[test]
 fn merged_matrices_equal_the_matrix_of_the_concatenated_data() {
     let seed = seed();
@@ -232,39 +246,31 @@ fn duplicate_origins_are_errors_naming_the_cloud_and_key() {
         (origin(3, 7), head),
     ]);
 
-    let err = match_clouds(&ok, &dup).expect_err("duplicate in ground truth");
-    assert!(
-        matches!(
-            err,
-            EvalError::DuplicateOrigin {
-                cloud: CloudRole::GroundTruth,
-                camera: 3,
-                pixel: 7,
-                first: 1,
-                second: 2,
-            }
-        ),
-        "{err:?}"
-    );
-    let message = err.to_string();
-    assert!(
-        message.contains("ground-truth") && message.contains("camera 3, pixel 7"),
-        "{message}"
-    );
-
-    let err = match_clouds(&dup, &ok).expect_err("duplicate in prediction");
-    assert!(
-        matches!(
-            err,
-            EvalError::DuplicateOrigin {
-                cloud: CloudRole::Prediction,
-                camera: 3,
-                pixel: 7,
-                ..
-            }
-        ),
-        "{err:?}"
-    );
+    // A duplicate in either cloud: the error names that cloud, the key and both points.
+    for (pred, gt, role, named) in [
+        (&ok, &dup, CloudRole::GroundTruth, "ground-truth cloud"),
+        (&dup, &ok, CloudRole::Prediction, "predicted cloud"),
+    ] {
+        let err = match_clouds(pred, gt).expect_err("a duplicate origin");
+        assert!(
+            matches!(
+                err,
+                EvalError::DuplicateOrigin {
+                    cloud,
+                    camera: 3,
+                    pixel: 7,
+                    first: 1,
+                    second: 2,
+                } if cloud == role
+            ),
+            "{err:?}"
+        );
+        let message = err.to_string();
+        assert!(
+            message.contains(named) && message.contains("camera 3, pixel 7"),
+            "{message}"
+        );
+    }
 }
 
 #[test]
@@ -316,16 +322,9 @@ fn markdown_has_paper_layout_and_signed_change_rows() {
         md.contains("| Reference | 100.00 | 90.00 | – | – | – | – | 95.24 |"),
         "{md}"
     );
-    let m_row = md
-        .lines()
-        .position(|l| l.starts_with("| M |"))
-        .expect("an M row");
-    let delta = md.lines().nth(m_row + 1).expect("a row under M");
     // Head 100 → 90 (-10.00), torso 90 → 90.91 (+0.91), background 20/21 → 100 (+4.76).
-    assert!(
-        delta.starts_with("| Δ vs Reference | -10.00 | +0.91 | – | – | – | – | +4.76 |"),
-        "{delta}"
-    );
+    let delta = "| Δ vs Reference | -10.00 | +0.91 | – | – | – | – | +4.76 |";
+    assert_row_under(&md, "M", delta);
     // Only one change row: none under the reference itself.
     assert_eq!(md.matches("Δ vs Reference").count(), 1);
     // Both configurations lack the same classes: named once.
@@ -353,15 +352,7 @@ fn markdown_names_absent_classes_per_configuration_when_they_differ() {
     );
     // N's upper-arms IoU is 0 and has no reference to compare with.
     assert!(md.contains("| N | 100.00 | 100.00 | 0.00 | – |"), "{md}");
-    let n_row = md
-        .lines()
-        .position(|l| l.starts_with("| N |"))
-        .expect("an N row");
-    let delta = md.lines().nth(n_row + 1).expect("a row under N");
-    assert!(
-        delta.starts_with("| Δ vs Reference | 0.00 | +10.00 | – | – |"),
-        "{delta}"
-    );
+    assert_row_under(&md, "N", "| Δ vs Reference | 0.00 | +10.00 | – | – |");
 }
 
 #[test]

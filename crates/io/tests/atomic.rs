@@ -24,6 +24,20 @@ fn fail_midway(w: &mut dyn Write) -> io::Result<()> {
     Err(io::Error::other("disk full (simulated)"))
 }
 
+/// `path` holds `want` and is the only entry of its folder (no temporary left behind).
+fn assert_only_file(path: &Path, want: &[u8]) {
+    assert_eq!(std::fs::read(path).expect("read"), want);
+    let folder = path.parent().expect("a file in a folder");
+    let name = path.file_name().expect("a file name").to_string_lossy();
+    assert_eq!(listing(folder), [name]);
+}
+
+/// The message opens with the path of the file or folder that failed.
+fn assert_names_path(err: &IoError, path: &Path) {
+    let msg = err.to_string();
+    assert!(msg.starts_with(&path.display().to_string()), "{msg}");
+}
+
 #[test]
 fn successful_write_replaces_the_file_and_leaves_no_temporary() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -31,8 +45,7 @@ fn successful_write_replaces_the_file_and_leaves_no_temporary() {
     write_atomic(&path, |w| w.write_all(b"first")).expect("write");
     assert_eq!(std::fs::read(&path).expect("read"), b"first");
     write_bytes_atomic(&path, b"second, longer").expect("overwrite");
-    assert_eq!(std::fs::read(&path).expect("read"), b"second, longer");
-    assert_eq!(listing(dir.path()), ["out.bin"]);
+    assert_only_file(&path, b"second, longer");
 }
 
 #[test]
@@ -41,18 +54,13 @@ fn unsynced_writes_are_atomic_too_and_a_bulk_sync_follows() {
     let path = dir.path().join("out.bin");
     std::fs::write(&path, b"previous result").expect("seed");
     write_atomic_with(&path, Durability::Renamed, fail_midway).expect_err("must fail");
-    assert_eq!(std::fs::read(&path).expect("read"), b"previous result");
-    assert_eq!(listing(dir.path()), ["out.bin"]);
+    assert_only_file(&path, b"previous result");
     write_atomic_with(&path, Durability::Renamed, |w| w.write_all(b"new")).expect("write");
-    assert_eq!(std::fs::read(&path).expect("read"), b"new");
-    assert_eq!(listing(dir.path()), ["out.bin"]);
+    assert_only_file(&path, b"new");
     sync_file_system(dir.path()).expect("sync");
     let missing = dir.path().join("missing");
     let err = sync_file_system(&missing).expect_err("no such folder");
-    assert!(
-        err.to_string().starts_with(&missing.display().to_string()),
-        "{err}"
-    );
+    assert_names_path(&err, &missing);
 }
 
 #[test]
@@ -62,10 +70,7 @@ fn failing_writer_leaves_no_file_and_no_temporary() {
     let err = write_atomic(&path, fail_midway).expect_err("must fail");
     assert!(matches!(err, IoError::Write { .. }), "{err}");
     assert!(err.to_string().contains("disk full (simulated)"), "{err}");
-    assert!(
-        err.to_string().starts_with(&path.display().to_string()),
-        "{err}"
-    );
+    assert_names_path(&err, &path);
     assert!(listing(dir.path()).is_empty(), "{:?}", listing(dir.path()));
 }
 
@@ -75,8 +80,7 @@ fn failing_writer_leaves_an_existing_destination_untouched() {
     let path = dir.path().join("out.ply");
     std::fs::write(&path, b"previous result").expect("seed");
     write_atomic(&path, fail_midway).expect_err("must fail");
-    assert_eq!(std::fs::read(&path).expect("read"), b"previous result");
-    assert_eq!(listing(dir.path()), ["out.ply"]);
+    assert_only_file(&path, b"previous result");
 }
 
 #[test]
@@ -105,10 +109,7 @@ fn missing_directory_is_a_write_error_naming_the_path() {
     let path = dir.path().join("no/such/dir/out.bin");
     let err = write_atomic(&path, |w| w.write_all(b"x")).expect_err("no dir");
     assert!(matches!(err, IoError::Write { .. }), "{err}");
-    assert!(
-        err.to_string().starts_with(&path.display().to_string()),
-        "{err}"
-    );
+    assert_names_path(&err, &path);
 }
 
 #[test]

@@ -16,17 +16,7 @@ fn a_ply_without_label_reads_unlabelled() {
                   property uchar red\nproperty uchar green\nproperty uchar blue\n";
     for enc in Enc::ALL {
         let mut b = PlyBuilder::new(enc, header);
-        for k in 0..2 {
-            let k = f64::from(k);
-            b.row(&[
-                ("float", k),
-                ("float", 1.0),
-                ("float", 2.0),
-                ("uchar", 10.0),
-                ("uchar", 20.0),
-                ("uchar", 30.0),
-            ]);
-        }
+        b.xyz_rgb_rows(2, |k| ([k, 1.0, 2.0], [10.0, 20.0, 30.0]));
         let file = parse_ply_file(&b.bytes(), Path::new(P)).expect("no label is fine");
         assert_eq!(file.labels, FileLabels::Absent, "{enc:?}");
         assert_eq!(file.cloud.labels, vec![Label::UNKNOWN; 2]);
@@ -39,18 +29,8 @@ fn a_ply_without_label_reads_unlabelled() {
 #[test]
 fn another_tools_label_ids_read_as_foreign_and_all_unknown() {
     // PCL's PointXYZRGBL writes `uint label` segment ids: 0, 3, 40.
-    let header = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
-                  property uint label\n";
     for enc in Enc::ALL {
-        let mut b = PlyBuilder::new(enc, header);
-        for label in [0.0, 3.0, 40.0] {
-            b.row(&[
-                ("float", 0.0),
-                ("float", 0.0),
-                ("float", 0.0),
-                ("uint", label),
-            ]);
-        }
+        let b = PlyBuilder::labels_at_origin(enc, "uint", &[0.0, 3.0, 40.0]);
         let file = parse_ply_file(&b.bytes(), Path::new(P)).expect("foreign ids");
         assert_eq!(
             file.labels,
@@ -64,21 +44,7 @@ fn another_tools_label_ids_read_as_foreign_and_all_unknown() {
         assert_eq!(file.cloud.labels, vec![Label::UNKNOWN; 3], "{enc:?}");
     }
     // The fast path (uchar labels) too.
-    let header = "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n\
-                  property uchar label\n";
-    let mut b = PlyBuilder::new(Enc::Le, header);
-    b.row(&[
-        ("float", 0.0),
-        ("float", 0.0),
-        ("float", 0.0),
-        ("uchar", 2.0),
-    ]);
-    b.row(&[
-        ("float", 0.0),
-        ("float", 0.0),
-        ("float", 0.0),
-        ("uchar", 9.0),
-    ]);
+    let b = PlyBuilder::labels_at_origin(Enc::Le, "uchar", &[2.0, 9.0]);
     let file = parse_ply_file(&b.bytes(), Path::new(P)).expect("foreign ids");
     assert_eq!(
         file.labels,
@@ -109,17 +75,7 @@ fn a_pcl_organised_ply_keeps_its_grid_through_the_range_grid() {
                   element range_grid 6\nproperty list uchar int vertex_indices\n";
     for enc in Enc::ALL {
         let mut b = PlyBuilder::new(enc, header);
-        for k in 0..4 {
-            let k = f64::from(k);
-            b.row(&[
-                ("float", k),
-                ("float", 0.0),
-                ("float", 1.0),
-                ("uchar", 10.0 * k),
-                ("uchar", 0.0),
-                ("uchar", 0.0),
-            ]);
-        }
+        b.xyz_rgb_rows(4, |k| ([k, 0.0, 1.0], [10.0 * k, 0.0, 0.0]));
         for cell in [Some(0.0), None, Some(1.0), Some(2.0), None, Some(3.0)] {
             match cell {
                 Some(v) => b.row(&[("uchar", 1.0), ("int", v)]),

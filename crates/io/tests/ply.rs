@@ -283,22 +283,14 @@ fn big_endian_file_reads() {
     let header = "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n\
                   property uchar label\nproperty uchar camera\nproperty uint pixel\n";
     let mut b = PlyBuilder::new(Enc::Be, header);
-    b.row(&[
-        ("float", 1.5),
-        ("float", -2.0),
-        ("float", 0.75),
-        ("uchar", 4.0),
-        ("uchar", 2.0),
-        ("uint", 0x0102_0304 as f64),
-    ]);
-    b.row(&[
-        ("float", 0.0),
-        ("float", 0.0),
-        ("float", 1.0),
-        ("uchar", 255.0),
-        ("uchar", 1.0),
-        ("uint", 7.0),
-    ]);
+    b.xyz_row(
+        [1.5, -2.0, 0.75],
+        &[("uchar", 4.0), ("uchar", 2.0), ("uint", 0x0102_0304 as f64)],
+    );
+    b.xyz_row(
+        [0.0, 0.0, 1.0],
+        &[("uchar", 255.0), ("uchar", 1.0), ("uint", 7.0)],
+    );
     let bytes = b.bytes();
     // Big-endian float 1.5 is 3F C0 00 00.
     assert_eq!(
@@ -384,18 +376,8 @@ fn missing_label_property_is_an_error_naming_the_file() {
 
 #[test]
 fn label_out_of_range_is_an_error_naming_the_vertex() {
-    let header = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
-                  property uchar label\n";
     for enc in Enc::ALL {
-        let mut b = PlyBuilder::new(enc, header);
-        for label in [0.0, 6.0, 17.0] {
-            b.row(&[
-                ("float", 0.0),
-                ("float", 0.0),
-                ("float", 0.0),
-                ("uchar", label),
-            ]);
-        }
+        let b = PlyBuilder::labels_at_origin(enc, "uchar", &[0.0, 6.0, 17.0]);
         let err = parse(&b.bytes()).expect_err("label 17");
         assert!(
             matches!(&err, IoError::ForeignLabels { index: 2, value, .. } if value == "17"),
@@ -498,12 +480,7 @@ fn huge_declared_counts_are_truncation_not_allocation() {
         let header = "element vertex 1000000000000000\nproperty float x\nproperty float y\n\
                       property float z\nproperty uchar label\n";
         let mut b = PlyBuilder::new(enc, header);
-        b.row(&[
-            ("float", 0.0),
-            ("float", 0.0),
-            ("float", 0.0),
-            ("uchar", 1.0),
-        ]);
+        b.xyz_row([0.0, 0.0, 0.0], &[("uchar", 1.0)]);
         let err = parse(&b.bytes()).expect_err("truncated");
         assert!(
             matches!(
@@ -521,12 +498,7 @@ fn huge_declared_counts_are_truncation_not_allocation() {
     let header = "element vertex 1\nproperty float x\nproperty float y\nproperty float z\n\
                   property uchar label\nelement face 1\nproperty list uint int idx\n";
     let mut b = PlyBuilder::new(Enc::Le, header);
-    b.row(&[
-        ("float", 0.0),
-        ("float", 0.0),
-        ("float", 0.0),
-        ("uchar", 1.0),
-    ]);
+    b.xyz_row([0.0, 0.0, 0.0], &[("uchar", 1.0)]);
     b.row(&[("uint", u32::MAX as f64), ("int", 1.0)]);
     assert!(matches!(
         parse(&b.bytes()),
@@ -554,17 +526,17 @@ fn small_file(enc: Enc) -> (Vec<u8>, usize) {
     b.row(&[("uchar", 3.0), ("int", 0.0), ("int", 1.0), ("int", 2.0)]);
     for i in 0..3 {
         let f = i as f64;
-        b.row(&[
-            ("float", 0.125 + f),
-            ("float", -1.5 * f),
-            ("float", 1000.0 + f),
-            ("uchar", 10.0),
-            ("uchar", 20.0),
-            ("uchar", 30.0),
-            ("uchar", f + 1.0),
-            ("uchar", f),
-            ("uint", 12345.0 * f),
-        ]);
+        b.xyz_row(
+            [0.125 + f, -1.5 * f, 1000.0 + f],
+            &[
+                ("uchar", 10.0),
+                ("uchar", 20.0),
+                ("uchar", 30.0),
+                ("uchar", f + 1.0),
+                ("uchar", f),
+                ("uint", 12345.0 * f),
+            ],
+        );
     }
     b.row(&[("uchar", 1.0), ("uchar", 9.0)]);
     b.row(&[("uchar", 0.0)]);

@@ -23,14 +23,21 @@ impl Rng {
     }
 }
 
+/// Unit vectors along the axes, for [`rect`]'s sides.
+const X: Vec3 = [1.0, 0.0, 0.0];
+const Y: Vec3 = [0.0, 1.0, 0.0];
+const Z: Vec3 = [0.0, 0.0, 1.0];
+
+/// Depth noise of [`rect`]'s surfaces, metres (±1 cm, as a depth camera at a few metres).
+const RECT_NOISE_M: f32 = 0.01;
+
 /// Points every `step_m` on the rectangle `origin + s·a + t·b`, s in [0, la], t in
-/// [0, lb], with ±`noise_m` along `normal`.
+/// [0, lb], with ±[`RECT_NOISE_M`] along `normal`.
 fn rect(
     rng: &mut Rng,
     origin: Vec3,
     (a, la): (Vec3, f32),
     (b, lb): (Vec3, f32),
-    noise_m: f32,
     out: &mut Vec<Vec3>,
 ) {
     let normal = cross(a, b);
@@ -39,7 +46,7 @@ fn rect(
     for i in 0..=ns {
         for j in 0..=nt {
             let (s, t) = (i as f32 * step, j as f32 * step);
-            let e = rng.uniform(-noise_m, noise_m);
+            let e = rng.uniform(-RECT_NOISE_M, RECT_NOISE_M);
             out.push(std::array::from_fn(|k| {
                 origin[k] + s * a[k] + t * b[k] + e * normal[k]
             }));
@@ -105,22 +112,8 @@ fn apply(r: &[[f32; 3]; 3], t: Vec3, p: Vec3) -> Vec3 {
 /// sees) and three people standing on the floor.
 fn room(rng: &mut Rng) -> Vec<Vec3> {
     let mut pts = Vec::new();
-    rect(
-        rng,
-        [-2.0, -2.0, 0.0],
-        ([1.0, 0.0, 0.0], 4.0),
-        ([0.0, 1.0, 0.0], 4.0),
-        0.01,
-        &mut pts,
-    );
-    rect(
-        rng,
-        [-2.0, 2.0, 0.0],
-        ([1.0, 0.0, 0.0], 4.0),
-        ([0.0, 0.0, 1.0], 2.5),
-        0.01,
-        &mut pts,
-    );
+    rect(rng, [-2.0, -2.0, 0.0], (X, 4.0), (Y, 4.0), &mut pts);
+    rect(rng, [-2.0, 2.0, 0.0], (X, 4.0), (Z, 2.5), &mut pts);
     for (x, y) in [(-1.0, 0.0), (0.2, 0.5), (1.2, -0.8)] {
         person(rng, x, y, 0.05, &mut pts);
     }
@@ -187,22 +180,8 @@ fn a_wall_larger_than_the_floor_loses_because_nobody_stands_on_it() {
     // wall, and the camera's own frame (y down, z forward).
     let mut rng = Rng(7);
     let mut local = Vec::new();
-    rect(
-        &mut rng,
-        [-3.0, 0.8, 0.0],
-        ([1.0, 0.0, 0.0], 6.0),
-        ([0.0, 1.0, 0.0], 1.2),
-        0.01,
-        &mut local,
-    );
-    rect(
-        &mut rng,
-        [-3.0, 2.0, 0.0],
-        ([1.0, 0.0, 0.0], 6.0),
-        ([0.0, 0.0, 1.0], 3.0),
-        0.01,
-        &mut local,
-    );
+    rect(&mut rng, [-3.0, 0.8, 0.0], (X, 6.0), (Y, 1.2), &mut local);
+    rect(&mut rng, [-3.0, 2.0, 0.0], (X, 6.0), (Z, 3.0), &mut local);
     for x in [-2.0, -0.7, 0.6, 1.9] {
         person(&mut rng, x, 1.4, 0.1, &mut local);
     }
@@ -231,32 +210,11 @@ fn in_a_corridor_the_floor_beats_walls_and_ceiling() {
     // Floor 3 m wide, 8 m long; walls 2.8 m high; a ceiling; five people walking.
     let mut rng = Rng(11);
     let mut pts = Vec::new();
-    let along = ([0.0, 1.0, 0.0], 8.0);
-    rect(
-        &mut rng,
-        [-1.5, 0.0, 0.0],
-        ([1.0, 0.0, 0.0], 3.0),
-        along,
-        0.01,
-        &mut pts,
-    );
-    rect(
-        &mut rng,
-        [-1.5, 0.0, 2.8],
-        ([1.0, 0.0, 0.0], 3.0),
-        along,
-        0.01,
-        &mut pts,
-    );
+    let along = (Y, 8.0);
+    rect(&mut rng, [-1.5, 0.0, 0.0], (X, 3.0), along, &mut pts);
+    rect(&mut rng, [-1.5, 0.0, 2.8], (X, 3.0), along, &mut pts);
     for x in [-1.5, 1.5] {
-        rect(
-            &mut rng,
-            [x, 0.0, 0.0],
-            ([0.0, 0.0, 1.0], 2.8),
-            along,
-            0.01,
-            &mut pts,
-        );
+        rect(&mut rng, [x, 0.0, 0.0], (Z, 2.8), along, &mut pts);
     }
     for (x, y) in [(-0.9, 2.0), (-0.3, 2.5), (0.3, 3.2), (0.9, 2.2), (0.0, 4.5)] {
         person(&mut rng, x, y, 0.1, &mut pts);

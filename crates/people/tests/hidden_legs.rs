@@ -25,14 +25,8 @@ fn an_upper_body_without_legs_is_a_person_with_its_head_on_top() {
     let mut person = Scene::default();
     person.cylinder([0.0, 0.0, 0.55], [0.0, 0.0, 1.25], 0.15, Class::Torso);
     person.sphere([0.0, 0.0, 1.4], 0.1, Class::Head);
-    for side in [-1.0, 1.0] {
-        person.cylinder(
-            [0.0, side * 0.2, 1.25],
-            [0.0, side * 0.22, 0.95],
-            0.05,
-            Class::UpperArms,
-        );
-    }
+    let upper_arm = ([0.0, 0.2, 1.25], [0.0, 0.22, 0.95], 0.05);
+    person.both_sides(&[upper_arm], Class::UpperArms);
     assert_eq!(boxes(person), 1);
     // The same parts stacked as a robot link the parser misread: torso, then head, then
     // forearm and upper arm above it. Its head lies 0.4 m below its top.

@@ -16,20 +16,9 @@ fn person(out: &mut Scene) -> PersonBox {
     out.sphere([0.0, 0.0, 1.62], 0.1, Label::UNKNOWN);
     out.cylinder([0.0, 0.0, 1.44], [0.0, 0.0, 1.54], 0.05, Label::UNKNOWN);
     out.cylinder([0.0, 0.0, 0.88], [0.0, 0.0, 1.44], 0.16, Label::UNKNOWN);
-    for side in [-1.0, 1.0] {
-        out.cylinder(
-            [0.0, side * 0.09, 0.0],
-            [0.0, side * 0.09, 0.9],
-            0.07,
-            Label::UNKNOWN,
-        );
-        out.cylinder(
-            [0.0, side * 0.22, 1.42],
-            [0.0, side * 0.24, 0.86],
-            0.045,
-            Label::UNKNOWN,
-        );
-    }
+    let leg = ([0.0, 0.09, 0.0], [0.0, 0.09, 0.9], 0.07);
+    let arm = ([0.0, 0.22, 1.42], [0.0, 0.24, 0.86], 0.045);
+    out.both_sides(&[leg, arm], Label::UNKNOWN);
     // Extent: x ±0.16 (torso), y ±0.285 (arms), z 0–1.72; plus 0.05 on every side and on top.
     PersonBox {
         id: 0,

@@ -19,7 +19,7 @@
 
 use std::hint::black_box;
 
-use bodyseg_calib::{BackProjectOptions, CloudFrame, Distortion, RgbdCamera, Rig, testing};
+use bodyseg_calib::{BackProjectOptions, CloudFrame, Distortion, RgbdCamera, testing};
 use bodyseg_core::{Label, LabelImage};
 use bodyseg_project::{CameraImages, FrameProjector, ProjectConfig};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -27,27 +27,9 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-/// Fixed seed of the hole pattern.
-const SEED: u64 = 0x00B0_D15E_6BEC_0001;
-
 /// The box's depth pixels (u range, v range) in every camera's depth image.
 const BOX_U: std::ops::Range<u32> = testing::TEST_BOX_U;
 const BOX_V: std::ops::Range<u32> = testing::TEST_BOX_V;
-
-fn kinect() -> RgbdCamera {
-    testing::kinect_v2_test_camera().unwrap_or_else(|e| panic!("bench data: {e}"))
-}
-
-/// Three cameras 2.2 m up on a circle of radius 3 m around the world origin, looking at
-/// it 30° down.
-fn rig() -> Rig {
-    testing::ring_rig(&kinect(), 3)
-}
-
-/// A depth image (mm) of a slanted plane with a box in front of it, ~15% holes.
-fn depth_image(width: u32, height: u32, seed: u64) -> Vec<u16> {
-    testing::plane_and_box_depth_mm(width, height, seed)
-}
 
 /// The colour camera's label image of the truth: every depth point of the box splatted
 /// (5×5 colour pixels, closing the gaps between depth samples) with its part (upper half
@@ -83,14 +65,9 @@ fn label_image(camera: &RgbdCamera, depth_raw: &[u16]) -> LabelImage {
 }
 
 fn bench(c: &mut Criterion) {
-    let rig = rig();
+    let rig = testing::bench_ring_rig();
     let projector = FrameProjector::new(&rig).expect("a valid rig");
-    let depths: Vec<Vec<u16>> = rig
-        .cameras
-        .iter()
-        .enumerate()
-        .map(|(i, cam)| depth_image(cam.depth.width, cam.depth.height, SEED + i as u64))
-        .collect();
+    let depths = testing::bench_depth_images(&rig);
     let labels: Vec<LabelImage> = rig
         .cameras
         .iter()
@@ -128,17 +105,11 @@ fn bench(c: &mut Criterion) {
         cloud.labels.len(),
         100.0 * unknown as f64 / cloud.labels.len() as f64,
     );
-    let size = format!(
-        "3x{}x{}",
-        rig.cameras[0].depth.width, rig.cameras[0].depth.height
-    );
+    let size = testing::bench_frame_size(&rig);
 
     let mut group = c.benchmark_group("project_frame");
     group.throughput(Throughput::Elements(pixels as u64));
-    let two = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .expect("a 2-thread pool");
+    let two = testing::two_thread_pool();
     for (name, cfg) in [("naive", &naive), ("dsa", &dsa)] {
         group.bench_with_input(
             BenchmarkId::new(format!("{name}_rayon_2_threads"), &size),

@@ -40,21 +40,26 @@ impl Scene {
     }
 }
 
+/// The ray (z = 1, sensor frame) of every pixel centre of `intr`, row-major.
+fn pixel_rays(intr: &Intrinsics) -> impl Iterator<Item = [f64; 3]> + '_ {
+    (0..intr.height).flat_map(move |v| {
+        (0..intr.width).map(move |u| {
+            intr.unproject(f64::from(u), f64::from(v))
+                .expect("fixture intrinsics undistort everywhere")
+        })
+    })
+}
+
 /// Depth image (raw, with the camera's scale and shift) and the truth per depth pixel.
 fn render_depth(camera: &RgbdCamera, scene: &Scene) -> (Vec<u16>, Vec<Class>) {
     let d = &camera.depth;
     let mut raw = Vec::with_capacity(d.num_pixels());
     let mut truth = Vec::with_capacity(d.num_pixels());
-    for v in 0..d.height {
-        for u in 0..d.width {
-            let ray = d
-                .unproject(f64::from(u), f64::from(v))
-                .expect("fixture intrinsics undistort everywhere");
-            let (z, class) = scene.hit([0.0; 3], ray);
-            let mm = z * camera.depth_scale - camera.depth_shift_mm;
-            raw.push(mm.round() as u16);
-            truth.push(class);
-        }
+    for ray in pixel_rays(d) {
+        let (z, class) = scene.hit([0.0; 3], ray);
+        let mm = z * camera.depth_scale - camera.depth_shift_mm;
+        raw.push(mm.round() as u16);
+        truth.push(class);
     }
     (raw, truth)
 }
@@ -66,14 +71,9 @@ fn render_labels(camera: &RgbdCamera, scene: &Scene) -> LabelImage {
     let origin = depth_from_color.transform_point([0.0; 3]);
     let r = depth_from_color.rotation();
     let mut labels = Vec::with_capacity(c.num_pixels());
-    for v in 0..c.height {
-        for u in 0..c.width {
-            let d = c
-                .unproject(f64::from(u), f64::from(v))
-                .expect("fixture intrinsics undistort everywhere");
-            let dir = [0, 1, 2].map(|i| r[i][0] * d[0] + r[i][1] * d[1] + r[i][2] * d[2]);
-            labels.push(Label::from(scene.hit(origin, dir).1));
-        }
+    for d in pixel_rays(c) {
+        let dir = [0, 1, 2].map(|i| r[i][0] * d[0] + r[i][1] * d[1] + r[i][2] * d[2]);
+        labels.push(Label::from(scene.hit(origin, dir).1));
     }
     LabelImage::new(c.width, c.height, labels).expect("one label per colour pixel")
 }
@@ -510,47 +510,18 @@ fn points_outside_the_color_image_are_unknown() {
 
 #[test]
 fn config_validation_names_the_field() {
-    let cases: [(ProjectConfig, &str); 5] = [
-        (
-            ProjectConfig {
-                occlusion_tol_m: -0.01,
-                ..Default::default()
-            },
-            "project.occlusion_tol_m",
-        ),
-        (
-            ProjectConfig {
-                edge_jump_ratio: f64::NAN,
-                ..Default::default()
-            },
-            "project.edge_jump_ratio",
-        ),
-        (
-            ProjectConfig {
-                edge_radius_px: 0,
-                ..Default::default()
-            },
-            "project.edge_radius_px",
-        ),
-        (
-            ProjectConfig {
-                boundary_radius_px: 99,
-                ..Default::default()
-            },
-            "project.boundary_radius_px",
-        ),
-        (
-            ProjectConfig {
-                min_probability: 1.5,
-                ..Default::default()
-            },
-            "project.min_probability",
-        ),
-    ];
-    for (cfg, field) in cases {
+    // The default config with one field set out of its range: the error opens with it.
+    let rejects = |edit: fn(&mut ProjectConfig), field: &str| {
+        let mut cfg = ProjectConfig::default();
+        edit(&mut cfg);
         let msg = cfg.validate().expect_err(field).to_string();
         assert!(msg.starts_with(field), "{msg}");
-    }
+    };
+    rejects(|c| c.occlusion_tol_m = -0.01, "project.occlusion_tol_m");
+    rejects(|c| c.edge_jump_ratio = f64::NAN, "project.edge_jump_ratio");
+    rejects(|c| c.edge_radius_px = 0, "project.edge_radius_px");
+    rejects(|c| c.boundary_radius_px = 99, "project.boundary_radius_px");
+    rejects(|c| c.min_probability = 1.5, "project.min_probability");
     assert!(ProjectConfig::default().validate().is_ok());
     // project_labels validates too.
     let f = fixture(simple_camera(), &SIMPLE_SCENE);

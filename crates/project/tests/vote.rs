@@ -229,28 +229,23 @@ fn vote_rejects_a_cloud_from_another_rig() {
     let images = f.images();
     let mut out = Vec::new();
     cloud.origins[5].camera = 7;
-    let err = projector
-        .vote_labels(
-            &images,
-            &BackProjectOptions::default(),
-            &ProjectConfig::naive(),
-            &cloud,
-            &mut out,
-        )
-        .expect_err("camera 7 of 3");
+    let mut vote = |images: &[CameraImages<'_>], cloud: &LabeledCloud, why: &str| {
+        projector
+            .vote_labels(
+                images,
+                &BackProjectOptions::default(),
+                &ProjectConfig::naive(),
+                cloud,
+                &mut out,
+            )
+            .expect_err(why)
+    };
+    let err = vote(&images, &cloud, "camera 7 of 3");
     assert!(
         matches!(err, ProjectError::CameraCount { want: 3, .. }),
         "{err}"
     );
-    let err = projector
-        .vote_labels(
-            &images[..2],
-            &BackProjectOptions::default(),
-            &ProjectConfig::naive(),
-            &cloud,
-            &mut out,
-        )
-        .expect_err("two images for three cameras");
+    let err = vote(&images[..2], &cloud, "two images for three cameras");
     assert!(
         matches!(err, ProjectError::CameraCount { got: 2, want: 3 }),
         "{err}"

@@ -12,3 +12,26 @@ pub fn seed() -> u64 {
 /// xorshift64* (core's): enough randomness to sample pixels, points and depths.
 #[allow(unused_imports)] // not every test binary that includes this module samples
 pub use bodyseg_core::rng::XorShift64Star as Rng;
+
+/// The crate's promise for undistortion, pixels.
+pub const ROUND_TRIP_TOL_PX: f64 = 1e-6;
+
+/// Fails naming `what` when a worst round trip (|project(unproject(u, v)·z) − (u, v)|,
+/// pixels) breaks [`ROUND_TRIP_TOL_PX`].
+pub fn assert_round_trip(worst_px: f64, what: &str) {
+    assert!(
+        worst_px < ROUND_TRIP_TOL_PX,
+        "{what}: worst round trip {worst_px:e} px"
+    );
+}
+
+/// The image's four outer corners: pixel borders at -0.5 and size - 0.5.
+pub fn outer_corners(intr: &bodyseg_calib::Intrinsics) -> [[f64; 2]; 4] {
+    let (w, h) = (f64::from(intr.width), f64::from(intr.height));
+    [
+        [-0.5, -0.5],
+        [w - 0.5, -0.5],
+        [-0.5, h - 0.5],
+        [w - 0.5, h - 0.5],
+    ]
+}

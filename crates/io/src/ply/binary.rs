@@ -143,15 +143,11 @@ pub(crate) fn vertices_fixed<const BIG_ENDIAN: bool>(
     Ok(sink.finish())
 }
 
+/// The `f32` at byte `off` of `rec`: its bits as [`u32_at`] reads them (what
+/// `f32::from_{be,le}_bytes` do).
 #[inline(always)]
 pub(crate) fn f32_at<const BIG_ENDIAN: bool>(rec: &[u8], off: usize) -> f32 {
-    let mut a = [0u8; 4];
-    a.copy_from_slice(&rec[off..off + 4]);
-    if BIG_ENDIAN {
-        f32::from_be_bytes(a)
-    } else {
-        f32::from_le_bytes(a)
-    }
+    f32::from_bits(u32_at::<BIG_ENDIAN>(rec, off))
 }
 
 #[inline(always)]

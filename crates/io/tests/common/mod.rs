@@ -97,6 +97,43 @@ impl PlyBuilder {
         self
     }
 
+    /// One entry that opens with `float x, y, z` (the usual vertex), then `rest` as in
+    /// [`Self::row`].
+    pub fn xyz_row(&mut self, xyz: [f64; 3], rest: &[(&str, f64)]) -> &mut Self {
+        let mut values = vec![("float", xyz[0]), ("float", xyz[1]), ("float", xyz[2])];
+        values.extend_from_slice(rest);
+        self.row(&values)
+    }
+
+    /// `n` vertices (`k = 0..n`) of `float x, y, z, uchar red, green, blue`, each at the
+    /// position and of the colour that `vertex(k)` gives.
+    pub fn xyz_rgb_rows(
+        &mut self,
+        n: u32,
+        vertex: impl Fn(f64) -> ([f64; 3], [f64; 3]),
+    ) -> &mut Self {
+        for k in 0..n {
+            let (xyz, [r, g, b]) = vertex(f64::from(k));
+            self.xyz_row(xyz, &[("uchar", r), ("uchar", g), ("uchar", b)]);
+        }
+        self
+    }
+
+    /// A file of one vertex per value of `labels`, each at the origin with its label
+    /// stored as `label_type` (`uchar`, `uint`).
+    pub fn labels_at_origin(enc: Enc, label_type: &str, labels: &[f64]) -> PlyBuilder {
+        let header = format!(
+            "element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+             property {label_type} label\n",
+            labels.len()
+        );
+        let mut b = PlyBuilder::new(enc, &header);
+        for &label in labels {
+            b.xyz_row([0.0; 3], &[(label_type, label)]);
+        }
+        b
+    }
+
     fn value(&mut self, ty: &str, v: f64) {
         macro_rules! bin {
             ($x:expr) => {{

@@ -198,13 +198,12 @@ mod tests {
         }
         let cluster: Vec<u32> = (0..centers.len() as u32).collect();
         let robot: Vec<u32> = (21..61).collect();
-        let got = person_colored(
-            &chroma,
-            &cluster,
-            &column_colors(&chroma, &cluster, &[0], &centers, 0.2),
-            &robot,
-        );
-        assert_eq!(&got[61..], &[true, true, false, false, false]);
+        // Which of the judged voxels (61..) are the person's colour, the person the only seed.
+        let judged_colored = |chroma: &[Option<u16>]| {
+            let columns = column_colors(chroma, &cluster, &[0], &centers, 0.2);
+            person_colored(chroma, &cluster, &columns, &robot)[61..].to_vec()
+        };
+        assert_eq!(judged_colored(&chroma), &[true, true, false, false, false]);
         // The scene with the person in `shirt` (their column's and the judged sleeve) and
         // the robot's voxels `part` (and the judged link) in `robot_color`.
         let dressed = |shirt, part: std::ops::Range<usize>, robot_color| {
@@ -217,13 +216,7 @@ mod tests {
         };
         // A shirt of the robot's colour: nothing is slowed any more than without colours.
         let same = dressed(orange, 0..0, orange);
-        let got = person_colored(
-            &same,
-            &cluster,
-            &column_colors(&same, &cluster, &[0], &centers, 0.2),
-            &robot,
-        );
-        assert_eq!(&got[61..], &[false, true, false, false, false]);
+        assert_eq!(judged_colored(&same), &[false, true, false, false, false]);
         // Nothing claimed with a colour (a dark pedestal alone): a person's colours slow it.
         let dark: Vec<Option<u16>> = (0..chroma.len())
             .map(|j| {
@@ -234,35 +227,17 @@ mod tests {
                 }
             })
             .collect();
-        let got = person_colored(
-            &dark,
-            &cluster,
-            &column_colors(&dark, &cluster, &[0], &centers, 0.2),
-            &robot,
-        );
-        assert_eq!(&got[61..], &[true, true, false, false, false]);
+        assert_eq!(judged_colored(&dark), &[true, true, false, false, false]);
         // A grey shirt one bin from the robot's grey joints (half its voxels): the sleeve
         // is still the person's colour, the joints still the robot's.
         let grey = dressed(bin(15, 17), 21..41, bin(15, 16));
-        let got = person_colored(
-            &grey,
-            &cluster,
-            &column_colors(&grey, &cluster, &[0], &centers, 0.2),
-            &robot,
-        );
-        assert_eq!(&got[61..], &[true, true, false, false, false]);
+        assert_eq!(judged_colored(&grey), &[true, true, false, false, false]);
         // An orange shirt a bin from the robot's orange, and the robot's shade of it (5% of
         // the robot, a bin from both): the shade is the robot's, which wears its very bin
         // more than the person. (When a colour was the robot's only from 10% of its part
         // on, the shade was the person's.)
         let shaded = dressed(bin(33, 15), 21..23, bin(32, 15));
-        let got = person_colored(
-            &shaded,
-            &cluster,
-            &column_colors(&shaded, &cluster, &[0], &centers, 0.2),
-            &robot,
-        );
-        assert_eq!(&got[61..], &[true, true, false, false, false]);
+        assert_eq!(judged_colored(&shaded), &[true, true, false, false, false]);
     }
 
     #[test]

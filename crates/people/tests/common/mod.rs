@@ -42,6 +42,18 @@ impl Scene {
         }
     }
 
+    /// The cylinders `(a, b, radius)` of the body's right side (y < 0: `y` is negated),
+    /// then of its left (as given), labelled `label`: arms and legs.
+    pub fn both_sides(&mut self, parts: &[(Vec3, Vec3, f32)], label: impl Into<Label>) {
+        let label = label.into();
+        for side in [-1.0, 1.0] {
+            let mirror = |p: Vec3| [p[0], side * p[1], p[2]];
+            for &(a, b, radius) in parts {
+                self.cylinder(mirror(a), mirror(b), radius, label);
+            }
+        }
+    }
+
     /// Points on a sphere (Fibonacci lattice), labelled `label`.
     pub fn sphere(&mut self, center: Vec3, radius: f32, label: impl Into<Label>) {
         let label = label.into();
