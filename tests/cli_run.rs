@@ -45,7 +45,7 @@ fn on_recording<'a>(
 fn run_writes_every_output_and_a_second_run_skips_every_frame() {
     let rec = recording();
     let dir = tempdir();
-    let args = on_recording("run", &rec, "out", &["--write-stages"]);
+    let args = on_recording("run", rec, "out", &["--write-stages"]);
     let first = bodyseg(dir.path(), &args);
     assert_ok(&first, "bodyseg run");
     let out = dir.path().join("out");
@@ -85,7 +85,7 @@ fn run_writes_every_output_and_a_second_run_skips_every_frame() {
             dir.path(),
             &on_recording(
                 "project",
-                &rec,
+                rec,
                 alone.to_str().expect("utf-8"),
                 &["--frame", &f],
             ),
@@ -186,7 +186,7 @@ fn a_killed_run_finishes_when_started_again_with_identical_outputs() {
     let rec = recording();
     let dir = tempdir();
     let args = |out: &str| -> Vec<String> {
-        on_recording("run", &rec, out, &["-q"])
+        on_recording("run", rec, out, &["-q"])
             .into_iter()
             .map(String::from)
             .collect()
@@ -344,7 +344,7 @@ fn sigterm_and_sigint_leave_no_temporary_and_the_run_resumes() {
     for (signal, status) in [("-TERM", 143), ("-INT", 130)] {
         let out = format!("out{status}");
         let child = Command::new(env!("CARGO_BIN_EXE_bodyseg"))
-            .args(on_recording("run", &rec, &out, &["-q"]))
+            .args(on_recording("run", rec, &out, &["-q"]))
             .current_dir(dir.path())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -375,7 +375,7 @@ fn sigterm_and_sigint_leave_no_temporary_and_the_run_resumes() {
             .filter(|f| f.rsplit('/').next().is_some_and(|n| n.starts_with('.')))
             .collect();
         assert!(hidden.is_empty(), "left behind: {hidden:?}");
-        let again = bodyseg(dir.path(), &on_recording("run", &rec, &out, &["-q"]));
+        let again = bodyseg(dir.path(), &on_recording("run", rec, &out, &["-q"]));
         assert_ok(&again, "resumed run");
     }
 }
