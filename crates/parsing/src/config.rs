@@ -35,7 +35,9 @@ pub struct ParsingConfig {
     /// `ORT_DYLIB_PATH` environment variable, else the project-local copy that
     /// `scripts/setup_onnxruntime.sh` writes (`.deps/onnxruntime/libonnxruntime.so`).
     pub runtime_library: String,
-    /// ONNX Runtime intra-op threads; 0 = one per core. Default 2.
+    /// Threads for the parser. `onnx`: ONNX Runtime's intra-op threads. `blazepose`: person
+    /// regions run at once, each on its own single-threaded session. 0 = ONNX Runtime's
+    /// default (one per core, one session). Default 2.
     pub threads: u32,
 }
 

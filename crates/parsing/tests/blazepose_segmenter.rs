@@ -10,6 +10,9 @@ use bodyseg_parsing::{BlazePoseOptions, BlazePoseSegmenter};
 use bodyseg_parsing::{ParsingError, PersonRegion, PixelBox, Segmenter, ViewInput};
 use std::path::{Path, PathBuf};
 
+#[path = "common/two_people.rs"]
+mod two_people;
+
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
@@ -28,13 +31,18 @@ fn runtime_library() -> PathBuf {
 }
 
 fn load(model: &Path) -> Result<BlazePoseSegmenter, ParsingError> {
+    load_with(model, 1)
+}
+
+/// The model with `threads` sessions (regions run at once).
+fn load_with(model: &Path, threads: usize) -> Result<BlazePoseSegmenter, ParsingError> {
     let bytes = std::fs::read(model).expect("committed model");
     BlazePoseSegmenter::new(
         &runtime_library(),
         &bytes,
         model,
         &BlazePoseOptions {
-            threads: 1,
+            threads,
             ..BlazePoseOptions::default()
         },
     )
@@ -135,4 +143,38 @@ fn nobody_gives_an_all_background_view_and_odd_regions_do_not_fail() {
     };
     let e = seg.segment(&[none]).expect_err("no image");
     assert!(e.to_string().contains("cam0"), "{e}");
+}
+
+/// Regions run at once on several sessions give the labels of one session running them in
+/// turn (people merged in region order), on a view with two people; and those labels hold
+/// both people's parts.
+#[test]
+fn regions_at_once_label_as_one_session_does() {
+    let (image, regions) = two_people::view();
+    assert_eq!(regions.len(), 2, "two people in view");
+    let model = root().join("models/blazepose_full.onnx");
+    let label = |threads: usize| {
+        let mut seg = load_with(&model, threads).expect("the committed full model loads");
+        let labels = seg.segment_image(&image, Some(&regions)).expect("segments");
+        (labels, seg.runs())
+    };
+    let (one, runs_one) = label(1);
+    let body = one
+        .labels
+        .iter()
+        .filter(|l| **l != Label::BACKGROUND)
+        .count();
+    assert!(body > 1000, "two people give body pixels, got {body}");
+    for threads in [2, 3] {
+        let (many, runs) = label(threads);
+        assert_eq!(runs, runs_one, "{threads} sessions run the model as often");
+        assert!(
+            many.labels == one.labels,
+            "{threads} sessions: labels differ"
+        );
+        assert!(
+            many.probs == one.probs,
+            "{threads} sessions: probabilities differ"
+        );
+    }
 }
