@@ -44,10 +44,11 @@ impl BlazePoseVariant {
 /// the real photographs (docs/notes/2026-12-02-blazepose-rule.md §5–6).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlazePoseOptions {
-    /// Regions run at once, each on its own single-threaded ONNX Runtime session (this
-    /// model gains only ~11 % from a second intra-op thread, a second region at once nearly
-    /// doubles the rate; labels are the same with any value). 0: one session with ONNX
-    /// Runtime's default threads. Default 2.
+    /// Threads. A view with one region runs on one session with this many ONNX Runtime
+    /// intra-op threads (0: ONNX Runtime's default); a view with several runs up to this
+    /// many regions at once, each on its own single-threaded session (a second region at
+    /// once gains more than a second intra-op thread; the labels do not depend on the
+    /// value). Default 2.
     pub threads: usize,
     /// The first ROI's side, × the region's longer side. Default 2.0 (a region from a
     /// person box; the model is trained on MediaPipe's ROIs, which hold the body with a
@@ -135,8 +136,13 @@ fn centre_inside(pose: &DecodedPose, bounds: &PixelBox, width: usize, height: us
 /// Without regions ([`ViewInput::regions`] `None`: colour-only input) the whole image is
 /// one region; with an empty list (nobody found in 3D) the view is all background.
 pub struct BlazePoseSegmenter {
-    /// One per region run at once ([`BlazePoseOptions::threads`]).
-    workers: Vec<Worker>,
+    /// The session of a view with one region: all [`BlazePoseOptions::threads`] as ONNX
+    /// Runtime intra-op threads.
+    wide: Worker,
+    /// Single-threaded sessions, one per region run at once, for views with several
+    /// regions (empty when `threads` < 2): this model gains far less from a second
+    /// intra-op thread than from a second region at once.
+    narrow: Vec<Worker>,
     model_path: PathBuf,
     options: BlazePoseOptions,
 }
@@ -180,17 +186,16 @@ impl BlazePoseSegmenter {
         options: &BlazePoseOptions,
     ) -> Result<BlazePoseSegmenter, ParsingError> {
         // A spinning pool is several times slower on a shared 2-core machine.
-        let (sessions, intra_op_threads) = match options.threads {
-            0 => (1, 0),
-            n => (n, 1),
+        let load = |intra_op_threads| {
+            load_session(
+                runtime_library,
+                model_bytes,
+                model_path,
+                intra_op_threads,
+                false,
+            )
         };
-        let session = load_session(
-            runtime_library,
-            model_bytes,
-            model_path,
-            intra_op_threads,
-            false,
-        )?;
+        let session = load(options.threads)?;
         let not_blazepose = |reason: String| ParsingError::NotBlazePose {
             reason,
             path: model_path.to_path_buf(),
@@ -233,19 +238,17 @@ impl BlazePoseSegmenter {
             input: Vec::with_capacity(INPUT * INPUT * 3),
             runs: 0,
         };
-        let mut workers = vec![worker(session)];
-        for _ in 1..sessions {
-            workers.push(worker(load_session(
-                runtime_library,
-                model_bytes,
-                model_path,
-                intra_op_threads,
-                false,
-            )?));
-        }
-        tracing::debug!(model = %model_path.display(), sessions, "loaded BlazePose landmark model");
+        let narrow = if options.threads >= 2 {
+            (0..options.threads)
+                .map(|_| load(1).map(worker))
+                .collect::<Result<Vec<_>, _>>()?
+        } else {
+            Vec::new()
+        };
+        tracing::debug!(model = %model_path.display(), "loaded BlazePose landmark model");
         Ok(BlazePoseSegmenter {
-            workers,
+            wide: worker(session),
+            narrow,
             model_path: model_path.to_path_buf(),
             options: options.clone(),
         })
@@ -258,26 +261,13 @@ impl BlazePoseSegmenter {
 
     /// Landmark-model runs so far.
     pub fn runs(&self) -> u64 {
-        self.workers.iter().map(|w| w.runs).sum()
-    }
-
-    /// The pose of the person in `bounds` (image px), on the first session; see
-    /// `Worker::pose_in`.
-    ///
-    /// # Errors
-    /// [`ParsingError::Inference`].
-    pub fn pose_in(
-        &mut self,
-        image: &RgbImage,
-        bounds: &PixelBox,
-    ) -> Result<DecodedPose, ParsingError> {
-        self.workers[0].pose_in(image, bounds, &self.model_path, &self.options)
+        self.wide.runs + self.narrow.iter().map(|w| w.runs).sum::<u64>()
     }
 
     /// Labels one view: every region's person (or the whole image as one region when
-    /// `regions` is `None`), merged. Regions are shared out over the sessions and run at
-    /// once; the people are merged in region order, so the labels do not depend on how
-    /// many sessions there are.
+    /// `regions` is `None`), merged. Several regions are shared out over the single-threaded
+    /// sessions and run at once; the people are merged in region order, so the labels do
+    /// not depend on how many sessions there are.
     ///
     /// # Errors
     /// [`ParsingError::Inference`].
@@ -297,10 +287,17 @@ impl BlazePoseSegmenter {
             depth_m: f64::NAN,
         }];
         let regions = regions.unwrap_or(&whole);
-        let n = self.workers.len();
         let (model_path, options) = (&self.model_path, &self.options);
+        if regions.len() < 2 || self.narrow.is_empty() {
+            let mut people = Vec::with_capacity(regions.len());
+            for region in regions {
+                people.extend(self.wide.person(image, region, model_path, options)?);
+            }
+            return Ok(merge_people(w, h, &people));
+        }
+        let n = self.narrow.len();
         let per_worker: Vec<Result<Vec<(usize, PersonLabels)>, ParsingError>> = self
-            .workers
+            .narrow
             .par_iter_mut()
             .enumerate()
             .map(|(k, worker)| {

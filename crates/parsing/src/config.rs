@@ -35,9 +35,10 @@ pub struct ParsingConfig {
     /// `ORT_DYLIB_PATH` environment variable, else the project-local copy that
     /// `scripts/setup_onnxruntime.sh` writes (`.deps/onnxruntime/libonnxruntime.so`).
     pub runtime_library: String,
-    /// Threads for the parser. `onnx`: ONNX Runtime's intra-op threads. `blazepose`: person
-    /// regions run at once, each on its own single-threaded session. 0 = ONNX Runtime's
-    /// default (one per core, one session). Default 2.
+    /// Threads for the parser. `onnx`: ONNX Runtime's intra-op threads. `blazepose`: the
+    /// intra-op threads of a view with one person region, the regions run at once (one
+    /// single-threaded session each) of a view with several. 0 = ONNX Runtime's default.
+    /// Default 2.
     pub threads: u32,
 }
 
