@@ -90,14 +90,29 @@ const REACH: i32 = 2;
 /// Never for valid parameters; `positions_m` and `labels` must have equal length (checked
 /// by the caller, `refine` validates its input).
 pub fn dbscan(positions_m: &[Vec3], labels: &[Label], params: &DbscanParams) -> Clustering {
+    dbscan_with_cells(positions_m, labels, params, false).0
+}
+
+/// [`dbscan`], and with `want_cells` the clustered points binned in DBSCAN's cells
+/// ([`ClusteredCells`], for N's nearest-point search), when the label groups' grids allow.
+pub(crate) fn dbscan_with_cells(
+    positions_m: &[Vec3],
+    labels: &[Label],
+    params: &DbscanParams,
+    want_cells: bool,
+) -> (Clustering, Option<ClusteredCells>) {
     debug_assert_eq!(positions_m.len(), labels.len());
     let n = positions_m.len();
     let separate_labels = params.label_penalty_m >= params.eps_m;
+    // Every labelled point, and their box: one frame of cells for all the label groups,
+    // so that their cells line up (N's index is then built by merging them).
+    let mut bounds = Aabb::EMPTY;
     let groups: Vec<Vec<u32>> = if separate_labels {
         let mut g: Vec<Vec<u32>> = vec![Vec::new(); NUM_CLASSES];
         for (i, l) in labels.iter().enumerate() {
             if let Some(c) = l.class() {
                 g[c.index()].push(i as u32);
+                bounds.grow(positions_m[i]);
             }
         }
         g.retain(|v| !v.is_empty());
@@ -106,21 +121,46 @@ pub fn dbscan(positions_m: &[Vec3], labels: &[Label], params: &DbscanParams) -> 
         let all: Vec<u32> = (0..n as u32)
             .filter(|&i| !labels[i as usize].is_unknown())
             .collect();
+        bounds = Aabb::of_ids(positions_m, &all);
         vec![all]
     };
+    let side = f64::from(params.eps_m) / 3f64.sqrt() * CELL_SIDE_FRACTION;
+    let frame = GridFrame::covering_box(bounds, side);
     let group_results: Vec<GroupResult> = groups
         .par_iter()
-        .map(|idx| cluster_group(positions_m, labels, idx, params))
+        .map(|idx| cluster_group(positions_m, labels, idx, params, &frame))
         .collect();
-    assemble(n, labels, &group_results, separate_labels)
+    let clustering = assemble(n, labels, &group_results, separate_labels);
+    let cells = want_cells
+        .then(|| ClusteredCells::merge(&frame, &group_results))
+        .flatten();
+    (clustering, cells)
+}
+
+/// The clustered points (core and border) of a clustering in DBSCAN's cells, all labels
+/// together: N's nearest-point index, built from the label groups' sorted cells without
+/// binning the points again.
+pub(crate) type ClusteredCells = crate::grid::nn::NnIndex;
+
+impl ClusteredCells {
+    /// `None` when the groups' frame is not one [`NnIndex::from_cells`] takes.
+    fn merge(frame: &GridFrame, results: &[GroupResult]) -> Option<ClusteredCells> {
+        let parts: Vec<(&CellGrid, &[Option<u32>])> = results
+            .iter()
+            .filter_map(|r| r.grid.as_ref().map(|g| (g, r.component.as_slice())))
+            .collect();
+        crate::grid::nn::NnIndex::from_cells(frame, &parts)
+    }
 }
 
 /// Per-group output: for each point of the group (in any order) its index, its local
-/// component and whether it is core.
+/// component and whether it is core; the group's grid, whose stored points are in the
+/// order of `ids` (none for a group too small to cluster).
 struct GroupResult {
     ids: Vec<u32>,
     component: Vec<Option<u32>>,
     is_core: Vec<bool>,
+    grid: Option<CellGrid>,
 }
 
 /// Gives global cluster ids (ordered by smallest point index) and cluster labels.
@@ -279,9 +319,15 @@ struct GroupGrid {
 }
 
 impl GroupGrid {
-    fn build(positions: &[Vec3], labels: &[Label], idx: &[u32], eps: f32) -> GroupGrid {
+    /// The points `idx` in `frame`'s cells (made for this `eps`: [`dbscan_with_cells`]).
+    fn build(
+        positions: &[Vec3],
+        labels: &[Label],
+        idx: &[u32],
+        eps: f32,
+        frame: &GridFrame,
+    ) -> GroupGrid {
         let side = f64::from(eps) / 3f64.sqrt() * CELL_SIDE_FRACTION;
-        let frame = GridFrame::covering(positions, idx, side);
         let fine = frame.side_m() <= side;
         let mut keys: Vec<[i32; 3]> = Vec::with_capacity(idx.len());
         for &i in idx {
@@ -400,6 +446,7 @@ fn cluster_group(
     labels: &[Label],
     idx: &[u32],
     params: &DbscanParams,
+    frame: &GridFrame,
 ) -> GroupResult {
     let m = idx.len();
     let min_pts = params.min_points;
@@ -408,12 +455,13 @@ fn cluster_group(
             ids: idx.to_vec(),
             component: vec![None; m],
             is_core: vec![false; m],
+            grid: None,
         };
     }
     let th = Thresholds::new(params);
     // One label in the group: no label test in the inner loops.
     let mixed = params.label_penalty_m < params.eps_m;
-    let mut g = GroupGrid::build(positions, labels, idx, params.eps_m);
+    let mut g = GroupGrid::build(positions, labels, idx, params.eps_m, frame);
     let mut core = if mixed {
         core_points::<true>(&g, min_pts, th)
     } else {
@@ -488,6 +536,7 @@ fn cluster_group(
         ids: g.grid.ids().to_vec(),
         component,
         is_core: core,
+        grid: Some(g.grid),
     }
 }
 
@@ -923,6 +972,7 @@ pub fn dbscan_brute_force(
         ids: idx,
         component,
         is_core,
+        grid: None,
     };
     assemble(n, labels, &[res], false)
 }

@@ -123,7 +123,19 @@ pub fn analyse_person(
     labels: &[Label],
     cfg: &RefineConfig,
 ) -> PersonStructure {
-    let clustering = dbscan(positions_m, labels, &cfg.dbscan_params());
+    analyse_person_with(positions_m, labels, cfg, false).0
+}
+
+/// [`analyse_person`], and with `want_cells` the index of the clustered points that N's
+/// nearest search takes ([`dbscan::dbscan_with_cells`]).
+fn analyse_person_with(
+    positions_m: &[Vec3],
+    labels: &[Label],
+    cfg: &RefineConfig,
+    want_cells: bool,
+) -> (PersonStructure, Option<dbscan::ClusteredCells>) {
+    let (clustering, cells) =
+        dbscan::dbscan_with_cells(positions_m, labels, &cfg.dbscan_params(), want_cells);
     let features = cluster_features(positions_m, &clustering);
     let graph = match cfg.graph {
         GraphMode::Spheres => build_graph(&features, cfg.inside_tolerance),
@@ -139,12 +151,15 @@ pub fn analyse_person(
         TreeMode::Paper => best_tree_paper(&features, &graph),
         TreeMode::Coverage => best_tree_coverage(&features, &graph),
     };
-    PersonStructure {
-        clustering,
-        features,
-        graph,
-        tree,
-    }
+    (
+        PersonStructure {
+            clustering,
+            features,
+            graph,
+            tree,
+        },
+        cells,
+    )
 }
 
 /// Runs `steps` on a person's [`PersonStructure`] (Algorithm 1's second half). `Reference`
@@ -519,18 +534,19 @@ pub fn refine_variants_with(
                         .collect()
                 });
                 let doubted = doubted.as_deref();
-                let structure = analyse_person(pos, cluster_lab, cfg);
-                // N's search depends on the clustering only: once for every run with N.
-                let nearest = (cfg.noise == NoiseMode::Nearest && runs.iter().any(Steps::noise))
-                    .then(|| {
-                        let is_noise: Vec<bool> = structure
-                            .clustering
-                            .cluster_of
-                            .iter()
-                            .map(Option::is_none)
-                            .collect();
-                        NoiseNearest::new(pos, &is_noise, cfg.eps_m)
-                    });
+                // N's search depends on the clustering only: once for every run with N, on
+                // DBSCAN's cells.
+                let want_nearest = cfg.noise == NoiseMode::Nearest && runs.iter().any(Steps::noise);
+                let (structure, cells) = analyse_person_with(pos, cluster_lab, cfg, want_nearest);
+                let nearest = want_nearest.then(|| {
+                    let is_noise: Vec<bool> = structure
+                        .clustering
+                        .cluster_of
+                        .iter()
+                        .map(Option::is_none)
+                        .collect();
+                    NoiseNearest::with_index(pos, &is_noise, cfg.eps_m, cells)
+                });
                 let evidence = PersonEvidence {
                     label_probs: probs,
                     doubted,

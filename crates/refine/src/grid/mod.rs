@@ -150,8 +150,22 @@ impl GridFrame {
     /// The frame of cells of side `side_m` over the points `ids` of `positions` (at least
     /// one), the side made larger when the extent would need more than
     /// [`MAX_CELLS_PER_AXIS`] cells ([`GridFrame::side_m`] says the side used).
+    #[cfg(test)]
     pub(crate) fn covering(positions: &[Vec3], ids: &[u32], side_m: f64) -> GridFrame {
-        let b = Aabb::of_ids(positions, ids);
+        Self::covering_box(Aabb::of_ids(positions, ids), side_m)
+    }
+
+    /// [`GridFrame::covering`] the points whose box is `b` (the point box at the origin
+    /// when `b` is empty, as [`Aabb::of_ids`] gives for no point).
+    pub(crate) fn covering_box(b: Aabb, side_m: f64) -> GridFrame {
+        let b = if b.lo[0] > b.hi[0] {
+            Aabb {
+                lo: [0.0; 3],
+                hi: [0.0; 3],
+            }
+        } else {
+            b
+        };
         let extent = [0, 1, 2].map(|a| f64::from(b.hi[a]) - f64::from(b.lo[a]));
         let widest = extent.iter().copied().fold(0.0, f64::max);
         let side = side_m
@@ -174,6 +188,14 @@ impl GridFrame {
     /// The side of the cells, metres (≥ the side asked).
     pub(crate) fn side_m(&self) -> f64 {
         self.side
+    }
+
+    /// When keys are computed in f32 (at most [`F32_KEYS`] cells per axis): the corner,
+    /// the inverse of the side (1/m) and the largest key per axis, with which
+    /// [`GridFrame::key`] gives `((p − corner) · inv) as i32` clamped to `0..=max_key`.
+    pub(crate) fn f32_keys(&self) -> Option<(Vec3, f32, [i32; 3])> {
+        self.fast
+            .map(|(lo, inv)| (lo, inv, self.max_key.map(|k| k as i32)))
     }
 
     /// The key of `p`'s cell (clamped into the frame, so a point outside the points it
@@ -229,7 +251,7 @@ enum CellLookup {
 }
 
 /// Marks an empty slot of a dense table.
-const EMPTY: u32 = u32::MAX;
+pub(crate) const EMPTY: u32 = u32::MAX;
 
 impl CellGrid {
     /// Bins the points `ids` of `positions`, point `ids[k]` in cell `keys[k]`. Within a
@@ -360,6 +382,33 @@ impl CellGrid {
             ids: sorted_ids,
             pts,
             lookup,
+        }
+    }
+
+    /// A grid whose cells (keys `keys`, in key order, points `start[c]..start[c + 1]` of
+    /// `ids` and `pts`) are numbered in `table`, a dense table over the keys `0..dims`
+    /// (x fastest; [`EMPTY`] where no point lies), as [`CellGrid::new`] makes with no
+    /// padding.
+    pub(crate) fn from_table(
+        keys: Vec<[i32; 3]>,
+        start: Vec<u32>,
+        ids: Vec<u32>,
+        pts: Vec<Vec3>,
+        dims: [i64; 3],
+        table: Vec<u32>,
+    ) -> Self {
+        debug_assert_eq!(start.len(), keys.len() + 1);
+        debug_assert_eq!(table.len() as i64, dims.iter().product::<i64>());
+        CellGrid {
+            keys,
+            start,
+            ids,
+            pts,
+            lookup: CellLookup::Dense {
+                lo: [0; 3],
+                dims,
+                table,
+            },
         }
     }
 

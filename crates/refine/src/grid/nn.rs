@@ -1,6 +1,6 @@
 //! [`NnIndex`]: exact nearest-neighbour and radius queries on a [`CellGrid`].
 
-use super::{Aabb, CellGrid, sort_by_key};
+use super::{Aabb, CellGrid, EMPTY, GridFrame, sort_by_key};
 use bodyseg_core::math::{Vec3, dist2};
 
 /// Scratch space of [`NnIndex::nearest_with`], kept between queries.
@@ -14,6 +14,19 @@ pub(crate) struct NnScratch {
 
 /// Fine cells per block edge in [`NnIndex`].
 const NN_BLOCK_CELLS: i32 = 4;
+
+/// [`NnIndex::from_cells`] merges 2×2×2 of the parts' cells into one of its cells: DBSCAN's
+/// cells (eps/√3·0.999) then make cells of 1.15·eps, about [`NnIndex::new`]'s (eps), with
+/// which the near search of most noise points ends in the 3×3×3 block. (DBSCAN's cells
+/// as they are: 166.2M instructions per refinement at 100k, the far search opening many
+/// small cells, against 172.2M before; merged 2×2×2: see docs/notes, fourth round.)
+const MERGE_SHIFT: i32 = 1;
+
+/// Most slots of the dense table [`NnIndex::from_cells`] lays over the whole frame, per
+/// point (a person's cells fill a few percent of their block)...
+const FROM_CELLS_FACTOR: u64 = 64;
+/// ...or this many in any case (4 MiB).
+const FROM_CELLS_ALWAYS: u64 = 1 << 20;
 
 /// Exact nearest-neighbour and radius queries over a fixed point set: a [`CellGrid`] of
 /// side `eps` (at least 1/64 of the points' extent, at most 64 cells along the longest
@@ -60,23 +73,123 @@ impl NnIndex {
             keys.push([k(0), k(1), k(2)]);
         }
         let grid = CellGrid::new(positions, idx, &keys, 0);
-        let ncells = grid.num_cells();
-        let cell_box: Vec<Aabb> = (0..ncells as u32)
+        let cell_box: Vec<Aabb> = (0..grid.num_cells() as u32)
             .map(|c| Aabb::of(&grid.pts()[grid.range(c)]))
             .collect();
+        Self::with_blocks(grid, lo, inv_side, dims, cell_box)
+    }
+
+    /// The index of the points that `parts` keep, each part a grid in `frame`'s cells
+    /// (DBSCAN's label groups: [`crate::dbscan`]) with, per stored point, `Some` when the
+    /// index holds it (a clustered point). The parts' cells are merged by key (one table
+    /// over the frame, no key computed again); within a cell the points come part by
+    /// part. `None` when the frame computes keys in f64 or is too large for one table
+    /// (the caller then uses [`NnIndex::new`]: the answers are the same, exact).
+    pub(crate) fn from_cells(
+        frame: &GridFrame,
+        parts: &[(&CellGrid, &[Option<u32>])],
+    ) -> Option<Self> {
+        let (lo, inv_side, max_key) = frame.f32_keys()?;
+        // A part's key `k` is `⌊(p − lo)·inv⌋`; halving `inv` is exact in f32, so
+        // `k >> 1` is `⌊(p − lo)·inv/2⌋`, the key [`NnIndex::key_of`] computes.
+        let inv_side = inv_side / (1 << MERGE_SHIFT) as f32;
+        let merged = |k: [i32; 3]| k.map(|v| v >> MERGE_SHIFT);
+        let dims = merged(max_key).map(|k| i64::from(k) + 1);
+        let m: usize = parts.iter().map(|(_, keep)| keep.len()).sum();
+        let volume = dims
+            .iter()
+            .try_fold(1u64, |v, &d| v.checked_mul(u64::try_from(d).ok()?))?;
+        if volume
+            > (m as u64)
+                .saturating_mul(FROM_CELLS_FACTOR)
+                .max(FROM_CELLS_ALWAYS)
+        {
+            return None;
+        }
+        let slot = |k: [i32; 3]| {
+            ((i64::from(k[2]) * dims[1] + i64::from(k[1])) * dims[0] + i64::from(k[0])) as usize
+        };
+        // Kept points per slot, then cells numbered in slot (= key) order.
+        let mut table = vec![0u32; volume as usize];
+        for (g, keep) in parts {
+            for c in 0..g.num_cells() as u32 {
+                let kept = keep[g.range(c)].iter().filter(|k| k.is_some()).count();
+                table[slot(merged(g.key(c)))] += kept as u32;
+            }
+        }
+        let mut keys = Vec::new();
+        let mut start = Vec::new();
+        let mut n = 0u32;
+        for (s, t) in table.iter_mut().enumerate() {
+            if *t == 0 {
+                *t = EMPTY;
+                continue;
+            }
+            let s = s as i64;
+            keys.push([
+                (s % dims[0]) as i32,
+                ((s / dims[0]) % dims[1]) as i32,
+                (s / (dims[0] * dims[1])) as i32,
+            ]);
+            start.push(n);
+            n += *t;
+            *t = keys.len() as u32 - 1;
+        }
+        start.push(n);
+        let mut fill = start.clone();
+        let mut ids = vec![0u32; n as usize];
+        let mut pts = vec![[0f32; 3]; n as usize];
+        let mut cell_box = vec![Aabb::EMPTY; keys.len()];
+        for (g, keep) in parts {
+            for c in 0..g.num_cells() as u32 {
+                let r = g.range(c);
+                let cell = table[slot(merged(g.key(c)))];
+                if cell == EMPTY {
+                    continue;
+                }
+                let cell = cell as usize;
+                let (f, bx) = (&mut fill[cell], &mut cell_box[cell]);
+                for ((&id, &p), k) in g.ids()[r.clone()]
+                    .iter()
+                    .zip(&g.pts()[r.clone()])
+                    .zip(&keep[r])
+                {
+                    if k.is_some() {
+                        ids[*f as usize] = id;
+                        pts[*f as usize] = p;
+                        *f += 1;
+                        bx.grow(p);
+                    }
+                }
+            }
+        }
+        let grid = CellGrid::from_table(keys, start, ids, pts, dims, table);
+        let dims = dims.map(|d| d as i32);
+        Some(Self::with_blocks(grid, lo, inv_side, dims, cell_box))
+    }
+
+    /// The index over `grid` (cells placed from `lo`, `1 / inv_side` wide, `dims` per
+    /// axis, each with the tight box of its points), cells grouped into blocks of
+    /// [`NN_BLOCK_CELLS`] per edge.
+    fn with_blocks(
+        grid: CellGrid,
+        lo: Vec3,
+        inv_side: f32,
+        dims: [i32; 3],
+        cell_box: Vec<Aabb>,
+    ) -> Self {
+        let ncells = grid.num_cells();
         // Blocks: the cells are in key order, so bucket them by block key.
-        let bdims = dims.map(|d| (d + NN_BLOCK_CELLS - 1) / NN_BLOCK_CELLS);
         let block_keys: Vec<[i32; 3]> = (0..ncells as u32)
             .map(|c| grid.key(c).map(|v| v / NN_BLOCK_CELLS))
             .collect();
-        let cell_ids: Vec<u32> = (0..ncells as u32).collect();
         let order = sort_by_key(&block_keys);
         let mut block_cells = Vec::with_capacity(ncells);
         let mut block_start = vec![0u32];
         let mut block_box = Vec::new();
         let mut last = None;
-        for &o in &order {
-            let bk = block_keys[o as usize];
+        for &c in &order {
+            let bk = block_keys[c as usize];
             if last.is_some_and(|l| l != bk) {
                 block_start.push(block_cells.len() as u32);
             }
@@ -84,7 +197,6 @@ impl NnIndex {
                 block_box.push(Aabb::EMPTY);
                 last = Some(bk);
             }
-            let c = cell_ids[o as usize];
             block_cells.push(c);
             if let Some(b) = block_box.last_mut() {
                 b.union(&cell_box[c as usize]);
@@ -94,10 +206,9 @@ impl NnIndex {
         if block_box.is_empty() {
             block_start = vec![0];
         }
-        debug_assert!(bdims.iter().all(|&d| d >= 1));
         NnIndex {
             grid,
-            lo: bounds.lo,
+            lo,
             inv_side,
             dims,
             cell_box,
@@ -306,14 +417,17 @@ impl NnIndex {
     }
 
     /// Squared distance from `q` (in cell `k`) to the walls of the block of cells within
-    /// `r` cells of `k`, shaved by a hair: no point outside that block is nearer.
+    /// `r` cells of `k`, shaved by a hair: no point outside that block is nearer. The
+    /// hair: a few f32 rounding steps of the coordinates and the walls (the points' keys
+    /// and the walls are computed apart, each rounded), and 10⁻⁴ of the square.
     fn wall_dist2(&self, q: Vec3, k: [i32; 3], r: i32) -> f32 {
         let side = 1.0 / self.inv_side;
         let mut m = f32::INFINITY;
         for a in 0..3 {
             let lo = self.lo[a] + (k[a] - r) as f32 * side;
             let hi = self.lo[a] + (k[a] + r + 1) as f32 * side;
-            m = m.min(q[a] - lo).min(hi - q[a]);
+            let slack = 4.0 * f32::EPSILON * (q[a].abs() + self.lo[a].abs() + hi.abs() + lo.abs());
+            m = m.min(q[a] - lo - slack).min(hi - q[a] - slack);
         }
         let m = m.max(0.0);
         m * m * (1.0 - 1e-4)

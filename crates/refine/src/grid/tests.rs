@@ -225,3 +225,67 @@ fn knn_within_equals_brute_force() {
         }
     }
 }
+
+#[test]
+fn nearest_on_dbscan_cells_equals_brute_force() {
+    use crate::dbscan::{DbscanParams, dbscan_with_cells};
+    use bodyseg_core::Label;
+    let mut rng = rng_from(13);
+    for case in 0..60 {
+        // Blobs of a few labels (clustered), scattered strays (noise), duplicates (ties),
+        // some unknown points (never clustered).
+        let n = 50 + (case * 41) % 900;
+        let mut pos: Vec<Vec3> = Vec::with_capacity(n);
+        let mut labels: Vec<Label> = Vec::with_capacity(n);
+        for i in 0..n {
+            let blob = i % 4;
+            let c = [
+                0.2 * blob as f32,
+                0.1 * (blob % 2) as f32,
+                0.05 * blob as f32,
+            ];
+            let spread = if rng() < 0.1 { 0.8 } else { 0.06 };
+            pos.push([
+                c[0] + rng() * spread,
+                c[1] + rng() * spread,
+                c[2] + rng() * spread,
+            ]);
+            labels.push(if rng() < 0.05 {
+                Label::UNKNOWN
+            } else {
+                Label::from_id(1 + (i % 3) as u8).expect("a class id")
+            });
+        }
+        if case % 4 == 1 {
+            let p = pos[3];
+            pos.extend(std::iter::repeat_n(p, 20));
+            labels.extend(std::iter::repeat_n(labels[3], 20));
+        }
+        let params = DbscanParams {
+            eps_m: [0.02, 0.05, 0.08][case % 3],
+            min_points: 2 + case % 6,
+            label_penalty_m: if case % 5 == 2 { 0.01 } else { f32::INFINITY },
+        };
+        let (clustering, index) = dbscan_with_cells(&pos, &labels, &params, true);
+        let Some(index) = index else {
+            panic!("case {case}: a small cloud's frame makes the index");
+        };
+        let clustered: Vec<u32> = (0..pos.len() as u32)
+            .filter(|&i| clustering.cluster_of[i as usize].is_some())
+            .collect();
+        let mut queries: Vec<Vec3> = (0..pos.len())
+            .filter(|&i| clustering.cluster_of[i].is_none())
+            .map(|i| pos[i])
+            .collect();
+        queries.extend((0..20).map(|_| [rng() * 2.0 - 0.5, rng() * 2.0 - 0.5, rng() * 2.0 - 0.5]));
+        queries.extend(pos.iter().step_by(7).copied());
+        for q in queries {
+            let want = clustered.iter().copied().min_by(|&a, &b| {
+                dist2(q, pos[a as usize])
+                    .total_cmp(&dist2(q, pos[b as usize]))
+                    .then(a.cmp(&b))
+            });
+            assert_eq!(index.nearest(q), want, "case {case}, query {q:?}");
+        }
+    }
+}

@@ -41,15 +41,33 @@ pub(crate) struct NoiseNearest {
 
 impl NoiseNearest {
     pub(crate) fn new(positions_m: &[Vec3], is_noise: &[bool], eps_m: f32) -> Self {
-        let (noise, clustered): (Vec<u32>, Vec<u32>) =
-            (0..positions_m.len() as u32).partition(|&i| is_noise[i as usize]);
-        if clustered.is_empty() {
+        Self::with_index(positions_m, is_noise, eps_m, None)
+    }
+
+    /// [`NoiseNearest::new`] with the index of the clustered points when it was built
+    /// already (DBSCAN's cells, [`crate::dbscan::dbscan_with_cells`]): it must hold
+    /// exactly the points with `!is_noise`.
+    pub(crate) fn with_index(
+        positions_m: &[Vec3],
+        is_noise: &[bool],
+        eps_m: f32,
+        index: Option<NnIndex>,
+    ) -> Self {
+        let noise: Vec<u32> = (0..positions_m.len() as u32)
+            .filter(|&i| is_noise[i as usize])
+            .collect();
+        if noise.len() == positions_m.len() {
             return NoiseNearest {
                 pairs: Vec::new(),
                 orphans: noise,
             };
         }
-        let index = NnIndex::new(positions_m, &clustered, eps_m);
+        let index = index.unwrap_or_else(|| {
+            let clustered: Vec<u32> = (0..positions_m.len() as u32)
+                .filter(|&i| !is_noise[i as usize])
+                .collect();
+            NnIndex::new(positions_m, &clustered, eps_m)
+        });
         let pairs: Vec<(u32, u32)> = noise
             .par_iter()
             .with_min_len(256)
