@@ -837,46 +837,92 @@ fn connect(
     }
     let (forward, near) = forward_offsets();
     let offs = g.grid.offsets(&forward);
-    // Two passes: the 3×3×3 blocks first, which join almost everything, so that the
-    // farther pairs of the second pass are mostly settled by one `find`.
-    let mut found = vec![0u32; forward.len()];
-    for pass in [0..near, near..forward.len()] {
+    // Joins the core points of cells `c` and `d` that lie within eps of each other.
+    let link = |uf: &mut UnionFind, c: u32, d: u32| {
+        let (ra, rb) = (core_range(c), core_range(d));
+        let whole_c = g.whole[c as usize];
+        if whole_c && g.whole[d as usize] {
+            // Already joined (the common case on a surface): nothing to test.
+            if uf.find(unit(c, ra.start)) == uf.find(unit(d, rb.start)) {
+                return;
+            }
+            if core_box[c as usize].gap2(&core_box[d as usize]) > reach2 {
+                return;
+            }
+            if let Some((i, j)) = any_pair(g, ra, rb, core_box[d as usize], th) {
+                uf.union(unit(c, i), unit(d, j));
+            }
+        } else {
+            if core_box[c as usize].gap2(&core_box[d as usize]) > reach2 {
+                return;
+            }
+            for i in ra {
+                for j in rb.clone() {
+                    if dist2(pts[i], pts[j]) <= th.get(g.lbl[i], g.lbl[j]) {
+                        uf.union(i as u32, j as u32);
+                    }
+                }
+            }
+        }
+    };
+    // The 3×3×3 blocks first (forward offsets: each pair once), which join almost
+    // everything, so that the farther pairs are mostly settled by one `find`.
+    let mut found = vec![0u32; 125];
+    for c in 0..ncells as u32 {
+        if !has_core(c) {
+            continue;
+        }
+        let n = g
+            .grid
+            .near_cells(g.grid.anchor(c), &offs, 0..near, &mut found);
+        for &d in &found[..n] {
+            if has_core(d) {
+                link(&mut uf, c, d);
+            }
+        }
+    }
+    if !all_whole {
         for c in 0..ncells as u32 {
             if !has_core(c) {
                 continue;
             }
-            let at = g.grid.anchor(c);
-            let ra = core_range(c);
-            let whole_c = g.whole[c as usize];
-            let n = g.grid.near_cells(at, &offs, pass.clone(), &mut found);
+            let n = g
+                .grid
+                .near_cells(g.grid.anchor(c), &offs, near..forward.len(), &mut found);
             for &d in &found[..n] {
-                if !has_core(d) {
-                    continue;
+                if has_core(d) {
+                    link(&mut uf, c, d);
                 }
-                let rb = core_range(d);
-                if whole_c && g.whole[d as usize] {
-                    // Already joined (the common case on a surface): nothing to test.
-                    if uf.find(unit(c, ra.start)) == uf.find(unit(d, rb.start)) {
-                        continue;
-                    }
-                    if core_box[c as usize].gap2(&core_box[d as usize]) > reach2 {
-                        continue;
-                    }
-                    if let Some((i, j)) = any_pair(g, ra.clone(), rb, core_box[d as usize], th) {
-                        uf.union(unit(c, i), unit(d, j));
-                    }
-                } else {
-                    if core_box[c as usize].gap2(&core_box[d as usize]) > reach2 {
-                        continue;
-                    }
-                    for i in ra.clone() {
-                        for j in rb.clone() {
-                            if dist2(pts[i], pts[j]) <= th.get(g.lbl[i], g.lbl[j]) {
-                                uf.union(i as u32, j as u32);
-                            }
-                        }
-                    }
-                }
+            }
+        }
+        return (uf, all_whole);
+    }
+    // The far shells (5×5×5 blocks less their 3×3×3), from the cells outside the largest
+    // component only, in both directions: a pair with a cell outside it is met from that
+    // cell, and a pair inside it is joined already. On a body surface the largest
+    // component holds almost every cell, so few cells look their far shell up.
+    let mut size = vec![0u32; ncells];
+    for c in 0..ncells as u32 {
+        if has_core(c) {
+            size[uf.find(c) as usize] += 1;
+        }
+    }
+    // A cell of the largest component (its root may change as others join it).
+    let Some(largest) = (0..ncells as u32).max_by_key(|&r| size[r as usize]) else {
+        return (uf, all_whole);
+    };
+    for c in 0..ncells as u32 {
+        // Skipped: `c` is joined to the largest component, so is every cell skipped, and
+        // a pair of cells not both skipped is met from the other one.
+        if !has_core(c) || uf.find(c) == uf.find(largest) {
+            continue;
+        }
+        let n = g
+            .grid
+            .shell2_cells(g.grid.anchor(c), &g.offs, NEAR_OFFSETS..125, &mut found);
+        for &d in &found[..n] {
+            if has_core(d) {
+                link(&mut uf, c, d);
             }
         }
     }

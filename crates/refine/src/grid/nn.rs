@@ -437,14 +437,39 @@ impl NnIndex {
         &self.block_cells[self.block_start[b] as usize..self.block_start[b + 1] as usize]
     }
 
+    /// Makes `best` the nearest of itself and the points of cell `c` to `q` (ties: the
+    /// smaller id). Points are tested four at a time: a block whose nearest point is
+    /// farther than `best` (most of them once `best` is near) is passed over after four
+    /// distances and one comparison; the others are updated one point at a time, with
+    /// [`dist2`]'s values, so the answer is the same.
     #[inline]
     fn scan_cell(&self, q: Vec3, c: usize, best: &mut Option<(f32, u32)>) {
         let r = self.grid.range(c as u32);
-        for (&j, &p) in self.grid.ids()[r.clone()].iter().zip(&self.grid.pts()[r]) {
-            let d2 = dist2(q, p);
+        let (ids, pts) = (&self.grid.ids()[r.clone()], &self.grid.pts()[r]);
+        let update = |best: &mut Option<(f32, u32)>, d2: f32, j: u32| {
             if best.is_none_or(|(b2, bj)| d2 < b2 || (d2 == b2 && j < bj)) {
                 *best = Some((d2, j));
             }
+        };
+        let mut blocks_p = pts.chunks_exact(4);
+        let mut blocks_i = ids.chunks_exact(4);
+        for (bp, bi) in (&mut blocks_p).zip(&mut blocks_i) {
+            let d = [
+                dist2(q, bp[0]),
+                dist2(q, bp[1]),
+                dist2(q, bp[2]),
+                dist2(q, bp[3]),
+            ];
+            let m = d[0].min(d[1]).min(d[2].min(d[3]));
+            if best.is_some_and(|(b2, _)| m > b2) {
+                continue;
+            }
+            for l in 0..4 {
+                update(best, d[l], bi[l]);
+            }
+        }
+        for (&p, &j) in blocks_p.remainder().iter().zip(blocks_i.remainder()) {
+            update(best, dist2(q, p), j);
         }
     }
 }
