@@ -875,9 +875,16 @@ fn connect(
         let n = g
             .grid
             .near_cells(g.grid.anchor(c), &offs, 0..near, &mut found);
+        // With all cells whole the union-find is over cells: `c`'s root, found again only
+        // after a join, settles most pairs (joined already) with one `find`.
+        let mut root_c = if all_whole { uf.find(c) } else { u32::MAX };
         for &d in &found[..n] {
-            if has_core(d) {
-                link(&mut uf, c, d);
+            if !has_core(d) || (all_whole && uf.find(d) == root_c) {
+                continue;
+            }
+            link(&mut uf, c, d);
+            if all_whole {
+                root_c = uf.find(c);
             }
         }
     }
