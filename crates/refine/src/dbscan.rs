@@ -145,9 +145,13 @@ pub(crate) type ClusteredCells = crate::grid::nn::NnIndex;
 impl ClusteredCells {
     /// `None` when the groups' frame is not one [`NnIndex::from_cells`] takes.
     fn merge(frame: &GridFrame, results: &[GroupResult]) -> Option<ClusteredCells> {
-        let parts: Vec<(&CellGrid, &[Option<u32>])> = results
+        let parts: Vec<crate::grid::nn::CellPart<'_>> = results
             .iter()
-            .filter_map(|r| r.grid.as_ref().map(|g| (g, r.component.as_slice())))
+            .filter_map(|r| {
+                r.grid
+                    .as_ref()
+                    .map(|(g, b)| (g, b.as_slice(), r.component.as_slice()))
+            })
             .collect();
         crate::grid::nn::NnIndex::from_cells(frame, &parts)
     }
@@ -155,12 +159,13 @@ impl ClusteredCells {
 
 /// Per-group output: for each point of the group (in any order) its index, its local
 /// component and whether it is core; the group's grid, whose stored points are in the
-/// order of `ids` (none for a group too small to cluster).
+/// order of `ids`, with the box of each cell's points (none for a group too small to
+/// cluster).
 struct GroupResult {
     ids: Vec<u32>,
     component: Vec<Option<u32>>,
     is_core: Vec<bool>,
-    grid: Option<CellGrid>,
+    grid: Option<(CellGrid, Vec<Aabb>)>,
 }
 
 /// Gives global cluster ids (ordered by smallest point index) and cluster labels.
@@ -536,7 +541,7 @@ fn cluster_group(
         ids: g.grid.ids().to_vec(),
         component,
         is_core: core,
-        grid: Some(g.grid),
+        grid: Some((g.grid, g.bbox)),
     }
 }
 

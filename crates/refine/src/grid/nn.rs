@@ -10,6 +10,8 @@ pub(crate) struct NnScratch {
     blocks: Vec<f32>,
     /// Cells to scan: (squared distance to the box, cell).
     cells: Vec<(f32, u32)>,
+    /// Blocks to open: (squared distance to the box, block).
+    open: Vec<(f32, u32)>,
 }
 
 /// Fine cells per block edge in [`NnIndex`].
@@ -44,7 +46,33 @@ pub(crate) struct NnIndex {
     block_cells: Vec<u32>,
     block_start: Vec<u32>,
     block_box: Vec<Aabb>,
+    /// Per block key (x fastest, `block_dims` per axis): its block, or [`EMPTY`]; empty
+    /// when that table would be large (then the far search checks every block).
+    block_table: Vec<u32>,
+    block_dims: [i32; 3],
+    /// Per cell, its points in runs, each with a box holding them (CSR: the runs of cell
+    /// `c` are `runs[run_start[c]..run_start[c + 1]]`), so that a scan passes over the
+    /// runs beyond the best point; empty when the cells are scanned whole.
+    runs: Vec<Run>,
+    run_start: Vec<u32>,
 }
+
+/// One DBSCAN group's cells for [`NnIndex::from_cells`]: its grid, the box of each cell's
+/// points, and per stored point its component (`None`: not indexed).
+pub(crate) type CellPart<'a> = (&'a CellGrid, &'a [Aabb], &'a [Option<u32>]);
+
+/// Stored points `start..end` of an [`NnIndex`] cell, all inside `bbox`.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    bbox: Aabb,
+    start: u32,
+    end: u32,
+}
+
+/// [`NnIndex`] lays a table over its blocks' keys when it holds at most this many slots per
+/// block, or [`BLOCK_TABLE_ALWAYS`] in any case.
+const BLOCK_TABLE_FACTOR: usize = 8;
+const BLOCK_TABLE_ALWAYS: usize = 1 << 12;
 
 impl NnIndex {
     /// Indexes the points `idx` of `positions` (cells of side `eps_m`, or 1/64 of the
@@ -85,17 +113,14 @@ impl NnIndex {
     /// over the frame, no key computed again); within a cell the points come part by
     /// part. `None` when the frame computes keys in f64 or is too large for one table
     /// (the caller then uses [`NnIndex::new`]: the answers are the same, exact).
-    pub(crate) fn from_cells(
-        frame: &GridFrame,
-        parts: &[(&CellGrid, &[Option<u32>])],
-    ) -> Option<Self> {
+    pub(crate) fn from_cells(frame: &GridFrame, parts: &[CellPart<'_>]) -> Option<Self> {
         let (lo, inv_side, max_key) = frame.f32_keys()?;
         // A part's key `k` is `⌊(p − lo)·inv⌋`; halving `inv` is exact in f32, so
         // `k >> 1` is `⌊(p − lo)·inv/2⌋`, the key [`NnIndex::key_of`] computes.
         let inv_side = inv_side / (1 << MERGE_SHIFT) as f32;
         let merged = |k: [i32; 3]| k.map(|v| v >> MERGE_SHIFT);
         let dims = merged(max_key).map(|k| i64::from(k) + 1);
-        let m: usize = parts.iter().map(|(_, keep)| keep.len()).sum();
+        let m: usize = parts.iter().map(|(_, _, keep)| keep.len()).sum();
         let volume = dims
             .iter()
             .try_fold(1u64, |v, &d| v.checked_mul(u64::try_from(d).ok()?))?;
@@ -109,12 +134,15 @@ impl NnIndex {
         let slot = |k: [i32; 3]| {
             ((i64::from(k[2]) * dims[1] + i64::from(k[1])) * dims[0] + i64::from(k[0])) as usize
         };
-        // Kept points per slot, then cells numbered in slot (= key) order.
+        // Kept points per slot, then cells numbered in slot (= key) order. Per part
+        // cell: its kept points (a run of the merged cell when any).
         let mut table = vec![0u32; volume as usize];
-        for (g, keep) in parts {
+        let mut kept: Vec<u32> = Vec::new();
+        for (g, _, keep) in parts {
             for c in 0..g.num_cells() as u32 {
-                let kept = keep[g.range(c)].iter().filter(|k| k.is_some()).count();
-                table[slot(merged(g.key(c)))] += kept as u32;
+                let k = keep[g.range(c)].iter().filter(|k| k.is_some()).count() as u32;
+                table[slot(merged(g.key(c)))] += k;
+                kept.push(k);
             }
         }
         let mut keys = Vec::new();
@@ -136,19 +164,42 @@ impl NnIndex {
             *t = keys.len() as u32 - 1;
         }
         start.push(n);
+        // Runs per merged cell (CSR), then the points and runs in place.
+        let mut run_start = vec![0u32; keys.len() + 1];
+        let mut k = 0;
+        for (g, _, _) in parts {
+            for c in 0..g.num_cells() as u32 {
+                if kept[k] > 0 {
+                    run_start[table[slot(merged(g.key(c)))] as usize + 1] += 1;
+                }
+                k += 1;
+            }
+        }
+        for c in 0..keys.len() {
+            run_start[c + 1] += run_start[c];
+        }
+        let mut run_fill = run_start.clone();
+        let empty = Run {
+            bbox: Aabb::EMPTY,
+            start: 0,
+            end: 0,
+        };
+        let mut runs = vec![empty; run_start[keys.len()] as usize];
         let mut fill = start.clone();
         let mut ids = vec![0u32; n as usize];
         let mut pts = vec![[0f32; 3]; n as usize];
         let mut cell_box = vec![Aabb::EMPTY; keys.len()];
-        for (g, keep) in parts {
+        let mut k = 0;
+        for (g, part_box, keep) in parts {
             for c in 0..g.num_cells() as u32 {
-                let r = g.range(c);
-                let cell = table[slot(merged(g.key(c)))];
-                if cell == EMPTY {
+                k += 1;
+                if kept[k - 1] == 0 {
                     continue;
                 }
-                let cell = cell as usize;
-                let (f, bx) = (&mut fill[cell], &mut cell_box[cell]);
+                let r = g.range(c);
+                let cell = table[slot(merged(g.key(c)))] as usize;
+                let f = &mut fill[cell];
+                let first = *f;
                 for ((&id, &p), k) in g.ids()[r.clone()]
                     .iter()
                     .zip(&g.pts()[r.clone()])
@@ -158,14 +209,26 @@ impl NnIndex {
                         ids[*f as usize] = id;
                         pts[*f as usize] = p;
                         *f += 1;
-                        bx.grow(p);
                     }
                 }
+                // The part's box holds all of its cell's points, the kept ones among them:
+                // a looser bound than theirs, never a wrong one.
+                let bbox = part_box[c as usize];
+                cell_box[cell].union(&bbox);
+                runs[run_fill[cell] as usize] = Run {
+                    bbox,
+                    start: first,
+                    end: *f,
+                };
+                run_fill[cell] += 1;
             }
         }
         let grid = CellGrid::from_table(keys, start, ids, pts, dims, table);
         let dims = dims.map(|d| d as i32);
-        Some(Self::with_blocks(grid, lo, inv_side, dims, cell_box))
+        let mut index = Self::with_blocks(grid, lo, inv_side, dims, cell_box);
+        index.runs = runs;
+        index.run_start = run_start;
+        Some(index)
     }
 
     /// The index over `grid` (cells placed from `lo`, `1 / inv_side` wide, `dims` per
@@ -206,6 +269,25 @@ impl NnIndex {
         if block_box.is_empty() {
             block_start = vec![0];
         }
+        let block_dims = dims.map(|d| (d + NN_BLOCK_CELLS - 1) / NN_BLOCK_CELLS);
+        let slots = block_dims
+            .iter()
+            .try_fold(1usize, |v, &d| v.checked_mul(usize::try_from(d).ok()?));
+        let block_table = match slots {
+            Some(n) if n <= (block_box.len() * BLOCK_TABLE_FACTOR).max(BLOCK_TABLE_ALWAYS) => {
+                let mut t = vec![EMPTY; n];
+                for b in 0..block_box.len() {
+                    let c = block_cells[block_start[b] as usize];
+                    let k = grid.key(c).map(|v| v / NN_BLOCK_CELLS);
+                    let slot = (k[2] as usize * block_dims[1] as usize + k[1] as usize)
+                        * block_dims[0] as usize
+                        + k[0] as usize;
+                    t[slot] = b as u32;
+                }
+                t
+            }
+            _ => Vec::new(),
+        };
         NnIndex {
             grid,
             lo,
@@ -215,6 +297,10 @@ impl NnIndex {
             block_cells,
             block_start,
             block_box,
+            block_table,
+            block_dims,
+            runs: Vec::new(),
+            run_start: Vec::new(),
         }
     }
 
@@ -247,8 +333,24 @@ impl NnIndex {
     /// [`NnIndex::nearest`] with `scratch` for the bounds of blocks and cells (no
     /// allocation per query).
     pub(crate) fn nearest_with(&self, q: Vec3, scratch: &mut NnScratch) -> Option<u32> {
-        let mut best: Option<(f32, u32)> = None;
-        let NnScratch { blocks, cells } = scratch;
+        self.nearest_from(q, None, scratch)
+    }
+
+    /// [`NnIndex::nearest_with`] starting from `hint`, an indexed point (id, position)
+    /// thought to be near `q` (the answer of a previous query nearby): its distance bounds
+    /// the search from the start, and the answer is the same whatever the hint.
+    pub(crate) fn nearest_from(
+        &self,
+        q: Vec3,
+        hint: Option<(u32, Vec3)>,
+        scratch: &mut NnScratch,
+    ) -> Option<u32> {
+        let mut best: Option<(f32, u32)> = hint.map(|(j, p)| (dist2(q, p), j));
+        let NnScratch {
+            blocks,
+            cells,
+            open,
+        } = scratch;
         let k = self.key_of(q);
         if self.inside(k) {
             if let Some(own) = self.grid.cell(k) {
@@ -279,25 +381,47 @@ impl NnIndex {
                 return best.map(|(_, j)| j);
             }
         }
-        blocks.clear();
-        blocks.extend(self.block_box.iter().map(|bx| bx.dist2(q)));
-        let b0 = (0..blocks.len()).min_by(|&a, &b| blocks[a].total_cmp(&blocks[b]))?;
-        let c0 = self
-            .cells_of_block(b0)
-            .iter()
-            .min_by(|&&a, &&b| {
-                self.cell_box[a as usize]
-                    .dist2(q)
-                    .total_cmp(&self.cell_box[b as usize].dist2(q))
-            })
-            .copied()?;
-        self.scan_cell(q, c0 as usize, &mut best);
-        cells.clear();
-        for (b, &lb) in blocks.iter().enumerate() {
-            if best.is_some_and(|(b2, _)| lb > b2) {
-                continue;
+        // With a bound, the blocks within it are found by their keys; without one, the
+        // nearest cell of the nearest block gives one.
+        let mut c0 = u32::MAX;
+        open.clear();
+        if let Some((b2, _)) = best
+            && self.blocks_within(q, b2, open)
+        {
+        } else {
+            blocks.clear();
+            blocks.extend(self.block_box.iter().map(|bx| bx.dist2(q)));
+            if best.is_none() {
+                let b0 = (0..blocks.len()).min_by(|&a, &b| blocks[a].total_cmp(&blocks[b]))?;
+                c0 = self
+                    .cells_of_block(b0)
+                    .iter()
+                    .min_by(|&&a, &&b| {
+                        self.cell_box[a as usize]
+                            .dist2(q)
+                            .total_cmp(&self.cell_box[b as usize].dist2(q))
+                    })
+                    .copied()?;
+                self.scan_cell(q, c0 as usize, &mut best);
             }
-            for &c in self.cells_of_block(b) {
+            open.extend(
+                blocks
+                    .iter()
+                    .enumerate()
+                    .filter(|&(_, &lb)| best.is_none_or(|(b2, _)| lb <= b2))
+                    .map(|(b, &lb)| (lb, b as u32)),
+            );
+        }
+        // The blocks that can hold a nearer point, opened nearest first: the best point
+        // found in the nearer ones rules out the cells, then the blocks, farther away
+        // (exact, as in `scan_nearest_first`).
+        open.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(lb, b) in open.iter() {
+            if best.is_some_and(|(b2, _)| lb > b2) {
+                break;
+            }
+            cells.clear();
+            for &c in self.cells_of_block(b as usize) {
                 if c == c0 {
                     continue;
                 }
@@ -306,8 +430,8 @@ impl NnIndex {
                     cells.push((lb, c));
                 }
             }
+            self.scan_nearest_first(q, cells, &mut best);
         }
-        self.scan_nearest_first(q, cells, &mut best);
         best.map(|(_, j)| j)
     }
 
@@ -433,18 +557,80 @@ impl NnIndex {
         m * m * (1.0 - 1e-4)
     }
 
+    /// Appends to `open` (squared distance to the box, block) every block whose box lies
+    /// within `b2` of `q`, found by the block keys around `q`; false (nothing appended)
+    /// when there is no block table or the key range holds more slots than there are
+    /// blocks (checking every block is then cheaper).
+    ///
+    /// Exact: a point `p` with `dist2(q, p) ≤ b2` lies within `r` of `q` on every axis,
+    /// `r` being √b2 widened past f32's rounding of `dist2`, the root and `q ± r`; the
+    /// key of a coordinate (`⌊(x − lo)·inv⌋`, clamped, as the points' keys are computed)
+    /// never decreases with it, so `p`'s key lies between those of `q − r` and `q + r`.
+    fn blocks_within(&self, q: Vec3, b2: f32, open: &mut Vec<(f32, u32)>) -> bool {
+        if self.block_table.is_empty() {
+            return false;
+        }
+        let mut range = [(0i32, 0i32); 3];
+        let mut slots = 1usize;
+        for a in 0..3 {
+            let r = b2.sqrt() * (1.0 + 1e-5) + 4.0 * f32::EPSILON * (q[a].abs() + self.lo[a].abs());
+            let key = |x: f32| {
+                (((x - self.lo[a]) * self.inv_side).floor() as i32).clamp(0, self.dims[a] - 1)
+                    / NN_BLOCK_CELLS
+            };
+            range[a] = (key(q[a] - r), key(q[a] + r));
+            slots = slots.saturating_mul((range[a].1 - range[a].0 + 1) as usize);
+        }
+        if slots > self.block_box.len() {
+            return false;
+        }
+        let [dx, dy, _] = self.block_dims.map(|d| d as usize);
+        for z in range[2].0..=range[2].1 {
+            for y in range[1].0..=range[1].1 {
+                for x in range[0].0..=range[0].1 {
+                    let b = self.block_table[(z as usize * dy + y as usize) * dx + x as usize];
+                    if b == EMPTY {
+                        continue;
+                    }
+                    let lb = self.block_box[b as usize].dist2(q);
+                    if lb <= b2 {
+                        open.push((lb, b));
+                    }
+                }
+            }
+        }
+        true
+    }
+
     fn cells_of_block(&self, b: usize) -> &[u32] {
         &self.block_cells[self.block_start[b] as usize..self.block_start[b + 1] as usize]
     }
 
     /// Makes `best` the nearest of itself and the points of cell `c` to `q` (ties: the
+    /// smaller id), run by run when the cell has runs.
+    #[inline]
+    fn scan_cell(&self, q: Vec3, c: usize, best: &mut Option<(f32, u32)>) {
+        if self.runs.is_empty() {
+            self.scan_points(q, self.grid.range(c as u32), best);
+            return;
+        }
+        let runs = &self.runs[self.run_start[c] as usize..self.run_start[c + 1] as usize];
+        for run in runs {
+            // Strictly farther: the run cannot hold a nearer point, nor a tie.
+            if best.is_some_and(|(b2, _)| run.bbox.dist2(q) > b2) {
+                continue;
+            }
+            self.scan_points(q, run.start as usize..run.end as usize, best);
+        }
+    }
+
+    /// Makes `best` the nearest of itself and the stored points `r` to `q` (ties: the
     /// smaller id). Points are tested four at a time: a block whose nearest point is
     /// farther than `best` (most of them once `best` is near) is passed over after four
     /// distances and one comparison; the others are updated one point at a time, with
     /// [`dist2`]'s values, so the answer is the same.
     #[inline]
-    fn scan_cell(&self, q: Vec3, c: usize, best: &mut Option<(f32, u32)>) {
-        let r = self.grid.range(c as u32);
+    fn scan_points(&self, q: Vec3, r: std::ops::Range<usize>, best: &mut Option<(f32, u32)>) {
         let (ids, pts) = (&self.grid.ids()[r.clone()], &self.grid.pts()[r]);
         let update = |best: &mut Option<(f32, u32)>, d2: f32, j: u32| {
             if best.is_none_or(|(b2, bj)| d2 < b2 || (d2 == b2 && j < bj)) {

@@ -286,6 +286,20 @@ fn nearest_on_dbscan_cells_equals_brute_force() {
                     .then(a.cmp(&b))
             });
             assert_eq!(index.nearest(q), want, "case {case}, query {q:?}");
+            // Any indexed point as the starting hint (near, far, the answer itself) gives
+            // the same answer.
+            if !clustered.is_empty() {
+                let mut scratch = crate::grid::nn::NnScratch::default();
+                let pick = clustered[(rng() * clustered.len() as f32) as usize % clustered.len()];
+                for hint in [Some(pick), want] {
+                    let hint = hint.map(|j| (j, pos[j as usize]));
+                    assert_eq!(
+                        index.nearest_from(q, hint, &mut scratch),
+                        want,
+                        "case {case}, query {q:?}, hint {hint:?}"
+                    );
+                }
+            }
         }
     }
 }

@@ -71,9 +71,18 @@ impl NoiseNearest {
         let pairs: Vec<(u32, u32)> = noise
             .par_iter()
             .with_min_len(256)
-            .map_init(NnScratch::default, |scratch, &i| {
-                (i, index.nearest_with(positions_m[i as usize], scratch))
-            })
+            // Each query starts from the answer of the one before it in its run (noise
+            // points in point order, i.e. image order, lie near one another): a far
+            // query then opens few blocks. The answers do not depend on it.
+            .map_init(
+                || (NnScratch::default(), None::<u32>),
+                |(scratch, last), &i| {
+                    let hint = last.map(|j| (j, positions_m[j as usize]));
+                    let nearest = index.nearest_from(positions_m[i as usize], hint, scratch);
+                    *last = nearest;
+                    (i, nearest)
+                },
+            )
             .filter_map(|(i, j)| j.map(|j| (i, j)))
             .collect();
         NoiseNearest {
