@@ -428,12 +428,9 @@ impl Recording {
     /// The file is missing, is not a 16-bit PNG, or has another size than the rig's
     /// depth sensor (the error names the camera, the file and both sizes).
     pub fn read_depth(&self, index: usize, stem: &str) -> Result<(DepthImage, PathBuf)> {
-        let camera = self.camera(index)?;
-        let path = self.image_path(&camera.name, Layer::Depth, stem)?;
-        let image =
-            bodyseg_io::read_depth_png(&path).with_context(|| format!("camera {}", camera.name))?;
-        check_size(camera, &path, Layer::Depth, (image.width, image.height))?;
-        Ok((image, path))
+        self.read_image(index, Layer::Depth, stem, bodyseg_io::read_depth_png, |i| {
+            (i.width, i.height)
+        })
     }
 
     /// The colour image of camera `index` for frame `stem` (PNG or JPEG, the colour
@@ -442,12 +439,9 @@ impl Recording {
     /// # Errors
     /// As [`Recording::read_depth`].
     pub fn read_color(&self, index: usize, stem: &str) -> Result<(RgbImage, PathBuf)> {
-        let camera = self.camera(index)?;
-        let path = self.image_path(&camera.name, Layer::Color, stem)?;
-        let image =
-            bodyseg_io::read_rgb_image(&path).with_context(|| format!("camera {}", camera.name))?;
-        check_size(camera, &path, Layer::Color, (image.width, image.height))?;
-        Ok((image, path))
+        self.read_image(index, Layer::Color, stem, bodyseg_io::read_rgb_image, |i| {
+            (i.width, i.height)
+        })
     }
 
     /// A label image (8-bit class ids, 255 = none) of camera `index` for frame `stem`:
@@ -463,17 +457,32 @@ impl Recording {
         layer: Layer,
         stem: &str,
     ) -> Result<(LabelImage, PathBuf)> {
+        if matches!(layer, Layer::Color | Layer::Depth | Layer::DepthPerson) {
+            bail!("{}/ holds no label images", layer.folder());
+        }
+        self.read_image(index, layer, stem, bodyseg_io::read_label_png, |i| {
+            (i.width, i.height)
+        })
+    }
+
+    /// The image of `layer` of camera `index` for frame `stem`, read by `read` and checked
+    /// against its sensor's size (`size`: width, height in pixels), with its path. Read
+    /// errors name the camera (and ground truth, for [`Layer::DepthLabels`]).
+    fn read_image<T, E: std::error::Error + Send + Sync + 'static>(
+        &self,
+        index: usize,
+        layer: Layer,
+        stem: &str,
+        read: impl FnOnce(&Path) -> Result<T, E>,
+        size: impl FnOnce(&T) -> (u32, u32),
+    ) -> Result<(T, PathBuf)> {
         let camera = self.camera(index)?;
-        let context = match layer {
-            Layer::Parsing | Layer::Labels => format!("camera {}", camera.name),
-            Layer::DepthLabels => format!("camera {}: ground truth", camera.name),
-            Layer::Color | Layer::Depth | Layer::DepthPerson => {
-                bail!("{}/ holds no label images", layer.folder())
-            }
-        };
         let path = self.image_path(&camera.name, layer, stem)?;
-        let image = bodyseg_io::read_label_png(&path).context(context)?;
-        check_size(camera, &path, layer, (image.width, image.height))?;
+        let image = read(&path).with_context(|| match layer {
+            Layer::DepthLabels => format!("camera {}: ground truth", camera.name),
+            _ => format!("camera {}", camera.name),
+        })?;
+        check_size(camera, &path, layer, size(&image))?;
         Ok((image, path))
     }
 }
