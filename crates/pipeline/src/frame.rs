@@ -134,6 +134,21 @@ pub struct ParsedFrame {
     pub people: Option<PersonBoxes>,
 }
 
+impl ParsedFrame {
+    /// Each camera's depth image and labels, rig order: the projection's input.
+    pub(crate) fn camera_images(&self) -> Vec<CameraImages<'_>> {
+        self.frame
+            .depth
+            .iter()
+            .zip(&self.labels)
+            .map(|(d, labels)| CameraImages {
+                depth_raw: &d.depth_mm,
+                labels,
+            })
+            .collect()
+    }
+}
+
 /// Runs `segmenter` on every camera of `frame` (one call, the views batched): the one call
 /// site of [`Segmenter::segment`] in the pipeline. The frame must hold what the segmenter
 /// needs ([`FrameNeeds::of`]); camera names come from `rig`. A segmenter that takes person
@@ -237,15 +252,7 @@ pub fn project_parsed(
             rig.cameras.len()
         );
     }
-    let images: Vec<CameraImages<'_>> = frame
-        .depth
-        .iter()
-        .zip(&parsed.labels)
-        .map(|(d, labels)| CameraImages {
-            depth_raw: &d.depth_mm,
-            labels,
-        })
-        .collect();
+    let images = parsed.camera_images();
     let projector = FrameProjector::new(rig)?;
     let backproject = config.backproject.options();
     if color {
