@@ -771,13 +771,19 @@ pub(crate) mod tests {
             .clone()
     }
 
-    #[test]
-    fn a_passed_through_jpeg_replaces_an_older_png() {
+    /// A temporary folder with a recording of [`rig`] with `layers` begun in `rec/`: the
+    /// folder, the recording's root, the rig and the writer.
+    fn new_recording(layers: &[Layer]) -> (tempfile::TempDir, PathBuf, Rig, RecordingWriter) {
         let dir = tempfile::tempdir().expect("temp dir");
         let root = dir.path().join("rec");
         let rig = rig();
-        let writer =
-            RecordingWriter::create(&root, &rig, &[Layer::Color, Layer::Depth]).expect("create");
+        let writer = RecordingWriter::create(&root, &rig, layers).expect("create");
+        (dir, root, rig, writer)
+    }
+
+    #[test]
+    fn a_passed_through_jpeg_replaces_an_older_png() {
+        let (_dir, root, rig, writer) = new_recording(&[Layer::Color, Layer::Depth]);
         let color = root.join(&rig.cameras[0].name).join("color");
         assert_eq!(
             writer
@@ -798,11 +804,7 @@ pub(crate) mod tests {
 
     #[test]
     fn a_written_recording_reads_back_with_its_frames_and_size_checks() {
-        let dir = tempfile::tempdir().expect("temp dir");
-        let root = dir.path().join("rec");
-        let rig = rig();
-        let writer =
-            RecordingWriter::create(&root, &rig, &[Layer::Depth, Layer::Parsing]).expect("create");
+        let (_dir, root, rig, writer) = new_recording(&[Layer::Depth, Layer::Parsing]);
         let depth = |i: usize| vec![1000u16 + i as u16; rig.cameras[i].depth.num_pixels()];
         for i in 0..rig.cameras.len() {
             writer.write_depth(i, "000000", &depth(i)).expect("depth");
@@ -858,10 +860,7 @@ pub(crate) mod tests {
 
     #[test]
     fn opening_checks_camera_names_and_folders() {
-        let dir = tempfile::tempdir().expect("temp dir");
-        let root = dir.path().join("rec");
-        let mut rig = rig();
-        RecordingWriter::create(&root, &rig, &[Layer::Depth]).expect("create");
+        let (_dir, root, mut rig, _) = new_recording(&[Layer::Depth]);
         let missing = root.join(&rig.cameras[2].name);
         std::fs::remove_dir_all(&missing).expect("remove");
         let e = format!("{:#}", Recording::open(&root).expect_err("missing"));
