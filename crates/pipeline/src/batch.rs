@@ -591,6 +591,16 @@ mod tests {
         })
     }
 
+    /// [`run_batch`] of every job (no shard, no redo, no progress) under `hash`.
+    fn whole<J: Sync>(
+        jobs: &[(String, J)],
+        out: &Path,
+        hash: &str,
+        process: &FrameFn<'_, J>,
+    ) -> BatchOutcome {
+        run_batch(jobs, out, Shard::ALL, hash, false, &|_| {}, process).expect("batch")
+    }
+
     fn record_of(id: &str) -> Result<FrameRecord> {
         Ok(FrameRecord {
             frame: id.to_string(),
@@ -616,8 +626,7 @@ mod tests {
             }
             record_of(f.id)
         };
-        let first =
-            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        let first = whole(&jobs, out, "h1", &process);
         assert_eq!((first.processed, first.skipped), (5, 0));
         assert_eq!(first.failed.len(), 1);
         assert!(first.failed[0].error.contains("004 is bad"));
@@ -627,18 +636,15 @@ mod tests {
         );
         assert!(!record_path(out, "004").exists());
 
-        let again =
-            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        let again = whole(&jobs, out, "h1", &process);
         assert_eq!((again.processed, again.skipped), (0, 5));
         assert_eq!(again.records, first.records);
 
         // A deleted output or another configuration makes a frame incomplete.
         std::fs::remove_file(out.join("a/002.txt")).expect("remove");
-        let third =
-            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        let third = whole(&jobs, out, "h1", &process);
         assert_eq!((third.processed, third.skipped), (1, 4));
-        let other =
-            run_batch(&jobs, out, Shard::ALL, "h2", false, &|_| {}, &process).expect("batch");
+        let other = whole(&jobs, out, "h2", &process);
         assert_eq!((other.processed, other.skipped), (5, 0));
 
         // Shards split the work.
@@ -673,8 +679,7 @@ mod tests {
             }
             record_of(f.id)
         };
-        let outcome =
-            run_batch(&jobs, out, Shard::ALL, "h", false, &|_| {}, &process).expect("batch");
+        let outcome = whole(&jobs, out, "h", &process);
         assert_eq!(outcome.processed, 2, "the batch goes on");
         let failed: Vec<(&str, &str)> = outcome
             .failed
@@ -710,10 +715,10 @@ mod tests {
             r.inputs.extend(InputFile::of(&input));
             Ok(r)
         };
-        let run = || run_batch(&jobs, &out, Shard::ALL, "h", false, &|_| {}, &process);
-        assert_eq!(run().expect("batch").processed, 1);
-        assert_eq!(run().expect("batch").skipped, 1);
+        let run = || whole(&jobs, &out, "h", &process);
+        assert_eq!(run().processed, 1);
+        assert_eq!(run().skipped, 1);
         std::fs::write(&input, b"three").expect("rewrite");
-        assert_eq!(run().expect("batch").processed, 1, "the input changed size");
+        assert_eq!(run().processed, 1, "the input changed size");
     }
 }
