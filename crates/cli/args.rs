@@ -1573,6 +1573,18 @@ mod tests {
         try_parse(base, extra).expect("valid command line").command
     }
 
+    /// The configuration `bodyseg refine --cloud c.ply --boxes b.json --out o.ply EXTRA`
+    /// resolves to.
+    fn refine_config(extra: &[&str]) -> Result<PipelineConfig> {
+        let files = [
+            "refine", "--cloud", "c.ply", "--boxes", "b.json", "--out", "o.ply",
+        ];
+        let Command::Refine(r) = parsed(&files, extra) else {
+            panic!("parsed as refine");
+        };
+        r.config()
+    }
+
     #[test]
     fn clap_definition_is_consistent() {
         Cli::command().debug_assert();
@@ -1654,27 +1666,8 @@ mod tests {
 
     #[test]
     fn flags_override_the_defaults() {
-        let Command::Refine(r) = parsed(
-            &[
-                "refine",
-                "--cloud",
-                "a.ply",
-                "--boxes",
-                "b.json",
-                "--out",
-                "c.ply",
-                "--steps",
-                "m,n",
-                "--eps-m",
-                "0.03",
-                "--min-points",
-                "5",
-            ],
-            &[],
-        ) else {
-            panic!("parsed as refine");
-        };
-        let c = r.config().expect("valid config");
+        let flags = ["--steps", "m,n", "--eps-m", "0.03", "--min-points", "5"];
+        let c = refine_config(&flags).expect("valid config");
         assert_eq!(c.refine.eps_m, 0.03);
         assert_eq!(c.refine.min_points, 5);
         assert_eq!(c.refine.steps.to_string(), "M-N");
@@ -1689,27 +1682,16 @@ mod tests {
         std::fs::write(&a, "[refine]\neps_m = 0.02\nmin_points = 7\n").expect("write");
         std::fs::write(&b, "[refine]\neps_m = 0.04\n").expect("write");
         let (a, b) = (a.display().to_string(), b.display().to_string());
-        let refine = |extra: &[&str]| {
-            let Command::Refine(r) = parsed(
-                &[
-                    "refine", "--cloud", "c.ply", "--boxes", "b.json", "--out", "o.ply",
-                ],
-                extra,
-            ) else {
-                panic!("parsed as refine");
-            };
-            r.config()
-        };
-        let c = refine(&["--config", &a, "--config", &b]).expect("valid");
+        let c = refine_config(&["--config", &a, "--config", &b]).expect("valid");
         assert_eq!(
             (c.refine.eps_m, c.refine.min_points),
             (0.04, 7),
             "later file wins"
         );
-        let c =
-            refine(&["--config", &a, "--config", &b, "--set", "refine.eps_m=0.06"]).expect("valid");
+        let c = refine_config(&["--config", &a, "--config", &b, "--set", "refine.eps_m=0.06"])
+            .expect("valid");
         assert_eq!(c.refine.eps_m, 0.06, "--set beats the files");
-        let c = refine(&[
+        let c = refine_config(&[
             "--set",
             "refine.eps_m=0.06",
             "--eps-m",
@@ -1725,7 +1707,7 @@ mod tests {
         );
         let e = format!(
             "{:#}",
-            refine(&["--set", "refine.min_pts=5"]).expect_err("unknown")
+            refine_config(&["--set", "refine.min_pts=5"]).expect_err("unknown")
         );
         assert!(e.contains("unknown key `refine.min_pts`"), "{e}");
 
@@ -1780,15 +1762,10 @@ mod tests {
     #[test]
     fn negative_radius_parses_and_is_rejected_naming_the_flag() {
         // clap takes the negative number as the flag's value.
-        let Command::Refine(r) = parsed(
-            &[
-                "refine", "--cloud", "a", "--boxes", "b", "--out", "c", "--eps-m", "-1",
-            ],
-            &[],
-        ) else {
-            panic!("parsed as refine");
-        };
-        let e = format!("{:#}", r.config().expect_err("invalid"));
+        let e = format!(
+            "{:#}",
+            refine_config(&["--eps-m", "-1"]).expect_err("invalid")
+        );
         assert_eq!(e, "--eps-m: refine.eps_m must be in (0, 5] metres, got -1");
     }
 
