@@ -268,6 +268,28 @@ pub fn project_parsed(
     }
 }
 
+/// The `read` stage of a one-frame command (`parse`, `project`, `boxes`): opens
+/// `recording` and reads frame `stem` with what `needs` asks of that recording. The
+/// stage's line counts the cameras' images as `images` (singular, plural).
+///
+/// # Errors
+/// As [`Recording::open`] and [`Frame::read`].
+pub(crate) fn read_one_frame(
+    recording: &Path,
+    stem: &str,
+    needs: impl FnOnce(&Recording) -> FrameNeeds,
+    images: (&str, &str),
+) -> Result<(Recording, Frame, Stage)> {
+    let ((rec, frame), took) = timed(|| -> Result<_> {
+        let rec = Recording::open(recording)?;
+        let frame = Frame::read(&rec, stem, needs(&rec))?;
+        Ok((rec, frame))
+    })?;
+    let cameras = plural(rec.rig().cameras.len(), images.0, images.1);
+    let stage = Stage::new("read", took, format!("{cameras}, frame {stem}"));
+    Ok((rec, frame, stage))
+}
+
 /// Reads frame `stem` of the recording at `recording` with its recorded predictions
 /// (`parsing/`), and projects it: `bodyseg project`, and `bodyseg boxes --recording`. The
 /// points carry their camera colours when the box finder uses them. Returns the rig, the
@@ -289,20 +311,9 @@ pub(crate) fn read_and_project(
         color,
         ..FrameNeeds::of(&segmenter)
     };
-    let ((rec, frame), read) = timed(|| -> Result<_> {
-        let rec = Recording::open(recording)?;
-        let frame = Frame::read(&rec, stem, needs)?;
-        Ok((rec, frame))
-    })?;
+    let (rec, frame, read) = read_one_frame(recording, stem, |_| needs, ("camera", "cameras"))?;
     let rig = rec.rig();
-    let mut stages = vec![Stage::new(
-        "read",
-        read,
-        format!(
-            "{}, frame {stem}",
-            plural(rig.cameras.len(), "camera", "cameras")
-        ),
-    )];
+    let mut stages = vec![read];
     tracing::info!(recording = %recording.display(), frame = %stem, "read frame");
 
     let context = || format!("{}: frame {stem}", recording.display());
