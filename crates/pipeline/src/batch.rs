@@ -584,11 +584,20 @@ mod tests {
         (0..n).map(|i| (format!("{i:03}"), i)).collect()
     }
 
-    /// Writes the frame's output `a/<id>.txt`, which a failed frame must not leave behind.
-    fn write_marker(id: &str, w: &mut FrameWriter) -> Result<std::path::PathBuf> {
-        w.write(&format!("a/{id}.txt"), |p| {
-            Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
-        })
+    /// A frame function that writes the frame's output `a/<id>.txt` (which a failed frame
+    /// must not leave behind), then fails the frame where `fail`, given the job, errs or
+    /// panics; else it returns the frame's record.
+    fn marking(
+        fail: impl Fn(u32) -> Result<()> + Sync,
+    ) -> impl Fn(BatchFrame<'_, u32>, &mut FrameWriter, &mut Vec<Stage>) -> Result<FrameRecord> + Sync
+    {
+        move |f, w, _| {
+            w.write(&format!("a/{}.txt", f.id), |p| {
+                Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
+            })?;
+            fail(*f.job)?;
+            record_of(f.id)
+        }
     }
 
     /// [`run_batch`] of every job (no shard, no redo, no progress) under `hash`.
@@ -619,13 +628,10 @@ mod tests {
         let dir = tempfile::tempdir().expect("temp dir");
         let out = dir.path();
         let jobs = numbered_jobs(6);
-        let process = |f: BatchFrame<'_, u32>, w: &mut FrameWriter, _: &mut Vec<Stage>| {
-            write_marker(f.id, w)?;
-            if *f.job == 4 {
-                bail!("frame {} is bad", f.id);
-            }
-            record_of(f.id)
-        };
+        let process = marking(|job| match job {
+            4 => bail!("frame {job:03} is bad"),
+            _ => Ok(()),
+        });
         let first = whole(&jobs, out, "h1", &process);
         assert_eq!((first.processed, first.skipped), (5, 0));
         assert_eq!(first.failed.len(), 1);
@@ -667,18 +673,17 @@ mod tests {
         let dir = tempfile::tempdir().expect("temp dir");
         let out = dir.path();
         let jobs = numbered_jobs(4);
-        let process = |f: BatchFrame<'_, u32>, w: &mut FrameWriter, _: &mut Vec<Stage>| {
-            write_marker(f.id, w)?;
-            if *f.job == 2 {
+        let process = marking(|job| {
+            if job == 2 {
                 let cells: Vec<u32> = Vec::new();
                 // A bug: an index out of bounds.
-                return record_of(&cells[*f.job as usize].to_string());
+                bail!("cell {}", cells[job as usize]);
             }
-            if *f.job == 3 {
-                panic!("frame {} panicked", f.id);
+            if job == 3 {
+                panic!("frame {job:03} panicked");
             }
-            record_of(f.id)
-        };
+            Ok(())
+        });
         let outcome = whole(&jobs, out, "h", &process);
         assert_eq!(outcome.processed, 2, "the batch goes on");
         let failed: Vec<(&str, &str)> = outcome
