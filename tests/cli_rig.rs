@@ -5,8 +5,8 @@
 //! test file (byte order mark, deprecated model).
 
 use crate::common::{
-    assert_contains_all, assert_ok, assert_one_error, bodyseg, bodyseg_line, fails_in,
-    fails_line_in, files_in, stderr, stdout, tempdir, words,
+    assert_contains_all, assert_help, assert_ok, assert_one_error, bodyseg, bodyseg_line, fails_in,
+    fails_line_in, files_in, stderr, stdout, succeeds_in, tempdir, words,
 };
 use bodyseg_pipeline::read_rig;
 use std::path::{Path, PathBuf};
@@ -77,9 +77,7 @@ fn import_two_cameras_then_show() {
         assert_eq!(c.world_from_depth.translation_m(), [0.0; 3]);
     }
 
-    let out = bodyseg(d, &["rig", "show", "rig.toml"]);
-    assert_ok(&out, "bodyseg rig show");
-    let text = stdout(&out);
+    let text = stdout(&succeeds_in(d, &["rig", "show", "rig.toml"]));
     assert_contains_all(
         &text,
         &[
@@ -136,12 +134,8 @@ fn show_of_a_missing_rig_names_the_file() {
 
 #[test]
 fn import_help_names_the_flags_and_the_world_pose_gap() {
-    let dir = tempdir();
-    let out = bodyseg(dir.path(), &["rig", "import", "--help"]);
-    assert_ok(&out, "bodyseg rig import --help");
-    let text = stdout(&out);
-    assert_contains_all(
-        &text,
+    assert_help(
+        &["rig", "import", "--help"],
         &[
             "--from",
             "iai_kinect2",
@@ -292,9 +286,7 @@ fn every_format_in_one_rig_placed_by_openptrack() {
             assert!((g - w).abs() < 1e-12, "{}: {got:?} vs {want:?}", cam.name);
         }
     }
-    let out = bodyseg(d, &["rig", "show", "rig.toml"]);
-    assert_ok(&out, "bodyseg rig show");
-    let shown = stdout(&out);
+    let shown = stdout(&succeeds_in(d, &["rig", "show", "rig.toml"]));
     assert!(
         shown.contains("rational distortion (8)") && shown.contains("Brown-Conrady distortion (5)"),
         "{shown}"

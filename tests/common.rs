@@ -44,6 +44,19 @@ pub fn assert_one_error(out: &Output, d: &Path, before: &[String], needles: &[&s
     err
 }
 
+/// Runs `bodyseg ARGS` in `dir` and asserts success (showing stderr otherwise); the run.
+pub fn succeeds_in(dir: &Path, args: &[&str]) -> Output {
+    let out = bodyseg(dir, args);
+    assert_ok(&out, &format!("bodyseg {args:?}"));
+    out
+}
+
+/// Asserts that `bodyseg ARGS` (a `--help`) succeeds and its stdout mentions every word.
+pub fn assert_help(args: &[&str], must_mention: &[&str]) {
+    let dir = tempdir();
+    assert_contains_all(&stdout(&succeeds_in(dir.path(), args)), must_mention);
+}
+
 /// Runs `bodyseg ARGS` in `dir` and asserts [`assert_one_error`] against the folder's
 /// files just before the run; returns stderr.
 pub fn fails_in(dir: &Path, args: &[&str], needles: &[&str]) -> String {
