@@ -3,9 +3,7 @@
 //! pypcd4), labels and file mode on a synthetic recording, and bad input (one `error:`
 //! line naming the file, exit 1, no output file).
 
-use crate::common::{
-    assert_ok, assert_one_error, bodyseg, bodyseg_line, files_in, stderr, tempdir,
-};
+use crate::common::{assert_ok, bodyseg, bodyseg_line, fails_in, stderr, tempdir};
 use bodyseg_io::read_boxes;
 use bodyseg_people::match_boxes;
 use std::path::{Path, PathBuf};
@@ -95,14 +93,7 @@ fn labels_and_file_modes_on_a_recording() {
         "{found:?}"
     );
     std::fs::remove_file(d.join("rec/cam0/color/000000.png")).expect("colour image");
-    assert_fails(d, &args("geometry", "none.json"), &["cam0", "000000.png"]);
-}
-
-/// Asserts exit status 1, one `error:` line holding every needle, no new file.
-fn assert_fails(d: &Path, args: &[&str], needles: &[&str]) {
-    let before = files_in(d);
-    let out = bodyseg(d, args);
-    assert_one_error(&out, d, &before, needles);
+    fails_in(d, &args("geometry", "none.json"), &["cam0", "000000.png"]);
 }
 
 const HEADER: &str = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
@@ -126,7 +117,7 @@ fn bad_pcd_files_are_clear_errors() {
     let compressed = std::fs::read(fixture("xyzrgb_binary_compressed.pcd")).expect("fixture");
     write("cut.pcd", &compressed[..compressed.len() - 40]);
     let run = |cloud: &str, needles: &[&str]| {
-        assert_fails(
+        fails_in(
             d,
             &[
                 "boxes", "--cloud", cloud, "--mode", "geometry", "--out", "b.json",
@@ -151,7 +142,7 @@ fn bad_pcd_files_are_clear_errors() {
     write("cloud.xyz", b"0 0 0\n");
     run("cloud.xyz", &["cloud.xyz: unknown cloud format"]);
     // File mode belongs to a recording frame.
-    assert_fails(
+    fails_in(
         d,
         &[
             "boxes", "--cloud", "kind.pcd", "--mode", "file", "--out", "b.json",
@@ -160,7 +151,7 @@ fn bad_pcd_files_are_clear_errors() {
     );
     // A configuration value out of range names the field.
     write("bad.toml", b"[boxes]\nperson_gap_m = 0.01\n");
-    assert_fails(
+    fails_in(
         d,
         &[
             "boxes", "--cloud", "kind.pcd", "--config", "bad.toml", "--out", "b.json",

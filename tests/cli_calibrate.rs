@@ -39,7 +39,7 @@ fn without_the_feature_calibrate_says_how_to_build_it() {
 #[cfg(feature = "opencv")]
 mod with_opencv {
     use super::*;
-    use crate::common::assert_ok;
+    use crate::common::succeeds_in;
     use bodyseg_calib::{Intrinsics, Pose, read_rig_toml};
     use bodyseg_io::write_gray8_png;
 
@@ -73,9 +73,7 @@ mod with_opencv {
     }
 
     fn run_ok(dir: &Path, args: &[&str]) -> String {
-        let out = bodyseg(dir, args);
-        assert_ok(&out, &format!("{args:?}"));
-        stderr(&out)
+        stderr(&succeeds_in(dir, args))
     }
 
     /// The whole way from synthetic board views of the default rig (3 cameras, 15 noisy

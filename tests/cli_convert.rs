@@ -3,7 +3,8 @@
 //! merged shard reports equal the whole conversion's report.
 
 use crate::common::{
-    FRAMES, assert_ok, bodyseg, bodyseg_line, copy_tree, recording, stderr, tempdir, tree,
+    FRAMES, assert_ok, bodyseg, bodyseg_line, convert_data, copy_tree, recording, stderr, tempdir,
+    tree,
 };
 use bodyseg_eval::Report;
 use std::path::Path;
@@ -28,21 +29,6 @@ fn slurm_script(dir: &Path, script: &str, args: &[&str], env: &[(&str, String)])
         .output()
         .expect("run bash");
     assert_ok(&out, &format!("{script} {args:?}"));
-}
-
-/// `bodyseg convert --input data --format recording --out OUT EXTRA...` in `dir`.
-fn convert_data(dir: &Path, out: &str, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "convert",
-        "--input",
-        "data",
-        "--format",
-        "recording",
-        "--out",
-        out,
-    ];
-    args.extend_from_slice(extra);
-    bodyseg(dir, &args)
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! `bodyseg eval`: several named predictions, markdown output, report files, merging.
 
-use crate::common::{assert_ok, bodyseg_line, refine_scene, stdout, tempdir, write_scene};
+use crate::common::{
+    assert_ok, bodyseg_line, refine_scene, stdout, succeeds_in, tempdir, words, write_scene,
+};
 use bodyseg_eval::Report;
 
 #[test]
@@ -33,8 +35,10 @@ fn named_predictions_markdown_json_and_merge() {
     let report = Report::from_json(&text).expect("a valid report");
     assert_eq!(report.names(), ["Reference", "M-R-N"]);
 
-    let out = bodyseg_line(d, "eval --merge report.json report.json --format json");
-    assert_ok(&out, "bodyseg eval --merge");
+    let out = succeeds_in(
+        d,
+        &words("eval --merge report.json report.json --format json"),
+    );
     let merged = Report::from_json(&stdout(&out)).expect("merged report");
     for (one, two) in report.configurations().iter().zip(merged.configurations()) {
         assert_eq!(two.evaluated(), 2 * one.evaluated());
@@ -47,7 +51,6 @@ fn named_predictions_markdown_json_and_merge() {
     }
 
     // --name names a single prediction.
-    let out = bodyseg_line(d, "eval --pred refined.ply --name mine --gt gt.ply");
-    assert_ok(&out, "bodyseg eval --name");
+    let out = succeeds_in(d, &words("eval --pred refined.ply --name mine --gt gt.ply"));
     assert!(stdout(&out).contains("| mine |"));
 }

@@ -1,19 +1,6 @@
 //! `--help` of every command exits 0 and names the key flags.
 
-use crate::common::{assert_ok, bodyseg, stdout, tempdir, words};
-
-fn help(args: &[&str], must_mention: &[&str]) {
-    let dir = tempdir();
-    let out = bodyseg(dir.path(), args);
-    assert_ok(&out, &format!("bodyseg {args:?}"));
-    let text = stdout(&out);
-    for word in must_mention {
-        assert!(
-            text.contains(word),
-            "{args:?} does not mention {word}:\n{text}"
-        );
-    }
-}
+use crate::common::{assert_help as help, words};
 
 #[test]
 fn main_help() {

@@ -13,11 +13,13 @@
 //! again, and (`#[ignore]`, slow) `bodyseg run` on the imported recording gives the same
 //! report and labels as on the original.
 
-use crate::common::{assert_ok, bodyseg, copy_tree, stderr, tempdir, tree, words};
+use crate::common::{
+    assert_contains_all, assert_ok, bodyseg, bodyseg_line, copy_tree, stderr, tempdir, tree, words,
+};
 use bodyseg_calib::{Pose, Rig};
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Output};
 
 /// Largest difference of a transform entry (rotation, metres) after the round trip:
 /// rotation matrix → quaternion → matrix and a composition of three transforms, all in
@@ -84,27 +86,32 @@ fn assert_same_images(got: &Path, want: &Path, frames: usize) {
     }
 }
 
-fn import(dir: &Path, bag: &Path, out: &str, extra: &[&str]) -> std::process::Output {
+fn import(dir: &Path, bag: &Path, out: &str, extra: &[&str]) -> Output {
     let mut args = vec!["import", "ros2", bag.to_str().expect("utf-8"), "--out", out];
     args.extend_from_slice(extra);
     bodyseg(dir, &args)
 }
 
+/// Imports the fixture bag into `dir/rec` (the `what`-th time), asserting success and a
+/// log (stderr) holding every needle.
+fn import_fixture(dir: &Path, what: &str, needles: &[&str]) {
+    let out = import(dir, &fixture_bag(), "rec", &[]);
+    assert_ok(&out, what);
+    assert_contains_all(&stderr(&out), needles);
+}
+
 #[test]
 fn the_fixture_imports_into_the_recording_it_was_written_from() {
     let dir = tempdir();
-    let out = import(dir.path(), &fixture_bag(), "rec", &[]);
-    assert_ok(&out, "bodyseg import ros2");
-    let log = stderr(&out);
-    assert!(
-        log.contains("camera cam0: depth /cam0/sd/image_depth (16UC1, 64x53"),
-        "{log}"
+    import_fixture(
+        dir.path(),
+        "first import",
+        &[
+            "camera cam0: depth /cam0/sd/image_depth (16UC1, 64x53",
+            "colour /cam0/qhd/image_color (bgr8, 120x67",
+            "2 written",
+        ],
     );
-    assert!(
-        log.contains("colour /cam0/qhd/image_color (bgr8, 120x67"),
-        "{log}"
-    );
-    assert!(log.contains("2 written"), "{log}");
     let rec = dir.path().join("rec");
     let source = fixtures().join("kinect3_x8");
     assert_same_rig(&read_rig(&rec), &read_rig(&source));
@@ -128,25 +135,14 @@ fn the_fixture_imports_into_the_recording_it_was_written_from() {
             (f, bytes)
         })
         .collect();
-    let again = import(dir.path(), &fixture_bag(), "rec", &[]);
-    assert_ok(&again, "second import");
-    let log = stderr(&again);
-    assert!(
-        log.contains("0 written") && log.contains("2 skipped as complete"),
-        "{log}"
-    );
+    let skipped = ["0 written", "2 skipped as complete"];
+    import_fixture(dir.path(), "second import", &skipped);
     for (f, bytes) in &before {
         assert_eq!(&std::fs::read(rec.join(f)).expect("read"), bytes, "{f}");
     }
     // A deleted image makes its frame incomplete: only that frame is written again.
     std::fs::remove_file(rec.join("cam1/color/000001.png")).expect("remove");
-    let third = import(dir.path(), &fixture_bag(), "rec", &[]);
-    assert_ok(&third, "third import");
-    let log = stderr(&third);
-    assert!(
-        log.contains("1 written") && log.contains("1 skipped"),
-        "{log}"
-    );
+    import_fixture(dir.path(), "third import", &["1 written", "1 skipped"]);
     assert_same_images(&rec, &source, 2);
 
     // The cameras chosen by prefix, in another order: the rig follows it.
@@ -327,35 +323,37 @@ fn write_bag(rec: &Path, bag: &Path, args: &[&str]) {
     assert_ok(&out, &format!("write_ros2_bag.py {args:?}"));
 }
 
-/// A synthetic recording of `frames` frames (3 Kinect v2 cameras, colour 960x540).
-fn synth(dir: &Path, frames: usize) -> PathBuf {
-    let out = bodyseg(
-        dir,
-        &[
-            "synth",
-            "--preset",
-            "handover",
-            "--frames",
-            &frames.to_string(),
-            "--seed",
-            "11",
-            "--no-preview",
-            "--out",
-            "src",
-        ],
-    );
-    assert_ok(&out, "bodyseg synth");
-    dir.join("src")
+/// A temporary folder with a synthetic recording of `frames` frames in `src` (3 Kinect v2
+/// cameras, colour 960x540), and the recording's path; `None` (the test is skipped) when
+/// no bag can be written ([`python_writer`]).
+fn synth_for_writer(frames: usize) -> Option<(tempfile::TempDir, PathBuf)> {
+    if !python_writer() {
+        return None;
+    }
+    let dir = tempdir();
+    let line =
+        format!("synth --preset handover --frames {frames} --seed 11 --no-preview --out src");
+    assert_ok(&bodyseg_line(dir.path(), &line), "bodyseg synth");
+    let src = dir.path().join("src");
+    Some((dir, src))
+}
+
+/// A bag of `src` written with `args` to `NAME.mcap` in `d`, imported into `d/NAME` (which
+/// it returns, with the import's run) and asserted to succeed.
+fn write_and_import(d: &Path, src: &Path, name: &str, args: &[&str]) -> (PathBuf, Output) {
+    let bag = d.join(format!("{name}.mcap"));
+    write_bag(src, &bag, args);
+    let out = import(d, &bag, name, &[]);
+    assert_ok(&out, name);
+    (d.join(name), out)
 }
 
 #[test]
 fn bags_of_every_encoding_written_by_the_ros2_writer_import_again() {
-    if !python_writer() {
+    let Some((dir, src)) = synth_for_writer(2) else {
         return;
-    }
-    let dir = tempdir();
+    };
     let d = dir.path();
-    let src = synth(d, 2);
     let source_rig = read_rig(&src);
     // Lossless variants: the same images and rig.
     for (name, args) in [
@@ -373,21 +371,14 @@ fn bags_of_every_encoding_written_by_the_ros2_writer_import_again() {
             vec!["--compressed", "--colour-format", "png"],
         ),
     ] {
-        let bag = d.join(format!("{name}.mcap"));
-        write_bag(&src, &bag, &args);
-        let out = import(d, &bag, name, &[]);
-        assert_ok(&out, name);
-        let rec = d.join(name);
+        let (rec, _) = write_and_import(d, &src, name, &args);
         assert_same_rig(&read_rig(&rec), &source_rig);
         assert_same_images(&rec, &src, 2);
     }
 
     // JPEG colour is passed through as it is; compressedDepth of metres is quantised.
-    let bag = d.join("jpeg.mcap");
-    write_bag(&src, &bag, &["--compressed", "--depth-encoding", "32FC1"]);
-    let out = import(d, &bag, "jpeg", &[]);
-    assert_ok(&out, "jpeg");
-    let rec = d.join("jpeg");
+    let args = ["--compressed", "--depth-encoding", "32FC1"];
+    let (rec, _) = write_and_import(d, &src, "jpeg", &args);
     let jpg = rec.join("cam0/color/000000.jpg");
     let got = bodyseg_io::read_rgb_image(&jpg).expect("jpeg");
     let want = bodyseg_io::read_rgb_image(&src.join("cam0/color/000000.png")).expect("png");
@@ -423,11 +414,8 @@ fn bags_of_every_encoding_written_by_the_ros2_writer_import_again() {
     );
 
     // Rectified topics: intrinsics from p, no distortion.
-    let bag = d.join("rect.mcap");
-    write_bag(&src, &bag, &["--rect"]);
-    let out = import(d, &bag, "rect", &[]);
-    assert_ok(&out, "rect");
-    let rig = read_rig(&d.join("rect"));
+    let (rect, out) = write_and_import(d, &src, "rect", &["--rect"]);
+    let rig = read_rig(&rect);
     for (g, w) in rig.cameras.iter().zip(&source_rig.cameras) {
         assert_eq!(g.depth.distortion, bodyseg_calib::Distortion::NONE);
         assert_eq!((g.color.fx, g.color.cy), (w.color.fx, w.color.cy));
@@ -447,17 +435,11 @@ fn bags_of_every_encoding_written_by_the_ros2_writer_import_again() {
 #[test]
 #[ignore = "slow: synth, bag and two runs of 8 full-size frames (~1 min in release)"]
 fn run_on_an_imported_bag_gives_the_same_report_and_labels() {
-    if !python_writer() {
+    let Some((dir, src)) = synth_for_writer(8) else {
         return;
-    }
-    let dir = tempdir();
+    };
     let d = dir.path();
-    let src = synth(d, 8);
-    let bag = d.join("session.mcap");
-    write_bag(&src, &bag, &[]);
-    let out = import(d, &bag, "imported", &[]);
-    assert_ok(&out, "import");
-    let imported = d.join("imported");
+    let (imported, _) = write_and_import(d, &src, "imported", &[]);
     assert_same_images(&imported, &src, 8);
     for cam in ["cam0", "cam1", "cam2"] {
         for layer in ["parsing", "depth_labels", "depth_person"] {

@@ -5,7 +5,7 @@
 //! and bad input: a depth image of the wrong size, an 8-bit depth PNG, a missing camera
 //! folder.
 
-use crate::common::{assert_ok, assert_one_error, bodyseg, files_in, stderr, tempdir};
+use crate::common::{assert_ok, bodyseg, fails_in, stderr, tempdir};
 use bodyseg_calib::{Pose, RgbdCamera, Rig, write_rig_toml};
 use bodyseg_core::{Class, Label, LabelImage, LabeledCloud};
 use bodyseg_io::{DepthImage, read_ply, write_depth_png, write_label_png};
@@ -268,20 +268,16 @@ fn naive_and_dsa_label_every_depth_point_and_dsa_drops_the_occluded_ones() {
 /// Runs `bodyseg project` on `rec/` expecting exit 1, one `error:` line holding every
 /// needle, and no file written.
 fn assert_project_fails(d: &Path, needles: &[&str]) {
-    let before = files_in(d);
-    let out = bodyseg(
-        d,
-        &[
-            "project",
-            "--recording",
-            "rec",
-            "--frame",
-            FRAME,
-            "--out",
-            "cloud.ply",
-        ],
-    );
-    assert_one_error(&out, d, &before, needles);
+    let args = [
+        "project",
+        "--recording",
+        "rec",
+        "--frame",
+        FRAME,
+        "--out",
+        "cloud.ply",
+    ];
+    fails_in(d, &args, needles);
 }
 
 #[test]

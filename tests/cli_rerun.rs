@@ -7,8 +7,8 @@
 //! `BODYSEG_RERUN_PYTHON` names the Python that has it (default `python3`).
 
 #[cfg(feature = "rerun")]
-use crate::common::{FRAMES, assert_ok, stdout};
-use crate::common::{bodyseg, recording, run_recording, stderr, tempdir};
+use crate::common::{FRAMES, assert_ok, bodyseg, stdout};
+use crate::common::{convert_data, recording, run_recording, stderr, tempdir};
 #[cfg(feature = "rerun")]
 use std::path::Path;
 #[cfg(feature = "rerun")]
@@ -128,20 +128,7 @@ fn rerun_on_several_recordings_is_refused() {
     for name in ["a", "b"] {
         crate::common::copy_tree(rec, &data.join(name));
     }
-    let o = bodyseg(
-        dir.path(),
-        &[
-            "convert",
-            "--input",
-            "data",
-            "--format",
-            "recording",
-            "--out",
-            "conv",
-            "--rerun",
-            "conv.rrd",
-        ],
-    );
+    let o = convert_data(dir.path(), "conv", &["--rerun", "conv.rrd"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("one recording"), "{}", stderr(&o));
     assert!(!dir.path().join("conv.rrd").exists());

@@ -5,7 +5,8 @@
 //! test file (byte order mark, deprecated model).
 
 use crate::common::{
-    assert_ok, assert_one_error, bodyseg, bodyseg_line, files_in, stderr, stdout, tempdir, words,
+    assert_contains_all, assert_help, assert_ok, assert_one_error, bodyseg, bodyseg_line, fails_in,
+    fails_line_in, files_in, stderr, stdout, succeeds_in, tempdir, words,
 };
 use bodyseg_pipeline::read_rig;
 use std::path::{Path, PathBuf};
@@ -16,16 +17,20 @@ fn kinect2_folder() -> PathBuf {
     bodyseg_calib::testing::kinect_v2_test_dir()
 }
 
-/// Copies the real folder's files into `dir/name`.
-fn copy_folder(dir: &Path, name: &str) -> PathBuf {
-    let to = dir.join(name);
-    std::fs::create_dir(&to).expect("create camera folder");
-    for entry in std::fs::read_dir(kinect2_folder()).expect("read ../shared/data/iai_kinect2") {
-        let from = entry.expect("dir entry").path();
-        let file = from.file_name().expect("a file name");
-        std::fs::copy(&from, to.join(file)).expect("copy calibration file");
+/// A temporary folder with a copy of the real folder's files in a folder of each name.
+fn kinect_folders(names: &[&str]) -> tempfile::TempDir {
+    let dir = tempdir();
+    for name in names {
+        let to = dir.path().join(name);
+        std::fs::create_dir(&to).expect("create camera folder");
+        let real = std::fs::read_dir(kinect2_folder()).expect("read ../shared/data/iai_kinect2");
+        for entry in real {
+            let from = entry.expect("dir entry").path();
+            let file = from.file_name().expect("a file name");
+            std::fs::copy(&from, to.join(file)).expect("copy calibration file");
+        }
     }
-    to
+    dir
 }
 
 /// Asserts a successful `rig import` whose stderr has its `import ...` timing line
@@ -43,10 +48,8 @@ fn assert_imported(out: &Output, summary: &str) -> String {
 
 #[test]
 fn import_two_cameras_then_show() {
-    let dir = tempdir();
+    let dir = kinect_folders(&["kinect_a", "kinect_b"]);
     let d = dir.path();
-    copy_folder(d, "kinect_a");
-    copy_folder(d, "kinect_b");
     let out = bodyseg_line(
         d,
         "rig import --from iai_kinect2 kinect_a kinect_b --out rig.toml",
@@ -74,25 +77,23 @@ fn import_two_cameras_then_show() {
         assert_eq!(c.world_from_depth.translation_m(), [0.0; 3]);
     }
 
-    let out = bodyseg(d, &["rig", "show", "rig.toml"]);
-    assert_ok(&out, "bodyseg rig show");
-    let text = stdout(&out);
-    for needle in [
-        "2 cameras",
-        "kinect_a",
-        "kinect_b",
-        "fx 1059.95",
-        "baseline 52.1 mm",
-    ] {
-        assert!(text.contains(needle), "{needle:?} not in:\n{text}");
-    }
+    let text = stdout(&succeeds_in(d, &["rig", "show", "rig.toml"]));
+    assert_contains_all(
+        &text,
+        &[
+            "2 cameras",
+            "kinect_a",
+            "kinect_b",
+            "fx 1059.95",
+            "baseline 52.1 mm",
+        ],
+    );
 }
 
 #[test]
 fn names_and_no_note_with_world_from_depth_identity() {
-    let dir = tempdir();
+    let dir = kinect_folders(&["k"]);
     let d = dir.path();
-    copy_folder(d, "k");
     let out = bodyseg_line(
         d,
         "rig import --from iai_kinect2 k --name front --world-from-depth-identity --out rig.toml",
@@ -106,31 +107,21 @@ fn names_and_no_note_with_world_from_depth_identity() {
 
 #[test]
 fn folder_without_calib_pose_names_the_file() {
-    let dir = tempdir();
+    let dir = kinect_folders(&["good", "bad"]);
     let d = dir.path();
-    copy_folder(d, "good");
-    let bad = copy_folder(d, "bad");
-    std::fs::remove_file(bad.join("calib_pose.yaml")).expect("remove calib_pose.yaml");
-    let before = files_in(d);
-    let out = bodyseg_line(d, "rig import --from iai_kinect2 good bad --out rig.toml");
-    assert_one_error(&out, d, &before, &["calib_pose.yaml"]);
+    std::fs::remove_file(d.join("bad/calib_pose.yaml")).expect("remove calib_pose.yaml");
+    let line = "rig import --from iai_kinect2 good bad --out rig.toml";
+    let err = fails_line_in(d, line, &["calib_pose.yaml"]);
     // The cause once, not also chained as a source.
-    let err = stderr(&out);
     assert_eq!(err.matches("No such file").count(), 1, "{err}");
 }
 
 #[test]
 fn repeated_camera_names_are_named() {
-    let dir = tempdir();
+    let dir = kinect_folders(&["a", "b"]);
     let d = dir.path();
-    copy_folder(d, "a");
-    copy_folder(d, "b");
-    let before = files_in(d);
-    let out = bodyseg_line(
-        d,
-        "rig import --from iai_kinect2 a b --name cam0 --name cam0 --out rig.toml",
-    );
-    assert_one_error(&out, d, &before, &["\"cam0\"", "used twice"]);
+    let line = "rig import --from iai_kinect2 a b --name cam0 --name cam0 --out rig.toml";
+    fails_line_in(d, line, &["\"cam0\"", "used twice"]);
 }
 
 #[test]
@@ -143,32 +134,29 @@ fn show_of_a_missing_rig_names_the_file() {
 
 #[test]
 fn import_help_names_the_flags_and_the_world_pose_gap() {
-    let dir = tempdir();
-    let out = bodyseg(dir.path(), &["rig", "import", "--help"]);
-    assert_ok(&out, "bodyseg rig import --help");
-    let text = stdout(&out);
-    for needle in [
-        "--from",
-        "iai_kinect2",
-        "azure_kinect",
-        "--from ros",
-        "--from opencv",
-        "DEPTH.yaml,COLOR.yaml",
-        "--poses",
-        "camera_poses.yaml",
-        "--depth-mode",
-        "--color-resolution",
-        "depth shift 0",
-        "plumb_bob",
-        "--name",
-        "--world-from-depth-identity",
-        "--out",
-        "identity",
-        "bodyseg calibrate world",
-        "Examples:",
-    ] {
-        assert!(text.contains(needle), "{needle:?} not in:\n{text}");
-    }
+    assert_help(
+        &["rig", "import", "--help"],
+        &[
+            "--from",
+            "iai_kinect2",
+            "azure_kinect",
+            "--from ros",
+            "--from opencv",
+            "DEPTH.yaml,COLOR.yaml",
+            "--poses",
+            "camera_poses.yaml",
+            "--depth-mode",
+            "--color-resolution",
+            "depth shift 0",
+            "plumb_bob",
+            "--name",
+            "--world-from-depth-identity",
+            "--out",
+            "identity",
+            "bodyseg calibrate world",
+            "Examples:",
+        ],
+    );
 }
 
 /// A file or folder of `tests/fixtures/calib` (sources in its SOURCES.md).
@@ -248,14 +236,15 @@ fn every_format_in_one_rig_placed_by_openptrack() {
     );
     let err = assert_imported(&out, "5 cameras → rig.toml");
     // The defaults taken, one note each, naming the camera.
-    for needle in [
-        "note: camera kinectBB: no calib_depth.yaml: depth shift 0 mm",
-        "note: camera kinectDD: ros files hold no pose between the sensors",
-        "note: camera kinectEE: opencv files hold no pose between the sensors",
-        "sensors not imported (no camera of that name): kinectFF",
-    ] {
-        assert!(err.contains(needle), "{needle:?} not in:\n{err}");
-    }
+    assert_contains_all(
+        &err,
+        &[
+            "note: camera kinectBB: no calib_depth.yaml: depth shift 0 mm",
+            "note: camera kinectDD: ros files hold no pose between the sensors",
+            "note: camera kinectEE: opencv files hold no pose between the sensors",
+            "sensors not imported (no camera of that name): kinectFF",
+        ],
+    );
     assert!(!err.contains("world_from_depth is the identity"), "{err}");
 
     let rig = read_rig(&d.join("rig.toml")).expect("rig.toml reads back");
@@ -297,9 +286,7 @@ fn every_format_in_one_rig_placed_by_openptrack() {
             assert!((g - w).abs() < 1e-12, "{}: {got:?} vs {want:?}", cam.name);
         }
     }
-    let out = bodyseg(d, &["rig", "show", "rig.toml"]);
-    assert_ok(&out, "bodyseg rig show");
-    let shown = stdout(&out);
+    let shown = stdout(&succeeds_in(d, &["rig", "show", "rig.toml"]));
     assert!(
         shown.contains("rational distortion (8)") && shown.contains("Brown-Conrady distortion (5)"),
         "{shown}"
@@ -311,25 +298,20 @@ fn camera_unknown_to_openptrack_is_named_with_the_file() {
     let dir = tempdir();
     let d = dir.path();
     let poses = calib_fixture("openptrack/open_ptrack_v2/camera_poses.yaml");
-    let before = files_in(d);
-    let out = bodyseg(
+    let folder = calib_fixture("iai_kinect2/019469645147");
+    fails_in(
         d,
         &[
             "rig",
             "import",
             "--from",
             "iai_kinect2",
-            arg(&calib_fixture("iai_kinect2/019469645147")),
+            arg(&folder),
             "--poses",
             arg(&poses),
             "--out",
             "rig.toml",
         ],
-    );
-    assert_one_error(
-        &out,
-        d,
-        &before,
         &[
             "camera 019469645147: no sensor \"019469645147\"",
             "camera_poses.yaml",
@@ -343,26 +325,21 @@ fn camera_unknown_to_openptrack_is_named_with_the_file() {
 fn azure_sdk_test_file_is_refused_for_its_model_not_its_byte_order_mark() {
     let dir = tempdir();
     let d = dir.path();
-    let before = files_in(d);
-    let out = bodyseg(
+    let file = calib_fixture("azure_kinect/sdk_TestCalibration.json");
+    let err = fails_in(
         d,
         &[
             "rig",
             "import",
             "--from",
             "azure_kinect",
-            arg(&calib_fixture("azure_kinect/sdk_TestCalibration.json")),
+            arg(&file),
             "--out",
             "rig.toml",
         ],
-    );
-    assert_one_error(
-        &out,
-        d,
-        &before,
         &words("Intrinsics.ModelType Rational6KT sdk_TestCalibration.json"),
     );
-    assert!(!stderr(&out).contains("expected value"), "{}", stderr(&out));
+    assert!(!err.contains("expected value"), "{err}");
 }
 
 #[test]
@@ -379,12 +356,13 @@ fn ros_file_without_distortion_model_is_plumb_bob() {
     );
     assert_ok(&out, "bodyseg rig import --from ros");
     let err = stderr(&out);
-    for needle in [
-        "note: camera old: distortion_model: missing, read as plumb_bob",
-        "note: camera old: one ros file: depth registered to that sensor",
-    ] {
-        assert!(err.contains(needle), "{needle:?} not in:\n{err}");
-    }
+    assert_contains_all(
+        &err,
+        &[
+            "note: camera old: distortion_model: missing, read as plumb_bob",
+            "note: camera old: one ros file: depth registered to that sensor",
+        ],
+    );
     let rig = read_rig(&d.join("rig.toml")).expect("reads back");
     // test_calibration.yaml: camera_matrix data[0], distortion data[0].
     assert_eq!(rig.cameras[0].depth.fx, 1168.68);

@@ -44,6 +44,39 @@ pub fn assert_one_error(out: &Output, d: &Path, before: &[String], needles: &[&s
     err
 }
 
+/// Runs `bodyseg ARGS` in `dir` and asserts success (showing stderr otherwise); the run.
+pub fn succeeds_in(dir: &Path, args: &[&str]) -> Output {
+    let out = bodyseg(dir, args);
+    assert_ok(&out, &format!("bodyseg {args:?}"));
+    out
+}
+
+/// Asserts that `bodyseg ARGS` (a `--help`) succeeds and its stdout mentions every word.
+pub fn assert_help(args: &[&str], must_mention: &[&str]) {
+    let dir = tempdir();
+    assert_contains_all(&stdout(&succeeds_in(dir.path(), args)), must_mention);
+}
+
+/// Runs `bodyseg ARGS` in `dir` and asserts [`assert_one_error`] against the folder's
+/// files just before the run; returns stderr.
+pub fn fails_in(dir: &Path, args: &[&str], needles: &[&str]) -> String {
+    let before = files_in(dir);
+    let out = bodyseg(dir, args);
+    assert_one_error(&out, dir, &before, needles)
+}
+
+/// [`fails_in`] with the words of `line` (see [`words`]).
+pub fn fails_line_in(dir: &Path, line: &str, needles: &[&str]) -> String {
+    fails_in(dir, &words(line), needles)
+}
+
+/// Asserts that `text` holds every needle, showing it otherwise.
+pub fn assert_contains_all(text: &str, needles: &[&str]) {
+    for needle in needles {
+        assert!(text.contains(needle), "{needle:?} not in:\n{text}");
+    }
+}
+
 /// stderr as text.
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
@@ -125,12 +158,9 @@ impl SceneDir {
         self
     }
 
-    /// Runs `bodyseg ARGS` in the folder and asserts [`assert_one_error`] against the
-    /// folder's files just before the run; returns stderr.
+    /// [`fails_in`] the folder.
     pub fn fails(&self, args: &[&str], needles: &[&str]) -> String {
-        let before = files_in(self.path());
-        let out = bodyseg(self.path(), args);
-        assert_one_error(&out, self.path(), &before, needles)
+        fails_in(self.path(), args, needles)
     }
 
     /// [`SceneDir::fails`] with the words of `line` (see [`words`]).
@@ -215,6 +245,22 @@ pub fn run_recording(dir: &Path, extra: &[&str]) -> Output {
         recording().to_str().expect("utf-8"),
         "--out",
         "out",
+    ];
+    args.extend_from_slice(extra);
+    bodyseg(dir, &args)
+}
+
+/// `bodyseg convert --input data --format recording --out OUT EXTRA...` in `dir` (the
+/// recordings in `dir/data`).
+pub fn convert_data(dir: &Path, out: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "convert",
+        "--input",
+        "data",
+        "--format",
+        "recording",
+        "--out",
+        out,
     ];
     args.extend_from_slice(extra);
     bodyseg(dir, &args)

@@ -1563,6 +1563,28 @@ mod tests {
     use super::*;
     use clap::CommandFactory;
 
+    /// `bodyseg BASE EXTRA` as clap parses it (a test's fixed words, then the case's).
+    fn try_parse(base: &[&str], extra: &[&str]) -> Result<Cli, clap::Error> {
+        Cli::try_parse_from(["bodyseg"].iter().chain(base).chain(extra))
+    }
+
+    /// The command `bodyseg BASE EXTRA` parses into; panics when clap refuses the line.
+    fn parsed(base: &[&str], extra: &[&str]) -> Command {
+        try_parse(base, extra).expect("valid command line").command
+    }
+
+    /// The configuration `bodyseg refine --cloud c.ply --boxes b.json --out o.ply EXTRA`
+    /// resolves to.
+    fn refine_config(extra: &[&str]) -> Result<PipelineConfig> {
+        let files = [
+            "refine", "--cloud", "c.ply", "--boxes", "b.json", "--out", "o.ply",
+        ];
+        let Command::Refine(r) = parsed(&files, extra) else {
+            panic!("parsed as refine");
+        };
+        r.config()
+    }
+
     #[test]
     fn clap_definition_is_consistent() {
         Cli::command().debug_assert();
@@ -1571,19 +1593,18 @@ mod tests {
     #[test]
     fn project_mode_flag_overrides_the_config() {
         let parse = |extra: &[&str]| {
-            let mut all = vec![
-                "bodyseg",
-                "project",
-                "--recording",
-                "rec",
-                "--frame",
-                "000012",
-                "--out",
-                "o.ply",
-            ];
-            all.extend_from_slice(extra);
-            let cli = Cli::try_parse_from(all).expect("valid command line");
-            let Command::Project(p) = cli.command else {
+            let Command::Project(p) = parsed(
+                &[
+                    "project",
+                    "--recording",
+                    "rec",
+                    "--frame",
+                    "000012",
+                    "--out",
+                    "o.ply",
+                ],
+                extra,
+            ) else {
                 panic!("parsed as project");
             };
             p.options().expect("valid options")
@@ -1594,29 +1615,27 @@ mod tests {
         assert!(o.ascii);
         assert_eq!(o.frame, "000012");
         assert!(
-            Cli::try_parse_from([
-                "bodyseg",
-                "project",
-                "--recording",
-                "r",
-                "--frame",
-                "f",
-                "--mode",
-                "x",
-                "--out",
-                "o"
-            ])
+            try_parse(
+                &[
+                    "project",
+                    "--recording",
+                    "r",
+                    "--frame",
+                    "f",
+                    "--mode",
+                    "x",
+                    "--out",
+                    "o"
+                ],
+                &[]
+            )
             .is_err()
         );
     }
 
     #[test]
     fn boxes_takes_a_cloud_or_a_recording_frame() {
-        let parse = |args: &[&str]| {
-            let mut all = vec!["bodyseg", "boxes", "--out", "b.json"];
-            all.extend_from_slice(args);
-            Cli::try_parse_from(all)
-        };
+        let parse = |args: &[&str]| try_parse(&["boxes", "--out", "b.json"], args);
         let Ok(Cli {
             command: Command::Boxes(b),
             ..
@@ -1647,27 +1666,8 @@ mod tests {
 
     #[test]
     fn flags_override_the_defaults() {
-        let cli = Cli::try_parse_from([
-            "bodyseg",
-            "refine",
-            "--cloud",
-            "a.ply",
-            "--boxes",
-            "b.json",
-            "--out",
-            "c.ply",
-            "--steps",
-            "m,n",
-            "--eps-m",
-            "0.03",
-            "--min-points",
-            "5",
-        ])
-        .expect("valid command line");
-        let Command::Refine(r) = cli.command else {
-            panic!("parsed as refine");
-        };
-        let c = r.config().expect("valid config");
+        let flags = ["--steps", "m,n", "--eps-m", "0.03", "--min-points", "5"];
+        let c = refine_config(&flags).expect("valid config");
         assert_eq!(c.refine.eps_m, 0.03);
         assert_eq!(c.refine.min_points, 5);
         assert_eq!(c.refine.steps.to_string(), "M-N");
@@ -1682,27 +1682,16 @@ mod tests {
         std::fs::write(&a, "[refine]\neps_m = 0.02\nmin_points = 7\n").expect("write");
         std::fs::write(&b, "[refine]\neps_m = 0.04\n").expect("write");
         let (a, b) = (a.display().to_string(), b.display().to_string());
-        let refine = |extra: &[&str]| {
-            let mut all = vec![
-                "bodyseg", "refine", "--cloud", "c.ply", "--boxes", "b.json", "--out", "o.ply",
-            ];
-            all.extend_from_slice(extra);
-            let cli = Cli::try_parse_from(all).expect("valid command line");
-            let Command::Refine(r) = cli.command else {
-                panic!("parsed as refine");
-            };
-            r.config()
-        };
-        let c = refine(&["--config", &a, "--config", &b]).expect("valid");
+        let c = refine_config(&["--config", &a, "--config", &b]).expect("valid");
         assert_eq!(
             (c.refine.eps_m, c.refine.min_points),
             (0.04, 7),
             "later file wins"
         );
-        let c =
-            refine(&["--config", &a, "--config", &b, "--set", "refine.eps_m=0.06"]).expect("valid");
+        let c = refine_config(&["--config", &a, "--config", &b, "--set", "refine.eps_m=0.06"])
+            .expect("valid");
         assert_eq!(c.refine.eps_m, 0.06, "--set beats the files");
-        let c = refine(&[
+        let c = refine_config(&[
             "--set",
             "refine.eps_m=0.06",
             "--eps-m",
@@ -1718,29 +1707,29 @@ mod tests {
         );
         let e = format!(
             "{:#}",
-            refine(&["--set", "refine.min_pts=5"]).expect_err("unknown")
+            refine_config(&["--set", "refine.min_pts=5"]).expect_err("unknown")
         );
         assert!(e.contains("unknown key `refine.min_pts`"), "{e}");
 
         // Every command that reads the configuration takes them.
-        let run = Cli::try_parse_from([
-            "bodyseg",
-            "run",
-            "--recording",
-            "r",
-            "--out",
-            "o",
-            "--config",
-            &a,
-            "--set",
-            "project.mode=naive",
-            "--mode",
-            "dsa",
-            "--set",
-            "boxes.mode=geometry",
-        ])
-        .expect("valid command line");
-        let Command::Run(r) = run.command else {
+        let Command::Run(r) = parsed(
+            &[
+                "run",
+                "--recording",
+                "r",
+                "--out",
+                "o",
+                "--config",
+                &a,
+                "--set",
+                "project.mode=naive",
+                "--mode",
+                "dsa",
+                "--set",
+                "boxes.mode=geometry",
+            ],
+            &[],
+        ) else {
             panic!("parsed as run");
         };
         let o = r.options().expect("valid");
@@ -1765,45 +1754,40 @@ mod tests {
                 "o",
             ],
         ] {
-            let mut all = vec!["bodyseg"];
-            all.extend_from_slice(command);
-            all.extend_from_slice(&["--config", &a, "--set", "parsing.threads=3"]);
-            assert!(Cli::try_parse_from(all).is_ok(), "{command:?}");
+            let settings = ["--config", &a, "--set", "parsing.threads=3"];
+            assert!(try_parse(command, &settings).is_ok(), "{command:?}");
         }
     }
 
     #[test]
     fn negative_radius_parses_and_is_rejected_naming_the_flag() {
-        let cli = Cli::try_parse_from([
-            "bodyseg", "refine", "--cloud", "a", "--boxes", "b", "--out", "c", "--eps-m", "-1",
-        ])
-        .expect("clap accepts a negative number");
-        let Command::Refine(r) = cli.command else {
-            panic!("parsed as refine");
-        };
-        let e = format!("{:#}", r.config().expect_err("invalid"));
+        // clap takes the negative number as the flag's value.
+        let e = format!(
+            "{:#}",
+            refine_config(&["--eps-m", "-1"]).expect_err("invalid")
+        );
         assert_eq!(e, "--eps-m: refine.eps_m must be in (0, 5] metres, got -1");
     }
 
     #[test]
     fn rig_import_takes_folders_and_names_in_order() {
-        let cli = Cli::try_parse_from([
-            "bodyseg",
-            "rig",
-            "import",
-            "--from",
-            "iai_kinect2",
-            "a",
-            "b",
-            "--name",
-            "left",
-            "--name",
-            "right",
-            "--out",
-            "rig.toml",
-        ])
-        .expect("valid command line");
-        let Command::Rig(RigCommand::Import(r)) = cli.command else {
+        let Command::Rig(RigCommand::Import(r)) = parsed(
+            &[
+                "rig",
+                "import",
+                "--from",
+                "iai_kinect2",
+                "a",
+                "b",
+                "--name",
+                "left",
+                "--name",
+                "right",
+                "--out",
+                "rig.toml",
+            ],
+            &[],
+        ) else {
             panic!("parsed as rig import");
         };
         let o = r.options().expect("valid options");
@@ -1815,30 +1799,21 @@ mod tests {
         assert!(!o.world_from_depth_identity);
         // A folder is required, and so is a known format.
         assert!(
-            Cli::try_parse_from([
-                "bodyseg",
-                "rig",
-                "import",
-                "--from",
-                "iai_kinect2",
-                "--out",
-                "r"
-            ])
+            try_parse(
+                &["rig", "import", "--from", "iai_kinect2", "--out", "r"],
+                &[]
+            )
             .is_err()
         );
-        assert!(
-            Cli::try_parse_from(["bodyseg", "rig", "import", "--from", "x", "a", "--out", "r"])
-                .is_err()
-        );
+        assert!(try_parse(&["rig", "import", "--from", "x", "a", "--out", "r"], &[]).is_err());
     }
 
     #[test]
     fn rig_import_pairs_formats_with_inputs() {
         let parse = |args: &[&str]| {
-            let mut all = vec!["bodyseg", "rig", "import", "--out", "rig.toml"];
-            all.extend_from_slice(args);
-            let cli = Cli::try_parse_from(all).expect("valid command line");
-            let Command::Rig(RigCommand::Import(r)) = cli.command else {
+            let Command::Rig(RigCommand::Import(r)) =
+                parsed(&["rig", "import", "--out", "rig.toml"], args)
+            else {
                 panic!("parsed as rig import");
             };
             r.options()
@@ -1894,18 +1869,20 @@ mod tests {
         let e = parse(&["--from", "ros", "a", "--depth-mode", "WFOV_UNBINNED"])
             .expect_err("Azure option without Azure input");
         assert!(e.to_string().contains("azure_kinect only"), "{e}");
-        let cli = Cli::try_parse_from([
-            "bodyseg",
-            "rig",
-            "import",
-            "--from",
-            "azure_kinect",
-            "a.json",
-            "--depth-mode",
-            "NFOV",
-            "--out",
-            "r",
-        ]);
+        let cli = try_parse(
+            &[
+                "rig",
+                "import",
+                "--from",
+                "azure_kinect",
+                "a.json",
+                "--depth-mode",
+                "NFOV",
+                "--out",
+                "r",
+            ],
+            &[],
+        );
         let err = cli.expect_err("unknown mode").to_string();
         assert!(err.contains("NFOV_UNBINNED"), "{err}");
     }
@@ -1913,10 +1890,7 @@ mod tests {
     #[test]
     fn eval_names_predictions() {
         let parse = |args: &[&str]| {
-            let mut all = vec!["bodyseg", "eval", "--gt", "g.ply"];
-            all.extend_from_slice(args);
-            let cli = Cli::try_parse_from(all).expect("valid command line");
-            let Command::Eval(e) = cli.command else {
+            let Command::Eval(e) = parsed(&["eval", "--gt", "g.ply"], args) else {
                 panic!("parsed as eval");
             };
             e.options()
@@ -1928,11 +1902,9 @@ mod tests {
         let o = parse(&["--pred", "R=a.ply", "--pred", "M=b.ply"]).expect("valid");
         assert_eq!(o.predictions[1].name, "M");
         assert!(parse(&["--pred", "a.ply", "--pred", "M=b.ply"]).is_err());
-        assert!(
-            Cli::try_parse_from(["bodyseg", "eval", "--merge", "a.json", "--gt", "g"]).is_err()
-        );
-        assert!(Cli::try_parse_from(["bodyseg", "eval", "--merge", "a.json", "b.json"]).is_ok());
-        assert!(Cli::try_parse_from(["bodyseg", "eval", "--pred", "a.ply"]).is_err());
+        assert!(try_parse(&["eval", "--merge", "a.json", "--gt", "g"], &[]).is_err());
+        assert!(try_parse(&["eval", "--merge", "a.json", "b.json"], &[]).is_ok());
+        assert!(try_parse(&["eval", "--pred", "a.ply"], &[]).is_err());
     }
 }
 

@@ -36,6 +36,19 @@ impl LimitedAlloc {
     fn release(size: usize) {
         LIVE.fetch_sub(size, Ordering::Relaxed);
     }
+
+    /// `allocate`'s block of `size` bytes, booked: null without calling it past the limit,
+    /// and the booking given back when it fails.
+    fn booked(size: usize, allocate: impl FnOnce() -> *mut u8) -> *mut u8 {
+        if !Self::book(size) {
+            return std::ptr::null_mut();
+        }
+        let p = allocate();
+        if p.is_null() {
+            Self::release(size);
+        }
+        p
+    }
 }
 
 // SAFETY: every method forwards to `System` with the caller's layout unchanged, or
@@ -43,27 +56,13 @@ impl LimitedAlloc {
 // touches only an atomic counter and never allocates.
 unsafe impl GlobalAlloc for LimitedAlloc {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if !Self::book(layout.size()) {
-            return std::ptr::null_mut();
-        }
         // SAFETY: forwarded with the caller's layout (non-zero size, GlobalAlloc's contract).
-        let p = unsafe { System.alloc(layout) };
-        if p.is_null() {
-            Self::release(layout.size());
-        }
-        p
+        Self::booked(layout.size(), || unsafe { System.alloc(layout) })
     }
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        if !Self::book(layout.size()) {
-            return std::ptr::null_mut();
-        }
         // SAFETY: as in `alloc`.
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if p.is_null() {
-            Self::release(layout.size());
-        }
-        p
+        Self::booked(layout.size(), || unsafe { System.alloc_zeroed(layout) })
     }
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {

@@ -176,6 +176,12 @@ impl Label {
         self.class().is_some_and(Class::is_body)
     }
 
+    /// How many places two label lists of the same points differ at (before and after a
+    /// step, truth and prediction); a longer list's extra labels are not compared.
+    pub fn count_differing(a: &[Label], b: &[Label]) -> usize {
+        a.iter().zip(b).filter(|(a, b)| a != b).count()
+    }
+
     /// Palette colour; unknown is drawn white so it stands out.
     #[inline]
     pub fn color(self) -> [u8; 3] {
@@ -234,6 +240,16 @@ mod tests {
         assert!(!Label::UNKNOWN.is_body());
         assert!(!Label::BACKGROUND.is_body());
         assert!(Label::from(Class::Head).is_body());
+    }
+
+    #[test]
+    fn count_differing_counts_changed_places() {
+        let head = Label::from(Class::Head);
+        let a = [head, Label::BACKGROUND, Label::UNKNOWN, head];
+        let b = [head, head, Label::UNKNOWN, Label::UNKNOWN];
+        assert_eq!(Label::count_differing(&a, &b), 2);
+        assert_eq!(Label::count_differing(&a, &a), 0);
+        assert_eq!(Label::count_differing(&a, &b[..1]), 0);
     }
 
     #[test]

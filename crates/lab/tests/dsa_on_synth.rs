@@ -3,6 +3,7 @@
 //! the exact per-depth-pixel truth, and more than naive projection does; with a
 //! calibration error it still makes fewer mistakes than naive.
 
+use bodyseg_core::Label;
 use bodyseg_lab::{ProjectionStats, camera_images, parsing_images, projection_stats};
 use bodyseg_project::ProjectConfig;
 use bodyseg_synth::{ParserMistakesConfig, Synth, preset};
@@ -126,12 +127,7 @@ fn label_boundary_vote_works_with_a_stride() {
             },
         )
         .expect("vote off");
-    let changed = with
-        .labels
-        .iter()
-        .zip(&without.labels)
-        .filter(|(a, b)| a != b)
-        .count();
+    let changed = Label::count_differing(&with.labels, &without.labels);
     eprintln!(
         "{changed} of {} points changed by the vote at stride 2",
         with.len()

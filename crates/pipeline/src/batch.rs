@@ -584,11 +584,30 @@ mod tests {
         (0..n).map(|i| (format!("{i:03}"), i)).collect()
     }
 
-    /// Writes the frame's output `a/<id>.txt`, which a failed frame must not leave behind.
-    fn write_marker(id: &str, w: &mut FrameWriter) -> Result<std::path::PathBuf> {
-        w.write(&format!("a/{id}.txt"), |p| {
-            Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
-        })
+    /// A frame function that writes the frame's output `a/<id>.txt` (which a failed frame
+    /// must not leave behind), then fails the frame where `fail`, given the job, errs or
+    /// panics; else it returns the frame's record.
+    fn marking(
+        fail: impl Fn(u32) -> Result<()> + Sync,
+    ) -> impl Fn(BatchFrame<'_, u32>, &mut FrameWriter, &mut Vec<Stage>) -> Result<FrameRecord> + Sync
+    {
+        move |f, w, _| {
+            w.write(&format!("a/{}.txt", f.id), |p| {
+                Ok(bodyseg_io::write_bytes_atomic(p, b"x")?)
+            })?;
+            fail(*f.job)?;
+            record_of(f.id)
+        }
+    }
+
+    /// [`run_batch`] of every job (no shard, no redo, no progress) under `hash`.
+    fn whole<J: Sync>(
+        jobs: &[(String, J)],
+        out: &Path,
+        hash: &str,
+        process: &FrameFn<'_, J>,
+    ) -> BatchOutcome {
+        run_batch(jobs, out, Shard::ALL, hash, false, &|_| {}, process).expect("batch")
     }
 
     fn record_of(id: &str) -> Result<FrameRecord> {
@@ -609,15 +628,11 @@ mod tests {
         let dir = tempfile::tempdir().expect("temp dir");
         let out = dir.path();
         let jobs = numbered_jobs(6);
-        let process = |f: BatchFrame<'_, u32>, w: &mut FrameWriter, _: &mut Vec<Stage>| {
-            write_marker(f.id, w)?;
-            if *f.job == 4 {
-                bail!("frame {} is bad", f.id);
-            }
-            record_of(f.id)
-        };
-        let first =
-            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        let process = marking(|job| match job {
+            4 => bail!("frame {job:03} is bad"),
+            _ => Ok(()),
+        });
+        let first = whole(&jobs, out, "h1", &process);
         assert_eq!((first.processed, first.skipped), (5, 0));
         assert_eq!(first.failed.len(), 1);
         assert!(first.failed[0].error.contains("004 is bad"));
@@ -627,18 +642,15 @@ mod tests {
         );
         assert!(!record_path(out, "004").exists());
 
-        let again =
-            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        let again = whole(&jobs, out, "h1", &process);
         assert_eq!((again.processed, again.skipped), (0, 5));
         assert_eq!(again.records, first.records);
 
         // A deleted output or another configuration makes a frame incomplete.
         std::fs::remove_file(out.join("a/002.txt")).expect("remove");
-        let third =
-            run_batch(&jobs, out, Shard::ALL, "h1", false, &|_| {}, &process).expect("batch");
+        let third = whole(&jobs, out, "h1", &process);
         assert_eq!((third.processed, third.skipped), (1, 4));
-        let other =
-            run_batch(&jobs, out, Shard::ALL, "h2", false, &|_| {}, &process).expect("batch");
+        let other = whole(&jobs, out, "h2", &process);
         assert_eq!((other.processed, other.skipped), (5, 0));
 
         // Shards split the work.
@@ -661,20 +673,18 @@ mod tests {
         let dir = tempfile::tempdir().expect("temp dir");
         let out = dir.path();
         let jobs = numbered_jobs(4);
-        let process = |f: BatchFrame<'_, u32>, w: &mut FrameWriter, _: &mut Vec<Stage>| {
-            write_marker(f.id, w)?;
-            if *f.job == 2 {
+        let process = marking(|job| {
+            if job == 2 {
                 let cells: Vec<u32> = Vec::new();
                 // A bug: an index out of bounds.
-                return record_of(&cells[*f.job as usize].to_string());
+                bail!("cell {}", cells[job as usize]);
             }
-            if *f.job == 3 {
-                panic!("frame {} panicked", f.id);
+            if job == 3 {
+                panic!("frame {job:03} panicked");
             }
-            record_of(f.id)
-        };
-        let outcome =
-            run_batch(&jobs, out, Shard::ALL, "h", false, &|_| {}, &process).expect("batch");
+            Ok(())
+        });
+        let outcome = whole(&jobs, out, "h", &process);
         assert_eq!(outcome.processed, 2, "the batch goes on");
         let failed: Vec<(&str, &str)> = outcome
             .failed
@@ -710,10 +720,10 @@ mod tests {
             r.inputs.extend(InputFile::of(&input));
             Ok(r)
         };
-        let run = || run_batch(&jobs, &out, Shard::ALL, "h", false, &|_| {}, &process);
-        assert_eq!(run().expect("batch").processed, 1);
-        assert_eq!(run().expect("batch").skipped, 1);
+        let run = || whole(&jobs, &out, "h", &process);
+        assert_eq!(run().processed, 1);
+        assert_eq!(run().skipped, 1);
         std::fs::write(&input, b"three").expect("rewrite");
-        assert_eq!(run().expect("batch").processed, 1, "the input changed size");
+        assert_eq!(run().processed, 1, "the input changed size");
     }
 }

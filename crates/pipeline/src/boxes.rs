@@ -11,9 +11,7 @@
 use crate::config::PipelineConfig;
 use crate::floor::{cloud_frame, likely_cause, transformed};
 use crate::frame::read_and_project;
-use crate::outputs::{
-    check_output_file, read_cloud_file, resolved_config_path, write_with_side_file,
-};
+use crate::outputs::{check_output_file, read_cloud_file, write_stage};
 use crate::recording::{Recording, check_stem};
 use crate::sanity::{boxes_warnings, cloud_scale_warning, warn_all};
 use crate::stage::{Stage, plural, timed};
@@ -218,28 +216,15 @@ pub fn boxes_file(opts: &BoxesOptions) -> Result<BoxesSummary> {
         ),
     ));
 
-    let resolved_config = opts
-        .write_resolved_config
-        .then(|| resolved_config_path(&opts.out));
-    let ((), took) = timed(|| -> Result<()> {
-        if let (Some(path), Some(cloud)) = (&opts.preview, &cloud) {
+    let preview = opts.preview.as_deref();
+    let (_, write) = write_stage(&opts.out, cfg, opts.write_resolved_config, preview, || {
+        if let (Some(path), Some(cloud)) = (preview, &cloud) {
             let (w, h, rgb) = top_view(cloud, &boxes.boxes);
             bodyseg_io::write_rgb_png(path, w, h, &rgb).context("preview (--preview)")?;
         }
-        let text = resolved_config
-            .as_ref()
-            .map(|_| cfg.resolved_toml())
-            .transpose()?;
-        let side = resolved_config.as_deref().zip(text.as_deref());
-        write_with_side_file(&opts.out, side, || {
-            bodyseg_io::write_boxes(&opts.out, &boxes).context("person boxes (--out)")
-        })
+        bodyseg_io::write_boxes(&opts.out, &boxes).context("person boxes (--out)")
     })?;
-    let mut written = opts.out.display().to_string();
-    for path in resolved_config.iter().chain(&opts.preview) {
-        written.push_str(&format!(", {}", path.display()));
-    }
-    stages.push(Stage::new("write", took, written));
+    stages.push(write);
     Ok(BoxesSummary {
         boxes,
         stages,

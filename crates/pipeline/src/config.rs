@@ -367,6 +367,11 @@ mod tests {
         PipelineConfig::from_toml(text, Path::new("c.toml"))
     }
 
+    /// The error (chain, one line) of a file `c.toml` holding `text`.
+    fn parse_error(text: &str) -> String {
+        format!("{:#}", parse(text).expect_err("invalid"))
+    }
+
     #[test]
     fn empty_file_is_the_defaults_and_partial_sections_fill_in() {
         assert_eq!(parse("").ok(), Some(PipelineConfig::default()));
@@ -389,27 +394,21 @@ mod tests {
 
     #[test]
     fn unknown_keys_are_named_with_line_and_section() {
-        let e = format!(
-            "{:#}",
-            parse("[refine]\n\nepsilon = 1\n").expect_err("error")
-        );
+        let e = parse_error("[refine]\n\nepsilon = 1\n");
         assert!(
             e.starts_with("c.toml: line 3: unknown key `refine.epsilon`, expected one of"),
             "{e}"
         );
         assert!(!e.contains('\n'), "{e}");
-        let e = format!("{:#}", parse("[refin]\n").expect_err("error"));
+        let e = parse_error("[refin]\n");
         assert!(e.starts_with("c.toml: line 1: unknown key `refin`"), "{e}");
     }
 
     #[test]
     fn out_of_range_values_name_the_file_and_field() {
-        let e = format!("{:#}", parse("[refine]\neps_m = -1\n").expect_err("error"));
+        let e = parse_error("[refine]\neps_m = -1\n");
         assert_eq!(e, "c.toml: refine.eps_m must be in (0, 5] metres, got -1");
-        let e = format!(
-            "{:#}",
-            parse("[refine]\nsteps = \"m-x\"\n").expect_err("error")
-        );
+        let e = parse_error("[refine]\nsteps = \"m-x\"\n");
         assert!(
             e.contains("line 2, in [refine]") && e.contains("'x'"),
             "{e}"
@@ -423,23 +422,14 @@ mod tests {
         assert_eq!(c.project.mode, ProjectMode::Naive);
         assert_eq!(c.backproject.options().depth_max_m, 4.5);
         assert_eq!(c.backproject.options().frame, CloudFrame::World);
-        let e = format!(
-            "{:#}",
-            parse("[backproject]\nstride = 0\n").expect_err("error")
-        );
+        let e = parse_error("[backproject]\nstride = 0\n");
         assert_eq!(e, "c.toml: backproject.stride must be >= 1, got 0");
-        let e = format!(
-            "{:#}",
-            parse("[project]\nocclusion_tol_m = -1\n").expect_err("error")
-        );
+        let e = parse_error("[project]\nocclusion_tol_m = -1\n");
         assert!(
             e.starts_with("c.toml: project.occlusion_tol_m must be"),
             "{e}"
         );
-        let e = format!(
-            "{:#}",
-            parse("[project]\nmode = \"x\"\n").expect_err("error")
-        );
+        let e = parse_error("[project]\nmode = \"x\"\n");
         assert!(e.contains("line 2, in [project]"), "{e}");
         let mut c = PipelineConfig::default();
         c.apply_project_mode(Some(ProjectMode::Naive));
@@ -475,12 +465,12 @@ mod tests {
         let c = parse("[boxes]\nmode = \"geometry\"\nperson_gap_m = 0.2\n").expect("valid");
         assert_eq!(c.boxes.mode, BoxMode::Geometry);
         assert_eq!(c.boxes.person_gap_m, 0.2);
-        let e = format!("{:#}", parse("[boxes]\nvoxel_m = 0\n").expect_err("error"));
+        let e = parse_error("[boxes]\nvoxel_m = 0\n");
         assert_eq!(
             e,
             "c.toml: boxes.voxel_m must be in [0.01, 0.5] metres, got 0"
         );
-        let e = format!("{:#}", parse("[boxes]\ngap = 1\n").expect_err("error"));
+        let e = parse_error("[boxes]\ngap = 1\n");
         assert!(
             e.starts_with("c.toml: line 2: unknown key `boxes.gap`"),
             "{e}"
@@ -609,29 +599,26 @@ mod tests {
                 PipelineConfig::resolve(&paths, &sets(items)).expect_err("invalid")
             )
         };
-        let e = err(&["refine.epsx=1"]);
-        assert!(
-            e.starts_with("--set refine.epsx=1: unknown key `refine.epsx` (known in [refine]: ")
-                && e.contains("eps_m"),
-            "{e}"
-        );
-        let e = err(&["refin.eps_m=1"]);
-        assert!(
-            e.contains("unknown key `refin.eps_m` (known sections: "),
-            "{e}"
-        );
-        assert!(err(&["refine=1"]).contains("unknown key `refine`"));
-        let e = err(&["refine.eps_m=abc"]);
-        assert!(
-            e.starts_with("--set refine.eps_m=abc: refine.eps_m: "),
-            "{e}"
-        );
-        let e = err(&["project.mode=sideways"]);
-        assert!(
-            e.starts_with("--set project.mode=sideways: project.mode: "),
-            "{e}"
-        );
-        assert!(err(&["refine.eps_m"]).contains("not KEY=VALUE"));
+        // Each error names the setting first, then what is wrong with it.
+        for (setting, what) in [
+            (
+                "refine.epsx=1",
+                "unknown key `refine.epsx` (known in [refine]: ",
+            ),
+            (
+                "refin.eps_m=1",
+                "unknown key `refin.eps_m` (known sections: ",
+            ),
+            ("refine=1", "unknown key `refine`"),
+            ("refine.eps_m=abc", "refine.eps_m: "),
+            ("project.mode=sideways", "project.mode: "),
+            ("refine.eps_m", "not KEY=VALUE"),
+        ] {
+            let e = err(&[setting]);
+            let named = format!("--set {setting}: ");
+            assert!(e.starts_with(&named) && e.contains(what), "{e}");
+        }
+        assert!(err(&["refine.epsx=1"]).contains("eps_m"));
         // A value out of range is named with the setting that gave it...
         assert_eq!(
             err(&["refine.eps_m=-1"]),

@@ -24,7 +24,7 @@ use crate::recording::{Recording, check_folder_name};
 use crate::report::{ReportTarget, RunSummary, write_reports};
 use crate::stage::{Stage, plural, timed};
 use crate::threedpeople::{ThreeDPeopleCamera, list_3dpeople_views, read_3dpeople_view};
-use crate::viewer::RerunOutput;
+use crate::viewer::{RerunOutput, run_batch_with_rerun};
 use anyhow::{Context, Result, bail};
 use bodyseg_eval::Report;
 use bodyseg_io::{PlyColors, PlyFormat, PlyWriteOptions};
@@ -208,13 +208,13 @@ fn convert_recordings(
         "{resolved}\nconvert recording parser={:?} stages={} v1",
         opts.parser, opts.write_stages
     ));
-    let outcome = run_batch(
+    let (outcome, _) = run_batch_with_rerun(
         &jobs,
         &opts.out,
         opts.shard,
         &hash,
-        // A Rerun file has every frame: none is skipped as complete.
-        opts.redo || rerun.is_some(),
+        opts.redo,
+        rerun.as_ref(),
         progress,
         &|f: BatchFrame<'_, (usize, String)>,
           writer: &mut FrameWriter,
@@ -223,13 +223,9 @@ fn convert_recordings(
             let (k, frame) = f.job;
             processors[*k].run_frame(frame, writer, stages)
         },
+        &mut stages,
     )?;
     let fps = outcome.frames_per_second();
-    stages.extend(outcome.stage_lines());
-    if let Some(rerun) = &rerun {
-        let (path, took) = timed(|| rerun.finish())?;
-        stages.push(Stage::new("rerun", took, path.display().to_string()));
-    }
 
     // Reports per recording (its records and failures), then over all recordings.
     let (written_report, took) = timed(|| -> Result<_> {

@@ -562,12 +562,7 @@ mod tests {
                 // f32 rounding of two poses may move a point near a pixel boundary, or
                 // decide between two points at the same depth (the block's front face)
                 // the other way: a few pixels, against thousands for a wrong range.
-                let differ = from_hits
-                    .labels
-                    .iter()
-                    .zip(&again.labels)
-                    .filter(|(a, b)| a != b)
-                    .count();
+                let differ = Label::count_differing(&from_hits.labels, &again.labels);
                 assert!(
                     differ * 100 <= drawn,
                     "{mode:?} camera {c}: {differ} of {drawn} pixels differ"

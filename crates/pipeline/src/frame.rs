@@ -134,6 +134,21 @@ pub struct ParsedFrame {
     pub people: Option<PersonBoxes>,
 }
 
+impl ParsedFrame {
+    /// Each camera's depth image and labels, rig order: the projection's input.
+    pub(crate) fn camera_images(&self) -> Vec<CameraImages<'_>> {
+        self.frame
+            .depth
+            .iter()
+            .zip(&self.labels)
+            .map(|(d, labels)| CameraImages {
+                depth_raw: &d.depth_mm,
+                labels,
+            })
+            .collect()
+    }
+}
+
 /// Runs `segmenter` on every camera of `frame` (one call, the views batched): the one call
 /// site of [`Segmenter::segment`] in the pipeline. The frame must hold what the segmenter
 /// needs ([`FrameNeeds::of`]); camera names come from `rig`. A segmenter that takes person
@@ -237,15 +252,7 @@ pub fn project_parsed(
             rig.cameras.len()
         );
     }
-    let images: Vec<CameraImages<'_>> = frame
-        .depth
-        .iter()
-        .zip(&parsed.labels)
-        .map(|(d, labels)| CameraImages {
-            depth_raw: &d.depth_mm,
-            labels,
-        })
-        .collect();
+    let images = parsed.camera_images();
     let projector = FrameProjector::new(rig)?;
     let backproject = config.backproject.options();
     if color {
@@ -259,6 +266,28 @@ pub fn project_parsed(
     } else {
         Ok(projector.project_frame(&images, &backproject, &config.project)?)
     }
+}
+
+/// The `read` stage of a one-frame command (`parse`, `project`, `boxes`): opens
+/// `recording` and reads frame `stem` with what `needs` asks of that recording. The
+/// stage's line counts the cameras' images as `images` (singular, plural).
+///
+/// # Errors
+/// As [`Recording::open`] and [`Frame::read`].
+pub(crate) fn read_one_frame(
+    recording: &Path,
+    stem: &str,
+    needs: impl FnOnce(&Recording) -> FrameNeeds,
+    images: (&str, &str),
+) -> Result<(Recording, Frame, Stage)> {
+    let ((rec, frame), took) = timed(|| -> Result<_> {
+        let rec = Recording::open(recording)?;
+        let frame = Frame::read(&rec, stem, needs(&rec))?;
+        Ok((rec, frame))
+    })?;
+    let cameras = plural(rec.rig().cameras.len(), images.0, images.1);
+    let stage = Stage::new("read", took, format!("{cameras}, frame {stem}"));
+    Ok((rec, frame, stage))
 }
 
 /// Reads frame `stem` of the recording at `recording` with its recorded predictions
@@ -282,20 +311,9 @@ pub(crate) fn read_and_project(
         color,
         ..FrameNeeds::of(&segmenter)
     };
-    let ((rec, frame), read) = timed(|| -> Result<_> {
-        let rec = Recording::open(recording)?;
-        let frame = Frame::read(&rec, stem, needs)?;
-        Ok((rec, frame))
-    })?;
+    let (rec, frame, read) = read_one_frame(recording, stem, |_| needs, ("camera", "cameras"))?;
     let rig = rec.rig();
-    let mut stages = vec![Stage::new(
-        "read",
-        read,
-        format!(
-            "{}, frame {stem}",
-            plural(rig.cameras.len(), "camera", "cameras")
-        ),
-    )];
+    let mut stages = vec![read];
     tracing::info!(recording = %recording.display(), frame = %stem, "read frame");
 
     let context = || format!("{}: frame {stem}", recording.display());

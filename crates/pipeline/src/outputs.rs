@@ -2,6 +2,8 @@
 //! is the only crate that touches the file system): text written atomically, where the
 //! resolved configuration of an output goes, a cloud read by its extension, PLY options.
 
+use crate::config::PipelineConfig;
+use crate::stage::{Stage, timed};
 use anyhow::{Result, bail};
 use bodyseg_core::LabeledCloud;
 use bodyseg_io::{PlyFormat, PlyWriteOptions};
@@ -181,6 +183,35 @@ pub(crate) fn write_with_side_file(
         return Err(e.context("resolved configuration (the main output was removed again)"));
     }
     Ok(())
+}
+
+/// A command's `write` stage: its output `out` written by `write_main` and, when
+/// `write_resolved_config`, the resolved configuration beside it
+/// ([`write_with_side_file`], [`resolved_config_path`]). The stage's line names `out`, the
+/// configuration and `also` (a file `write_main` writes besides `out`, such as a preview).
+/// Returns where the configuration went, and the stage.
+///
+/// # Errors
+/// The configuration cannot be serialised, or a write fails (the error names the file).
+pub(crate) fn write_stage(
+    out: &Path,
+    config: &PipelineConfig,
+    write_resolved_config: bool,
+    also: Option<&Path>,
+    write_main: impl FnOnce() -> Result<()>,
+) -> Result<(Option<PathBuf>, Stage)> {
+    let resolved_config = write_resolved_config.then(|| resolved_config_path(out));
+    let resolved_text = match &resolved_config {
+        Some(_) => Some(config.resolved_toml()?),
+        None => None,
+    };
+    let side = resolved_config.as_deref().zip(resolved_text.as_deref());
+    let ((), took) = timed(|| write_with_side_file(out, side, write_main))?;
+    let mut written = out.display().to_string();
+    for path in resolved_config.as_deref().into_iter().chain(also) {
+        written.push_str(&format!(", {}", path.display()));
+    }
+    Ok((resolved_config, Stage::new("write", took, written)))
 }
 
 /// Where the resolved configuration of an output goes: `refined.ply` →

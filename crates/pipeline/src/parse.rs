@@ -2,7 +2,7 @@
 //! label images (class ids) and palette previews, per camera.
 
 use crate::config::PipelineConfig;
-use crate::frame::{Frame, FrameNeeds, ParsedFrame, parse_frame};
+use crate::frame::{FrameNeeds, ParsedFrame, parse_frame, read_one_frame};
 use crate::model::{load_segmenter, resolve_model};
 use crate::outputs::{check_output_folder, write_text};
 use crate::recording::{Layer, Layout, Recording, check_stem};
@@ -88,27 +88,16 @@ pub fn parse_file(opts: &ParseOptions) -> Result<ParseSummary> {
     // from depth (BlazePose).
     let people_from_depth =
         opts.source == ParseSource::Model && cfg.parsing.segmenter == SegmenterKind::Blazepose;
-    let ((rec, frame), read) = timed(|| -> Result<_> {
-        let rec = Recording::open(&opts.recording)?;
-        let needs = FrameNeeds {
-            color: true,
-            parsing: opts.source == ParseSource::Recorded,
-            depth: people_from_depth && rec.has_layer(Layer::Depth),
-            ..FrameNeeds::default()
-        };
-        let frame = Frame::read(&rec, &opts.frame, needs)?;
-        Ok((rec, frame))
-    })?;
+    let needs = |rec: &Recording| FrameNeeds {
+        color: true,
+        parsing: opts.source == ParseSource::Recorded,
+        depth: people_from_depth && rec.has_layer(Layer::Depth),
+        ..FrameNeeds::default()
+    };
+    let images = ("colour image", "colour images");
+    let (rec, frame, read) = read_one_frame(&opts.recording, &opts.frame, needs, images)?;
     let cameras: Vec<String> = rec.cameras().map(str::to_string).collect();
-    let mut stages = vec![Stage::new(
-        "read",
-        read,
-        format!(
-            "{}, frame {}",
-            plural(cameras.len(), "colour image", "colour images"),
-            opts.frame
-        ),
-    )];
+    let mut stages = vec![read];
 
     let model = match opts.source {
         ParseSource::Model => Some(resolve_model(cfg)?.0),

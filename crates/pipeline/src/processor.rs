@@ -28,7 +28,7 @@ use bodyseg_eval::Report;
 use bodyseg_io::{Durability, PlyFormat, PlyWriteOptions};
 use bodyseg_parsing::Segmenter;
 use bodyseg_people::BoxMode;
-use bodyseg_project::{CameraImages, FrameProjector, Hits};
+use bodyseg_project::{FrameProjector, Hits};
 use bodyseg_refine::{NoiseMode, PointEvidence, RefinedVariants, Steps, VoteMode};
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -333,15 +333,7 @@ impl FrameProcessor {
         let inputs = &parsed.frame;
         let frame = inputs.stem.as_str();
         let cfg = &self.config;
-        let images: Vec<CameraImages<'_>> = inputs
-            .depth
-            .iter()
-            .zip(&parsed.labels)
-            .map(|(d, l)| CameraImages {
-                depth_raw: &d.depth_mm,
-                labels: l,
-            })
-            .collect();
+        let images = parsed.camera_images();
         // Recorded label images carry no probabilities; the model's do.
         let with_probs = cfg.refine.noise == NoiseMode::Probability
             && parsed.labels.iter().any(|l| l.probs.is_some());

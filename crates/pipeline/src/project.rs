@@ -3,8 +3,8 @@
 
 use crate::config::PipelineConfig;
 use crate::frame::read_and_project;
-use crate::outputs::{check_output_file, ply_options, resolved_config_path, write_with_side_file};
-use crate::stage::{Stage, timed};
+use crate::outputs::{check_output_file, ply_options, write_stage};
+use crate::stage::Stage;
 use anyhow::{Context, Result};
 use bodyseg_project::ProjectMode;
 use std::path::PathBuf;
@@ -71,24 +71,11 @@ pub fn project_file(opts: &ProjectOptions) -> Result<ProjectSummary> {
     }
     let mode = cfg.project.mode;
     let ply = ply_options(opts.ascii);
-    let resolved_config = opts
-        .write_resolved_config
-        .then(|| resolved_config_path(&opts.out));
-    let resolved_text = match &resolved_config {
-        Some(_) => Some(cfg.resolved_toml()?),
-        None => None,
-    };
-    let side = resolved_config.as_deref().zip(resolved_text.as_deref());
-    let ((), took) = timed(|| {
-        write_with_side_file(&opts.out, side, || {
+    let (resolved_config, write) =
+        write_stage(&opts.out, cfg, opts.write_resolved_config, None, || {
             bodyseg_io::write_ply(&opts.out, &cloud, &ply).context("labelled cloud (--out)")
-        })
-    })?;
-    let mut written = opts.out.display().to_string();
-    if let Some(path) = &resolved_config {
-        written.push_str(&format!(", {}", path.display()));
-    }
-    stages.push(Stage::new("write", took, written));
+        })?;
+    stages.push(write);
 
     Ok(ProjectSummary {
         points: cloud.len(),

@@ -428,12 +428,9 @@ impl Recording {
     /// The file is missing, is not a 16-bit PNG, or has another size than the rig's
     /// depth sensor (the error names the camera, the file and both sizes).
     pub fn read_depth(&self, index: usize, stem: &str) -> Result<(DepthImage, PathBuf)> {
-        let camera = self.camera(index)?;
-        let path = self.image_path(&camera.name, Layer::Depth, stem)?;
-        let image =
-            bodyseg_io::read_depth_png(&path).with_context(|| format!("camera {}", camera.name))?;
-        check_size(camera, &path, Layer::Depth, (image.width, image.height))?;
-        Ok((image, path))
+        self.read_image(index, Layer::Depth, stem, bodyseg_io::read_depth_png, |i| {
+            (i.width, i.height)
+        })
     }
 
     /// The colour image of camera `index` for frame `stem` (PNG or JPEG, the colour
@@ -442,12 +439,9 @@ impl Recording {
     /// # Errors
     /// As [`Recording::read_depth`].
     pub fn read_color(&self, index: usize, stem: &str) -> Result<(RgbImage, PathBuf)> {
-        let camera = self.camera(index)?;
-        let path = self.image_path(&camera.name, Layer::Color, stem)?;
-        let image =
-            bodyseg_io::read_rgb_image(&path).with_context(|| format!("camera {}", camera.name))?;
-        check_size(camera, &path, Layer::Color, (image.width, image.height))?;
-        Ok((image, path))
+        self.read_image(index, Layer::Color, stem, bodyseg_io::read_rgb_image, |i| {
+            (i.width, i.height)
+        })
     }
 
     /// A label image (8-bit class ids, 255 = none) of camera `index` for frame `stem`:
@@ -463,17 +457,32 @@ impl Recording {
         layer: Layer,
         stem: &str,
     ) -> Result<(LabelImage, PathBuf)> {
+        if matches!(layer, Layer::Color | Layer::Depth | Layer::DepthPerson) {
+            bail!("{}/ holds no label images", layer.folder());
+        }
+        self.read_image(index, layer, stem, bodyseg_io::read_label_png, |i| {
+            (i.width, i.height)
+        })
+    }
+
+    /// The image of `layer` of camera `index` for frame `stem`, read by `read` and checked
+    /// against its sensor's size (`size`: width, height in pixels), with its path. Read
+    /// errors name the camera (and ground truth, for [`Layer::DepthLabels`]).
+    fn read_image<T, E: std::error::Error + Send + Sync + 'static>(
+        &self,
+        index: usize,
+        layer: Layer,
+        stem: &str,
+        read: impl FnOnce(&Path) -> Result<T, E>,
+        size: impl FnOnce(&T) -> (u32, u32),
+    ) -> Result<(T, PathBuf)> {
         let camera = self.camera(index)?;
-        let context = match layer {
-            Layer::Parsing | Layer::Labels => format!("camera {}", camera.name),
-            Layer::DepthLabels => format!("camera {}: ground truth", camera.name),
-            Layer::Color | Layer::Depth | Layer::DepthPerson => {
-                bail!("{}/ holds no label images", layer.folder())
-            }
-        };
         let path = self.image_path(&camera.name, layer, stem)?;
-        let image = bodyseg_io::read_label_png(&path).context(context)?;
-        check_size(camera, &path, layer, (image.width, image.height))?;
+        let image = read(&path).with_context(|| match layer {
+            Layer::DepthLabels => format!("camera {}: ground truth", camera.name),
+            _ => format!("camera {}", camera.name),
+        })?;
+        check_size(camera, &path, layer, size(&image))?;
         Ok((image, path))
     }
 }
@@ -762,13 +771,19 @@ pub(crate) mod tests {
             .clone()
     }
 
-    #[test]
-    fn a_passed_through_jpeg_replaces_an_older_png() {
+    /// A temporary folder with a recording of [`rig`] with `layers` begun in `rec/`: the
+    /// folder, the recording's root, the rig and the writer.
+    fn new_recording(layers: &[Layer]) -> (tempfile::TempDir, PathBuf, Rig, RecordingWriter) {
         let dir = tempfile::tempdir().expect("temp dir");
         let root = dir.path().join("rec");
         let rig = rig();
-        let writer =
-            RecordingWriter::create(&root, &rig, &[Layer::Color, Layer::Depth]).expect("create");
+        let writer = RecordingWriter::create(&root, &rig, layers).expect("create");
+        (dir, root, rig, writer)
+    }
+
+    #[test]
+    fn a_passed_through_jpeg_replaces_an_older_png() {
+        let (_dir, root, rig, writer) = new_recording(&[Layer::Color, Layer::Depth]);
         let color = root.join(&rig.cameras[0].name).join("color");
         assert_eq!(
             writer
@@ -789,11 +804,7 @@ pub(crate) mod tests {
 
     #[test]
     fn a_written_recording_reads_back_with_its_frames_and_size_checks() {
-        let dir = tempfile::tempdir().expect("temp dir");
-        let root = dir.path().join("rec");
-        let rig = rig();
-        let writer =
-            RecordingWriter::create(&root, &rig, &[Layer::Depth, Layer::Parsing]).expect("create");
+        let (_dir, root, rig, writer) = new_recording(&[Layer::Depth, Layer::Parsing]);
         let depth = |i: usize| vec![1000u16 + i as u16; rig.cameras[i].depth.num_pixels()];
         for i in 0..rig.cameras.len() {
             writer.write_depth(i, "000000", &depth(i)).expect("depth");
@@ -849,10 +860,7 @@ pub(crate) mod tests {
 
     #[test]
     fn opening_checks_camera_names_and_folders() {
-        let dir = tempfile::tempdir().expect("temp dir");
-        let root = dir.path().join("rec");
-        let mut rig = rig();
-        RecordingWriter::create(&root, &rig, &[Layer::Depth]).expect("create");
+        let (_dir, root, mut rig, _) = new_recording(&[Layer::Depth]);
         let missing = root.join(&rig.cameras[2].name);
         std::fs::remove_dir_all(&missing).expect("remove");
         let e = format!("{:#}", Recording::open(&root).expect_err("missing"));

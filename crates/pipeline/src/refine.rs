@@ -2,12 +2,11 @@
 
 use crate::config::PipelineConfig;
 use crate::floor::transformed;
-use crate::outputs::{
-    check_output_file, ply_options, read_labelled_ply, resolved_config_path, write_with_side_file,
-};
+use crate::outputs::{check_output_file, ply_options, read_labelled_ply, write_stage};
 use crate::sanity::{boxes_warnings, cloud_scale_warning, warn_all};
 use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result};
+use bodyseg_core::Label;
 use std::path::PathBuf;
 
 /// What [`refine_file`] reads, writes and how.
@@ -100,12 +99,7 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
         }
         anyhow::Ok(refined)
     })?;
-    let labels_changed = cloud
-        .labels
-        .iter()
-        .zip(&refined.cloud.labels)
-        .filter(|(a, b)| a != b)
-        .count();
+    let labels_changed = Label::count_differing(&cloud.labels, &refined.cloud.labels);
     stages.push(Stage::new(
         "refine",
         took,
@@ -118,24 +112,14 @@ pub fn refine_file(opts: &RefineOptions) -> Result<RefineSummary> {
     ));
 
     let ply = ply_options(opts.ascii);
-    let resolved_config = opts
-        .write_resolved_config
-        .then(|| resolved_config_path(&opts.out));
-    let resolved_text = match &resolved_config {
-        Some(_) => Some(opts.config.resolved_toml()?),
-        None => None,
-    };
-    let side = resolved_config.as_deref().zip(resolved_text.as_deref());
-    let ((), took) = timed(|| {
-        write_with_side_file(&opts.out, side, || {
-            bodyseg_io::write_ply(&opts.out, &refined.cloud, &ply).context("refined cloud (--out)")
-        })
-    })?;
-    let mut written = opts.out.display().to_string();
-    if let Some(path) = &resolved_config {
-        written.push_str(&format!(", {}", path.display()));
-    }
-    stages.push(Stage::new("write", took, written));
+    let (resolved_config, write) = write_stage(
+        &opts.out,
+        &opts.config,
+        opts.write_resolved_config,
+        None,
+        || bodyseg_io::write_ply(&opts.out, &refined.cloud, &ply).context("refined cloud (--out)"),
+    )?;
+    stages.push(write);
 
     Ok(RefineSummary {
         points: cloud.len(),

@@ -27,7 +27,7 @@ use crate::processor::FrameProcessor;
 use crate::recording::check_stem;
 use crate::report::{ReportTarget, RunSummary, figure_outputs, write_reports};
 use crate::stage::{Stage, plural, timed};
-use crate::viewer::RerunOutput;
+use crate::viewer::{RerunOutput, run_batch_with_rerun};
 use anyhow::{Result, bail};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -227,25 +227,20 @@ pub fn run_recording(
     let resolved = opts.config.resolved_toml()?;
     let hash = run_hash(opts, &resolved, processor.uses_model(), &figures);
     let jobs: Vec<(String, ())> = frames.iter().map(|f| (f.clone(), ())).collect();
-    let outcome = crate::batch::run_batch(
+    let (outcome, written_rrd) = run_batch_with_rerun(
         &jobs,
         &opts.out,
         opts.shard,
         &hash,
-        opts.redo || rerun.is_some(),
+        opts.redo,
+        rerun.as_ref(),
         progress,
         &|f: BatchFrame<'_, ()>, writer: &mut FrameWriter, stages: &mut Vec<Stage>| {
             processor.run_frame(f.id, writer, stages)
         },
+        &mut stages,
     )?;
     let fps = outcome.frames_per_second();
-    stages.extend(outcome.stage_lines());
-    let mut written_rrd = Vec::new();
-    if let Some(rerun) = &rerun {
-        let (path, took) = timed(|| rerun.finish())?;
-        stages.push(Stage::new("rerun", took, path.display().to_string()));
-        written_rrd.push(path);
-    }
 
     let ((report, written), took) = timed(|| {
         write_reports(

@@ -3,8 +3,10 @@
 //! the frame loop. Built with the `rerun` feature; without it [`RerunOutput::create`]
 //! says how to build.
 
+use crate::batch::{BatchOutcome, BatchProgress, FrameFn, Shard, run_batch};
 use crate::frame::{Frame, ParsedFrame};
 use crate::recording::Recording;
+use crate::stage::{Stage, timed};
 use anyhow::Result;
 use bodyseg_core::{Label, LabelImage, LabeledCloud, PersonBoxes};
 use bodyseg_eval::Report;
@@ -106,6 +108,38 @@ impl RerunOutput {
             anyhow::bail!("built without Rerun support")
         }
     }
+}
+
+/// [`run_batch`] of a recording's frames (`run`, `convert`) with its Rerun view, if one
+/// is written: a Rerun file has every frame, so none is skipped as complete then, and
+/// the file is finished after the loop. Adds the loop's stage lines, then `rerun`, to
+/// `stages`; returns the outcome and the `.rrd` file written.
+// The arguments of `run_batch`, then the view and the stage list: a struct of them would
+// only be unpacked again.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_batch_with_rerun<J: Sync>(
+    jobs: &[(String, J)],
+    out: &Path,
+    shard: Shard,
+    config_hash: &str,
+    redo: bool,
+    rerun: Option<&RerunOutput>,
+    progress: &(dyn Fn(BatchProgress) + Sync),
+    process: &FrameFn<'_, J>,
+    stages: &mut Vec<Stage>,
+) -> Result<(BatchOutcome, Option<PathBuf>)> {
+    let redo = redo || rerun.is_some();
+    let outcome = run_batch(jobs, out, shard, config_hash, redo, progress, process)?;
+    stages.extend(outcome.stage_lines());
+    let rrd = match rerun {
+        Some(rerun) => {
+            let (path, took) = timed(|| rerun.finish())?;
+            stages.push(Stage::new("rerun", took, path.display().to_string()));
+            Some(path)
+        }
+        None => None,
+    };
+    Ok((outcome, rrd))
 }
 
 /// A sink that drops every frame (never built: [`RerunOutput::create`] fails first

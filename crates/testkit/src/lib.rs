@@ -379,12 +379,7 @@ mod tests {
         for c in Class::BODY {
             assert!(a.truth.contains(&Label::from(c)), "{c} missing");
         }
-        let wrong = a
-            .truth
-            .iter()
-            .zip(&a.cloud.labels)
-            .filter(|(t, p)| t != p)
-            .count();
+        let wrong = Label::count_differing(&a.truth, &a.cloud.labels);
         assert!(wrong > 100 && wrong < 2000, "{wrong} wrong labels");
         let inside = a
             .cloud
