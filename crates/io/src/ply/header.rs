@@ -321,30 +321,34 @@ mod tests {
 
     #[test]
     fn rejects_bad_headers() {
-        assert!(matches!(parse("plx\n"), Err(IoError::NotPly { .. })));
-        assert!(matches!(
-            parse("ply\nformat ascii 1.0\nelement vertex 1\n"),
-            Err(IoError::UnterminatedHeader { .. })
-        ));
-        assert!(matches!(
-            parse("ply\nformat binary_middle_endian 1.0\nend_header\n"),
-            Err(IoError::UnsupportedFormat { .. })
-        ));
-        assert!(matches!(
-            parse("ply\nformat ascii 1.0\nproperty float x\nend_header\n"),
-            Err(IoError::BadHeader { line: 3, .. })
-        ));
-        assert!(matches!(
-            parse("ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n"),
-            Err(IoError::BadHeader { line: 4, .. })
-        ));
-        assert!(matches!(
-            parse("ply\nelement vertex 1\nend_header\n"),
-            Err(IoError::BadHeader { .. })
-        ));
-        assert!(matches!(
-            parse("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n"),
-            Err(IoError::BadHeader { line: 3, .. })
-        ));
+        // Each bad header and the error it must give (the line number where one is named).
+        let cases: [(&str, fn(&IoError) -> bool); 7] = [
+            ("plx\n", |e| matches!(e, IoError::NotPly { .. })),
+            ("ply\nformat ascii 1.0\nelement vertex 1\n", |e| {
+                matches!(e, IoError::UnterminatedHeader { .. })
+            }),
+            ("ply\nformat binary_middle_endian 1.0\nend_header\n", |e| {
+                matches!(e, IoError::UnsupportedFormat { .. })
+            }),
+            (
+                "ply\nformat ascii 1.0\nproperty float x\nend_header\n",
+                |e| matches!(e, IoError::BadHeader { line: 3, .. }),
+            ),
+            (
+                "ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n",
+                |e| matches!(e, IoError::BadHeader { line: 4, .. }),
+            ),
+            ("ply\nelement vertex 1\nend_header\n", |e| {
+                matches!(e, IoError::BadHeader { .. })
+            }),
+            (
+                "ply\nformat ascii 1.0\nelement vertex -1\nend_header\n",
+                |e| matches!(e, IoError::BadHeader { line: 3, .. }),
+            ),
+        ];
+        for (text, is_expected) in cases {
+            let err = parse(text).expect_err(text);
+            assert!(is_expected(&err), "{text:?}: {err:?}");
+        }
     }
 }
