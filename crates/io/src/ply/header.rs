@@ -321,8 +321,10 @@ mod tests {
 
     #[test]
     fn rejects_bad_headers() {
-        // Each bad header and the error it must give (the line number where one is named).
-        let cases: [(&str, fn(&IoError) -> bool); 7] = [
+        /// A bad header and whether an error is the one it must give.
+        type Case = (&'static str, fn(&IoError) -> bool);
+        // The line number is checked where the error names one.
+        let cases: [Case; 7] = [
             ("plx\n", |e| matches!(e, IoError::NotPly { .. })),
             ("ply\nformat ascii 1.0\nelement vertex 1\n", |e| {
                 matches!(e, IoError::UnterminatedHeader { .. })
