@@ -194,75 +194,50 @@ def png_seeds() -> None:
 
 # --- text formats ------------------------------------------------------------------------
 
-RIG = """[[camera]]
-name = "cam0"
-depth_scale = 1000.0
-depth_shift_mm = 0.0
+IDENTITY = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
 
-[camera.depth]
-width = 512
-height = 424
-fx = 366.9
-fy = 364.8
-cx = 243.0
-cy = 207.7
-distortion = [0.0966, -0.283, 0.000159, -0.000508, 0.105]
 
-[camera.color]
-width = 1920
-height = 1080
-fx = 1059.9
-fy = 1053.9
-cx = 954.9
-cy = 523.7
-distortion = [0.0563, -0.0742, 0.00143, -0.00170, 0.0241, 0.1, 0.2, 0.3]
+def sensor(
+    width: int, height: int, fx: float, fy: float, cx: float, cy: float, distortion: list[float]
+) -> str:
+    """One sensor's keys, as under `[camera.depth]`, `[camera.color]` or in an intrinsics file."""
+    return (
+        f"width = {width}\nheight = {height}\n"
+        f"fx = {fx}\nfy = {fy}\ncx = {cx}\ncy = {cy}\ndistortion = {distortion}\n"
+    )
 
-[camera.color_from_depth]
-rotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-translation_m = [-0.052, 0.0, 0.0]
 
-[camera.world_from_depth]
-quaternion_wxyz = [0.7071067811865476, 0.7071067811865476, 0.0, 0.0]
-translation_m = [0.0, -3.0, 2.2]
+def camera(name: str, header: str, depth: str, color: str, world_from_depth: str) -> str:
+    """One `[[camera]]` of a rig.toml: the keys after its name (`header`), its two sensors,
+    the identity rotation and 52 mm baseline from depth to colour, and `world_from_depth`'s keys."""
+    return (
+        f'[[camera]]\nname = "{name}"\n{header}\n'
+        f"[camera.depth]\n{depth}\n"
+        f"[camera.color]\n{color}\n"
+        f"[camera.color_from_depth]\nrotation = {IDENTITY}\ntranslation_m = [-0.052, 0.0, 0.0]\n\n"
+        f"[camera.world_from_depth]\n{world_from_depth}"
+    )
 
-[[camera]]
-name = "cam1"
 
-[camera.depth]
-width = 512
-height = 424
-fx = 365.0
-fy = 365.0
-cx = 256.0
-cy = 212.0
-distortion = [0.0, 0.0, 0.0, 0.0, 0.0]
+# Two cameras: Brown-Conrady depth, rational (8-coefficient) colour and a quaternion pose,
+# then undistorted sensors, default depth scale and shift, and a rotation-matrix pose.
+RIG = camera(
+    "cam0",
+    "depth_scale = 1000.0\ndepth_shift_mm = 0.0\n",
+    sensor(512, 424, 366.9, 364.8, 243.0, 207.7, [0.0966, -0.283, 0.000159, -0.000508, 0.105]),
+    sensor(
+        1920, 1080, 1059.9, 1053.9, 954.9, 523.7, [0.0563, -0.0742, 0.00143, -0.0017, 0.0241, 0.1, 0.2, 0.3]
+    ),
+    "quaternion_wxyz = [0.7071067811865476, 0.7071067811865476, 0.0, 0.0]\ntranslation_m = [0.0, -3.0, 2.2]\n",
+) + "\n" + camera(
+    "cam1",
+    "",
+    sensor(512, 424, 365.0, 365.0, 256.0, 212.0, [0.0] * 5),
+    sensor(1920, 1080, 1050.0, 1050.0, 960.0, 540.0, [0.0] * 5),
+    "rotation = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]\ntranslation_m = [2.0, 0.0, 2.2]\n",
+)
 
-[camera.color]
-width = 1920
-height = 1080
-fx = 1050.0
-fy = 1050.0
-cx = 960.0
-cy = 540.0
-distortion = [0.0, 0.0, 0.0, 0.0, 0.0]
-
-[camera.color_from_depth]
-rotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-translation_m = [-0.052, 0.0, 0.0]
-
-[camera.world_from_depth]
-rotation = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
-translation_m = [2.0, 0.0, 2.2]
-"""
-
-INTRINSICS = """width = 640
-height = 576
-fx = 504.2
-fy = 504.3
-cx = 321.5
-cy = 330.1
-distortion = [0.5, -0.1, 0.0001, -0.0002, 0.01]
-"""
+INTRINSICS = sensor(640, 576, 504.2, 504.3, 321.5, 330.1, [0.5, -0.1, 0.0001, -0.0002, 0.01])
 
 BOXES = """{
   "frame": "000042",

@@ -360,7 +360,11 @@ fn pyk4a_camera() -> RgbdCamera {
     imported.camera
 }
 
-fn assert_pixel(got: [f64; 2], want: [f64; 2], what: &str) -> f64 {
+/// Projects `p_camera` (the sensor's frame, any length unit the SDK used: the projection
+/// is scale-free) through `sensor` and checks it lands within `SDK_TOL_PX` of the pixel the
+/// SDK computed; returns the error, pixels.
+fn assert_projects(sensor: &Intrinsics, p_camera: [f64; 3], want: [f64; 2], what: &str) -> f64 {
+    let got = sensor.project(p_camera).expect("in front");
     let err = (got[0] - want[0]).abs().max((got[1] - want[1]).abs());
     assert!(err < SDK_TOL_PX, "{what}: {got:?} vs the SDK's {want:?}");
     err
@@ -374,18 +378,14 @@ fn azure_kinect_reproduces_projections_the_sdk_computed_for_pyk4a() {
     // pyk4a tests/unit/test_calibration.py, values the SDK returned (mm, pixels):
     // convert_3d_to_2d((-154.5365753173828, -26.12171173095703, 250.0), COLOR) = (250, 300).
     let p_color_mm = [-154.5365753173828, -26.12171173095703, 250.0];
-    let e1 = assert_pixel(
-        cam.color.project(p_color_mm).expect("in front"),
-        [250.0, 300.0],
-        "colour 3D → 2D",
-    );
+    let e1 = assert_projects(&cam.color, p_color_mm, [250.0, 300.0], "colour 3D → 2D");
     // convert_3d_to_2d((-122.29087829589844, -45.17741394042969, 243.19528198242188),
     // DEPTH, COLOR) = (250, 300): through color_from_depth (metres).
     let p_depth_m = [-122.29087829589844, -45.17741394042969, 243.19528198242188].map(|v| v / 1e3);
-    let e2 = assert_pixel(
-        cam.color
-            .project(cam.color_from_depth.transform_point(p_depth_m))
-            .expect("in front"),
+    let p_color_m = cam.color_from_depth.transform_point(p_depth_m);
+    let e2 = assert_projects(
+        &cam.color,
+        p_color_m,
         [250.0, 300.0],
         "depth 3D → colour 2D",
     );
@@ -425,18 +425,10 @@ fn azure_kinect_reproduces_the_sdk_test_projections() {
     assert_eq!((cam.color.width, cam.color.height), (3840, 2160));
     // m_depth_point2d_reference (256, 256) ↔ m_depth_point3d_reference.
     let depth_3d = [-2.45376134, -1.66107690, 1000.0];
-    let e1 = assert_pixel(
-        cam.depth.project(depth_3d).expect("in front"),
-        [256.0, 256.0],
-        "depth",
-    );
+    let e1 = assert_projects(&cam.depth, depth_3d, [256.0, 256.0], "depth");
     // m_color_point2d_reference ↔ m_color_point3d_reference.
     let color_3d = [-37.6291695, 63.3947754, 1001.46521];
-    let e2 = assert_pixel(
-        cam.color.project(color_3d).expect("in front"),
-        [1835.689453, 1206.290039],
-        "colour",
-    );
+    let e2 = assert_projects(&cam.color, color_3d, [1835.689453, 1206.290039], "colour");
     // Depth 3D → colour 3D (transformation_3d_to_3d; the SDK's tolerance 1e-3 mm).
     let got = cam
         .color_from_depth

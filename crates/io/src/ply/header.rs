@@ -321,30 +321,36 @@ mod tests {
 
     #[test]
     fn rejects_bad_headers() {
-        assert!(matches!(parse("plx\n"), Err(IoError::NotPly { .. })));
-        assert!(matches!(
-            parse("ply\nformat ascii 1.0\nelement vertex 1\n"),
-            Err(IoError::UnterminatedHeader { .. })
-        ));
-        assert!(matches!(
-            parse("ply\nformat binary_middle_endian 1.0\nend_header\n"),
-            Err(IoError::UnsupportedFormat { .. })
-        ));
-        assert!(matches!(
-            parse("ply\nformat ascii 1.0\nproperty float x\nend_header\n"),
-            Err(IoError::BadHeader { line: 3, .. })
-        ));
-        assert!(matches!(
-            parse("ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n"),
-            Err(IoError::BadHeader { line: 4, .. })
-        ));
-        assert!(matches!(
-            parse("ply\nelement vertex 1\nend_header\n"),
-            Err(IoError::BadHeader { .. })
-        ));
-        assert!(matches!(
-            parse("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n"),
-            Err(IoError::BadHeader { line: 3, .. })
-        ));
+        /// A bad header and whether an error is the one it must give.
+        type Case = (&'static str, fn(&IoError) -> bool);
+        // The line number is checked where the error names one.
+        let cases: [Case; 7] = [
+            ("plx\n", |e| matches!(e, IoError::NotPly { .. })),
+            ("ply\nformat ascii 1.0\nelement vertex 1\n", |e| {
+                matches!(e, IoError::UnterminatedHeader { .. })
+            }),
+            ("ply\nformat binary_middle_endian 1.0\nend_header\n", |e| {
+                matches!(e, IoError::UnsupportedFormat { .. })
+            }),
+            (
+                "ply\nformat ascii 1.0\nproperty float x\nend_header\n",
+                |e| matches!(e, IoError::BadHeader { line: 3, .. }),
+            ),
+            (
+                "ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n",
+                |e| matches!(e, IoError::BadHeader { line: 4, .. }),
+            ),
+            ("ply\nelement vertex 1\nend_header\n", |e| {
+                matches!(e, IoError::BadHeader { .. })
+            }),
+            (
+                "ply\nformat ascii 1.0\nelement vertex -1\nend_header\n",
+                |e| matches!(e, IoError::BadHeader { line: 3, .. }),
+            ),
+        ];
+        for (text, is_expected) in cases {
+            let err = parse(text).expect_err(text);
+            assert!(is_expected(&err), "{text:?}: {err:?}");
+        }
     }
 }
