@@ -498,8 +498,10 @@ fn pinhole(k: &Intrinsics) -> Pinhole {
 }
 
 /// A `Points3D` of these positions (x, y, z per point, metres) and, when given, these class
-/// ids (one per point), both handed to the SDK as ready-made Arrow arrays: building them
-/// through `Position3D` / `ClassId` values costs ~10 ms per frame of ~350k points.
+/// ids (one per point), both handed to the SDK as ready-made Arrow arrays. Through
+/// `Position3D` / `ClassId` values the SDK rebuilds each array by growing a `Vec` point by
+/// point: ~16 ms of user CPU per 3-camera frame of ~350k points, and the fresh pages of
+/// its reallocations showed as system time (docs/notes/2026-12-02-rerun.md, 2026-12-03).
 fn points(xyz_m: Vec<f32>, class_ids: Option<Vec<u16>>) -> Points3D {
     debug_assert_eq!(xyz_m.len() % 3, 0);
     let xyz = Float32Array::new(ScalarBuffer::from(xyz_m), None);
