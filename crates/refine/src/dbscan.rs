@@ -77,6 +77,11 @@ impl Clustering {
 /// points of one cell stays ≤ eps after rounding of coordinates up to ~1 km.
 const CELL_SIDE_FRACTION: f64 = 0.999;
 
+/// DBSCAN's cell side for `eps_m` (m): the diagonal just under eps ([`CELL_SIDE_FRACTION`]).
+fn cell_side_m(eps_m: f32) -> f64 {
+    f64::from(eps_m) / 3f64.sqrt() * CELL_SIDE_FRACTION
+}
+
 /// Offsets of the 3×3×3 block come first among [`neighbour_offsets`].
 const NEAR_OFFSETS: usize = 27;
 
@@ -124,8 +129,7 @@ pub(crate) fn dbscan_with_cells(
         bounds = Aabb::of_ids(positions_m, &all);
         vec![all]
     };
-    let side = f64::from(params.eps_m) / 3f64.sqrt() * CELL_SIDE_FRACTION;
-    let frame = GridFrame::covering_box(bounds, side);
+    let frame = GridFrame::covering_box(bounds, cell_side_m(params.eps_m));
     let group_results: Vec<GroupResult> = groups
         .par_iter()
         .map(|idx| cluster_group(positions_m, labels, idx, params, &frame))
@@ -332,8 +336,7 @@ impl GroupGrid {
         eps: f32,
         frame: &GridFrame,
     ) -> GroupGrid {
-        let side = f64::from(eps) / 3f64.sqrt() * CELL_SIDE_FRACTION;
-        let fine = frame.side_m() <= side;
+        let fine = frame.side_m() <= cell_side_m(eps);
         let mut keys: Vec<[i32; 3]> = Vec::with_capacity(idx.len());
         for &i in idx {
             keys.push(frame.key(positions[i as usize]));

@@ -253,6 +253,38 @@ enum CellLookup {
 /// Marks an empty slot of a dense table.
 pub(crate) const EMPTY: u32 = u32::MAX;
 
+/// Numbers the cells of a dense table over a block of `dims` slots per axis (x fastest)
+/// that holds each slot's point count: the non-empty slots become cells in slot (= key)
+/// order, and the table then holds each slot's cell ([`EMPTY`] where no point lies).
+/// Returns each cell's key (`key_of` its slot's coordinates in the block) and where its
+/// points start (CSR, one more entry than cells).
+pub(crate) fn number_cells(
+    table: &mut [u32],
+    dims: [u64; 3],
+    key_of: impl Fn([u64; 3]) -> [i32; 3],
+) -> (Vec<[i32; 3]>, Vec<u32>) {
+    let mut keys = Vec::new();
+    let mut start = Vec::new();
+    let mut n = 0u32;
+    for (s, t) in table.iter_mut().enumerate() {
+        if *t == 0 {
+            *t = EMPTY;
+            continue;
+        }
+        let s = s as u64;
+        keys.push(key_of([
+            s % dims[0],
+            (s / dims[0]) % dims[1],
+            s / (dims[0] * dims[1]),
+        ]));
+        start.push(n);
+        n += *t;
+        *t = keys.len() as u32 - 1;
+    }
+    start.push(n);
+    (keys, start)
+}
+
 impl CellGrid {
     /// Bins the points `ids` of `positions`, point `ids[k]` in cell `keys[k]`. Within a
     /// cell the points keep the order of `ids`. `pad`: neighbours within this many cells
@@ -308,29 +340,10 @@ impl CellGrid {
         for &s in &slots {
             table[s as usize] += 1;
         }
-        // Non-empty slots become cells, in slot order; the table then holds cell numbers.
-        let mut cell_keys = Vec::new();
-        let mut start = Vec::new();
-        let mut fill = Vec::new();
-        let mut n = 0u32;
-        for (s, t) in table.iter_mut().enumerate() {
-            if *t == 0 {
-                *t = EMPTY;
-                continue;
-            }
-            let s = s as u64;
-            let key = [
-                s % dims[0],
-                (s / dims[0]) % dims[1],
-                s / (dims[0] * dims[1]),
-            ];
-            cell_keys.push([0, 1, 2].map(|a| (key[a] as i64 + corner[a]) as i32));
-            start.push(n);
-            fill.push(n);
-            n += *t;
-            *t = cell_keys.len() as u32 - 1;
-        }
-        start.push(n);
+        let (cell_keys, start) = number_cells(&mut table, dims, |key| {
+            [0, 1, 2].map(|a| (key[a] as i64 + corner[a]) as i32)
+        });
+        let mut fill = start.clone();
         let mut sorted_ids = vec![0u32; m];
         let mut pts = vec![[0f32; 3]; m];
         for (&s, &id) in slots.iter().zip(ids) {

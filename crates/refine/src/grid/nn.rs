@@ -1,6 +1,6 @@
 //! [`NnIndex`]: exact nearest-neighbour and radius queries on a [`CellGrid`].
 
-use super::{Aabb, CellGrid, EMPTY, GridFrame, sort_by_key};
+use super::{Aabb, CellGrid, EMPTY, GridFrame, number_cells, sort_by_key};
 use bodyseg_core::math::{Vec3, dist2};
 
 /// Scratch space of [`NnIndex::nearest_with`], kept between queries.
@@ -145,25 +145,9 @@ impl NnIndex {
                 kept.push(k);
             }
         }
-        let mut keys = Vec::new();
-        let mut start = Vec::new();
-        let mut n = 0u32;
-        for (s, t) in table.iter_mut().enumerate() {
-            if *t == 0 {
-                *t = EMPTY;
-                continue;
-            }
-            let s = s as i64;
-            keys.push([
-                (s % dims[0]) as i32,
-                ((s / dims[0]) % dims[1]) as i32,
-                (s / (dims[0] * dims[1])) as i32,
-            ]);
-            start.push(n);
-            n += *t;
-            *t = keys.len() as u32 - 1;
-        }
-        start.push(n);
+        let (keys, start) =
+            number_cells(&mut table, dims.map(|d| d as u64), |k| k.map(|v| v as i32));
+        let n = start[keys.len()];
         // Runs per merged cell (CSR), then the points and runs in place.
         let mut run_start = vec![0u32; keys.len() + 1];
         let mut k = 0;
