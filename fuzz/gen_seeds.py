@@ -269,7 +269,11 @@ def text_seeds() -> None:
         if source.stat().st_size <= MAX_SEED_BYTES:
             copy("azure_kinect", str(source.relative_to(ROOT)))
     copy("azure_kinect", "crates/calib/tests/data/azure_kinect_calibration.json")
-    copy("config", "configs/default.toml")
+    # The default file is mostly comments (past 16 KiB): its seed keeps the TOML alone, which
+    # is all the config reader parses; comments are covered by the benchmark files.
+    text = (ROOT / "configs/default.toml").read_text()
+    keys = [line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#")]
+    write("config", "default.toml", ("\n".join(keys) + "\n").encode())
     for source in sorted((ROOT / "configs/benchmarks").glob("*.toml")):
         copy("config", str(source.relative_to(ROOT)), f"benchmark_{source.name}")
     write("config", "settings.txt", b"refine.eps_m=0.05\nproject.mode=naive\nboxes.mode=\"labels\"\n")
