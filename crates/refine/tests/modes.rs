@@ -358,12 +358,7 @@ fn vote_mode_starts_the_steps_from_the_voted_labels_and_leaves_reference_alone()
     for i in s.parts[missed].clone() {
         voted[i] = l(Class::LowerArms);
     }
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.0, 0.0, 1.0],
-        half_extents_m: [0.6, 0.6, 1.0],
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(0, [0.0, 0.0, 1.0], [0.6, 0.6, 1.0])];
     let steps = [Steps::Reference, Steps::MRN];
     let off = paper("M-R-N");
     let on = RefineConfig {
@@ -454,12 +449,7 @@ fn probability_noise_relabels_a_band_the_parser_was_unsure_of() {
     slab_body(&mut s);
     let (below, band, unsure) = forearm_with_unsure_band(&mut s, 0.4);
     let cloud = s.cloud();
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.0, 0.0, 1.0],
-        half_extents_m: [0.6, 0.6, 1.0],
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(0, [0.0, 0.0, 1.0], [0.6, 0.6, 1.0])];
     let steps = [Steps::Run {
         merge: false,
         remove: false,
@@ -560,12 +550,7 @@ fn refine_with_probs(
     (center, half_extents): ([f32; 3], [f32; 3]),
     cfg: &RefineConfig,
 ) -> Vec<Label> {
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: center,
-        half_extents_m: half_extents,
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(0, center, half_extents)];
     let evidence = PointEvidence {
         label_probs: Some(probs),
         ..Default::default()
@@ -754,12 +739,7 @@ fn merge_into_background_takes_a_patch_on_a_wall_but_never_a_foot_on_the_floor()
     );
     let patch = part(&mut s, [0.0, 0.61, 0.6], [0.1, 0.63, 0.7], Class::LowerArms);
     let cloud = s.cloud();
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.0, 0.1, 1.0],
-        half_extents_m: [0.6, 0.6, 1.0],
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(0, [0.0, 0.1, 1.0], [0.6, 0.6, 1.0])];
     let m = contact("M");
     let into_background = RefineConfig {
         merge_into_background: true,
@@ -812,12 +792,11 @@ fn foreign_colors_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm(
         colors[s.parts[p].clone()].fill(c);
     }
     cloud.colors = Some(colors);
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.15, 0.1, 1.2],
-        half_extents_m: [0.5, 0.5, 0.6],
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(
+        0,
+        [0.15, 0.1, 1.2],
+        [0.5, 0.5, 0.6],
+    )];
     let off = contact("M-R-N");
     let on = RefineConfig {
         foreign_color_density: 0.03,
@@ -885,18 +864,8 @@ fn foreign_colors_leave_a_hand_reaching_into_another_persons_box_to_its_owner() 
     }
     cloud.colors = Some(colors);
     let boxes = [
-        PersonBox {
-            id: 0,
-            center_m: [0.0, 0.0, 1.0],
-            half_extents_m: [0.45, 0.3, 1.0],
-            yaw_rad: 0.0,
-        },
-        PersonBox {
-            id: 1,
-            center_m: [0.8, 0.0, 1.0],
-            half_extents_m: [0.65, 0.3, 1.0],
-            yaw_rad: 0.0,
-        },
+        PersonBox::axis_aligned(0, [0.0, 0.0, 1.0], [0.45, 0.3, 1.0]),
+        PersonBox::axis_aligned(1, [0.8, 0.0, 1.0], [0.65, 0.3, 1.0]),
     ];
     let cfg = RefineConfig {
         foreign_color_density: 0.03,
