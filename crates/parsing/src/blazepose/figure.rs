@@ -7,7 +7,7 @@ use super::{DecodedPose, NUM_LANDMARKS, Roi, landmark};
 /// An upright figure's landmarks, image px in a 100×160 frame: eyes, mouth and ears at
 /// y 23–28, shoulders 40, elbows 60, wrists 78, hips 80, knees 110, ankles 140; hand
 /// landmarks 6 px past the wrists, foot landmarks 6 px past the ankles; the rest (nose,
-/// inner eye corners) at (50, 25).
+/// eye corners) at (50, 25).
 pub(crate) fn upright_figure_xy() -> Vec<[f64; 2]> {
     use landmark::*;
     let mut xy = vec![[50.0, 25.0]; NUM_LANDMARKS];
