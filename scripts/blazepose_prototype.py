@@ -367,25 +367,22 @@ def bones(pose, rule, image_wh):
                     rule.face_to_width * np.linalg.norm(eyes - mouth), 1.0)
         out.append((HEAD, "poly", np.array([hc - rule.head_down * width * up,
                                             hc + rule.head_up * width * up]), rule.r_head * width, scale))
-    for sh, el, wr, hands in ((L_SH, L_EL, L_WR, L_HANDS), (R_SH, R_EL, R_WR, R_HANDS)):
-        if seen(sh, el):
-            out.append((UPPER_ARMS, "poly", np.array([P[sh], P[el]]), rule.r_upper_arm * scale, scale))
-            if seen(wr):
-                pts = [P[el], P[wr]]
-                hp = [i for i in hands if ok[i]]
-                if hp:
-                    tip = P[hp].mean(0)
-                    pts.append(tip + rule.hand_extend * (tip - P[wr]))
-                out.append((LOWER_ARMS, "poly", np.array(pts), rule.r_lower_arm * scale, scale))
-    for hip, kn, an, feet in ((L_HIP, L_KN, L_AN, L_FEET), (R_HIP, R_KN, R_AN, R_FEET)):
-        if seen(hip, kn):
-            out.append((UPPER_LEGS, "poly", np.array([P[hip], P[kn]]), rule.r_upper_leg * scale, scale))
-            if seen(an):
-                pts = [P[kn], P[an]]
-                fp = [i for i in feet if ok[i]]
-                if fp:
-                    pts.append(P[fp].mean(0))
-                out.append((LOWER_LEGS, "poly", np.array(pts), rule.r_lower_leg * scale, scale))
+    # A limb: its upper part from root to middle joint, its lower part on to the end joint and
+    # past it to the mean of the hand (feet) landmarks seen, for hands extended by hand_extend.
+    limbs = [(root, mid, end, tips, UPPER_ARMS, LOWER_ARMS, rule.r_upper_arm, rule.r_lower_arm, rule.hand_extend)
+             for root, mid, end, tips in ((L_SH, L_EL, L_WR, L_HANDS), (R_SH, R_EL, R_WR, R_HANDS))]
+    limbs += [(root, mid, end, tips, UPPER_LEGS, LOWER_LEGS, rule.r_upper_leg, rule.r_lower_leg, 0.0)
+              for root, mid, end, tips in ((L_HIP, L_KN, L_AN, L_FEET), (R_HIP, R_KN, R_AN, R_FEET))]
+    for root, mid, end, tips, upper, lower, r_upper, r_lower, extend in limbs:
+        if seen(root, mid):
+            out.append((upper, "poly", np.array([P[root], P[mid]]), r_upper * scale, scale))
+            if seen(end):
+                pts = [P[mid], P[end]]
+                tp = [i for i in tips if ok[i]]
+                if tp:
+                    tip = P[tp].mean(0)
+                    pts.append(tip + extend * (tip - P[end]) if extend else tip)
+                out.append((lower, "poly", np.array(pts), r_lower * scale, scale))
     return out
 
 

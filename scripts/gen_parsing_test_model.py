@@ -75,17 +75,8 @@ def main():
     OUT.mkdir(parents=True, exist_ok=True)
     onnx.save(tiny_model(7), str(OUT / "tiny.onnx"))
     onnx.save(tiny_model(5), str(OUT / "tiny_5ch.onnx"))
-    sidecar = {
-        "input_size": [S, S],
-        "channel_order": "BGR",
-        "mean": MEAN,
-        "std": STD,
-        "class_names": pc.CLASS_NAMES,
-        "output_stride": 2,
-        "align_corners": True,
-        "description": "tiny random test model written by scripts/gen_parsing_test_model.py",
-    }
-    (OUT / "tiny.json").write_text(json.dumps(sidecar, indent=2) + "\n")
+    pc.write_sidecar(OUT / "tiny.json", S, "BGR", MEAN, STD, True,
+                     "tiny random test model written by scripts/gen_parsing_test_model.py")
 
     sess = ort.InferenceSession(str(OUT / "tiny.onnx"), providers=["CPUExecutionProvider"])
     # Fixed input: a smooth deterministic function of (n, c, y, x), Rust recomputes it.

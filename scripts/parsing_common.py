@@ -11,10 +11,28 @@ scripts/gen_parsing_test_model.py. Formulas: shared/ALGORITHM.md §2.
   before normalisation ((v/255 - mean)/std in the sidecar's channel order).
 """
 
+import json
+
 import numpy as np
 
 CLASS_NAMES = ["background", "head", "torso", "upper_arms", "lower_arms", "upper_legs", "lower_legs"]
 NUM_CLASSES = 7
+
+
+def write_sidecar(path, s, channel_order, mean, std, align_corners, description):
+    """Writes the sidecar JSON bodyseg-parsing reads beside an ONNX parser (output stride 2,
+    CLASS_NAMES), indented, with a final newline."""
+    sidecar = {
+        "input_size": [s, s],
+        "channel_order": channel_order,
+        "mean": mean,
+        "std": std,
+        "class_names": CLASS_NAMES,
+        "output_stride": 2,
+        "align_corners": align_corners,
+        "description": description,
+    }
+    path.write_text(json.dumps(sidecar, indent=2) + "\n")
 
 
 def input_transform(w, h, s):

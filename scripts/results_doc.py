@@ -64,6 +64,17 @@ def gains(rows, name="M-R-N"):
     return r["biou"] - ref["biou"], per_class
 
 
+def against_paper(runs, source, mode, setting):
+    """One 2D source and projection in the paper mode and in `setting` (`improved`, `vote`):
+    (paper rows, setting rows, paper M-R-N BIoU gain, setting's, setting's per-class gains,
+    setting's gain / paper's)."""
+    base = runs[(source, mode)]
+    rows = runs[(source, f"{mode}_{setting}")]
+    d0, _ = gains(base)
+    d1, per_class = gains(rows)
+    return base, rows, d0, d1, per_class, d1 / d0 if d0 else float("nan")
+
+
 def why_not_lower_arms(rows, best):
     """Where the paper setting's gains come from, from the confusion matrices: why `best`
     and not lower arms gains most."""
@@ -225,12 +236,8 @@ def main():
           f"as the paper's small M-N → M-R-N step also shows.")
     for source in ["recorded", "model"]:
         for mode in ["naive", "dsa"]:
-            base = runs[(source, mode)]
-            imp = runs[(source, f"{mode}_improved")]
-            d0, _ = gains(base)
-            d1, pc1 = gains(imp)
+            base, imp, d0, d1, pc1, ratio = against_paper(runs, source, mode, "improved")
             losses = [c for c in BODY if pc1[c] < -0.5]
-            ratio = d1 / d0 if d0 else float("nan")
             r_step = imp["M-R-N"]["biou"] - imp["M-N"]["biou"]
             w(f"- **Improved refinement** ({source_name[source]}, {mode_name[mode]}): M-R-N {d1:+.2f} BIoU against "
               f"the paper mode's {d0:+.2f} (×{ratio:.2f}); M-N {imp['M-N']['biou'] - imp['Reference']['biou']:+.2f}, "
@@ -262,12 +269,8 @@ def main():
           "see configs/benchmarks/improved.toml.)")
     for source in ["recorded", "model"]:
         for mode in ["naive", "dsa"]:
-            base = runs[(source, mode)]
-            vote = runs[(source, f"{mode}_vote")]
-            d0, _ = gains(base)
-            d1, pc1 = gains(vote)
+            base, vote, d0, d1, pc1, ratio = against_paper(runs, source, mode, "vote")
             worst = min(pc1, key=pc1.get)
-            ratio = d1 / d0 if d0 else float("nan")
             ceiling = 100.0 - base["Reference"]["biou"]  # BIoU points left to repair
             d_imp, _ = gains(runs[(source, f"{mode}_improved")])
             extra = f" (improved refinement without the vote: {d_imp:+.2f}, so the vote changes it by {d1 - d_imp:+.2f})"

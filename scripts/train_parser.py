@@ -253,19 +253,10 @@ def main():
     onnx.checker.check_model(m)
     onnx.save(m, str(tmp))
     os.replace(tmp, args.out)
-    sidecar = {
-        "input_size": [s, s],
-        "channel_order": "RGB",
-        "mean": MEAN,
-        "std": STD,
-        "class_names": pc.CLASS_NAMES,
-        "output_stride": 2,
-        "align_corners": False,
-        "description": (f"bodyseg_parser_small: trained by scripts/train_parser.py on bodyseg synth "
-                        f"(presets {', '.join(PRESETS)}, seeds 1-{args.train_seeds}, {len(x_all)} images), "
-                        f"{n_params} parameters, {step} steps"),
-    }
-    args.out.with_suffix(".json").write_text(json.dumps(sidecar, indent=2) + "\n")
+    pc.write_sidecar(args.out.with_suffix(".json"), s, "RGB", MEAN, STD, False,
+                     f"bodyseg_parser_small: trained by scripts/train_parser.py on bodyseg synth "
+                     f"(presets {', '.join(PRESETS)}, seeds 1-{args.train_seeds}, {len(x_all)} images), "
+                     f"{n_params} parameters, {step} steps")
 
     # 4. held-out evaluation through onnxruntime and the Rust-equivalent post-processing
     import onnxruntime as ort

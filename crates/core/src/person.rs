@@ -18,6 +18,16 @@ pub struct PersonBox {
 }
 
 impl PersonBox {
+    /// A box with its axes along the world's (yaw 0).
+    pub fn axis_aligned(id: u32, center_m: Vec3, half_extents_m: Vec3) -> PersonBox {
+        PersonBox {
+            id,
+            center_m,
+            half_extents_m,
+            yaw_rad: 0.0,
+        }
+    }
+
     /// True when `p_world` lies inside the box or on its faces. For many points, make a
     /// [`BoxTest`] once with [`PersonBox::test`].
     #[inline]
@@ -119,5 +129,13 @@ mod tests {
             ..b
         };
         assert!(bad.invalid_reason().is_some());
+    }
+
+    #[test]
+    fn an_axis_aligned_box_has_no_yaw() {
+        let b = PersonBox::axis_aligned(3, [1.0, 2.0, 1.0], [0.5, 0.1, 1.0]);
+        assert_eq!((b.id, b.yaw_rad), (3, 0.0));
+        assert!(b.contains([1.45, 2.05, 1.0]));
+        assert!(!b.contains([1.0, 2.45, 1.0]));
     }
 }

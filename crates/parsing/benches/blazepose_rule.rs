@@ -14,47 +14,16 @@ use bodyseg_parsing::blazepose::{
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 
+#[path = "../src/blazepose/figure.rs"]
+mod figure;
+
 const W: usize = 960;
 const H: usize = 540;
 
 /// The figure of the unit tests (image px, 100×160 frame), scaled by `k` and moved by
 /// `shift`, with a graded mask on a ROI of side `side`.
 fn person(k: f64, shift: [f64; 2], side: f64) -> DecodedPose {
-    use landmark::*;
-    let mut xy = vec![[50.0, 25.0]; NUM_LANDMARKS];
-    let set = [
-        (LEFT_EYE, [53.0, 23.0]),
-        (RIGHT_EYE, [47.0, 23.0]),
-        (MOUTH_LEFT, [52.0, 28.0]),
-        (MOUTH_RIGHT, [48.0, 28.0]),
-        (LEFT_EAR, [56.0, 24.0]),
-        (RIGHT_EAR, [44.0, 24.0]),
-        (LEFT_SHOULDER, [60.0, 40.0]),
-        (RIGHT_SHOULDER, [40.0, 40.0]),
-        (LEFT_HIP, [58.0, 80.0]),
-        (RIGHT_HIP, [42.0, 80.0]),
-        (LEFT_ELBOW, [70.0, 60.0]),
-        (RIGHT_ELBOW, [30.0, 60.0]),
-        (LEFT_WRIST, [72.0, 78.0]),
-        (RIGHT_WRIST, [28.0, 78.0]),
-        (LEFT_KNEE, [58.0, 110.0]),
-        (RIGHT_KNEE, [42.0, 110.0]),
-        (LEFT_ANKLE, [58.0, 140.0]),
-        (RIGHT_ANKLE, [42.0, 140.0]),
-    ];
-    for (i, p) in set {
-        xy[i] = p;
-    }
-    for (idx, p) in [
-        (&LEFT_HAND[..], [72.0, 84.0]),
-        (&RIGHT_HAND[..], [28.0, 84.0]),
-        (&LEFT_FOOT[..], [58.0, 146.0]),
-        (&RIGHT_FOOT[..], [42.0, 146.0]),
-    ] {
-        for &i in idx {
-            xy[i] = p;
-        }
-    }
+    let mut xy = figure::upright_figure_xy();
     for p in &mut xy {
         *p = [p[0] * k + shift[0], p[1] * k + shift[1]];
     }
@@ -65,18 +34,7 @@ fn person(k: f64, shift: [f64; 2], side: f64) -> DecodedPose {
             mask[j * INPUT + i] = m.clamp(0.0, 1.0) as f32;
         }
     }
-    DecodedPose {
-        roi: Roi {
-            centre_px: [50.0 * k + shift[0], 80.0 * k + shift[1]],
-            side_px: side,
-            angle_rad: 0.0,
-        },
-        flag: 1.0,
-        xy,
-        visibility: vec![1.0; NUM_LANDMARKS],
-        presence: vec![1.0; NUM_LANDMARKS],
-        mask,
-    }
+    figure::sure_pose(xy, [50.0 * k + shift[0], 80.0 * k + shift[1]], side, mask)
 }
 
 fn rule(c: &mut Criterion) {

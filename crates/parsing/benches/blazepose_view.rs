@@ -16,20 +16,16 @@ use bodyseg_parsing::{BlazePoseOptions, BlazePoseSegmenter, BlazePoseVariant};
 use bodyseg_parsing::{Segmenter, ViewInput};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
 
+#[path = "../tests/common/runtime.rs"]
+mod runtime;
+use runtime::{root, runtime_library};
 #[path = "../tests/common/two_people.rs"]
 mod two_people;
 use two_people::view;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
 fn segmenter(variant: BlazePoseVariant) -> BlazePoseSegmenter {
-    let library = std::env::var_os("ORT_DYLIB_PATH")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join(".deps/onnxruntime/libonnxruntime.so"));
+    let library = runtime_library();
     let model = root().join(format!("models/blazepose_{}.onnx", variant.name()));
     let bytes = std::fs::read(&model).expect("committed BlazePose model");
     BlazePoseSegmenter::new(&library, &bytes, &model, &BlazePoseOptions::default())

@@ -17,16 +17,14 @@ use bodyseg_parsing::{ModelSpec, OnnxOptions, OnnxSegmenter, Segmenter, ViewInpu
 use bodyseg_synth::{Synth, preset};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+#[path = "../tests/common/runtime.rs"]
+mod runtime;
+use runtime::{root, runtime_library};
 
 fn segmenter() -> OnnxSegmenter {
-    let library = std::env::var_os("ORT_DYLIB_PATH")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join(".deps/onnxruntime/libonnxruntime.so"));
+    let library = runtime_library();
     let model = root().join("models/bodyseg_parser_small.onnx");
     let bytes = std::fs::read(&model).expect("bundled model (scripts/train_parser.py)");
     let text = std::fs::read_to_string(model.with_extension("json")).expect("its sidecar");

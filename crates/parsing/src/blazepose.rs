@@ -23,6 +23,8 @@ pub use crate::segmenter::PixelBox;
 
 mod bone;
 mod decode;
+#[cfg(test)]
+pub(crate) mod figure;
 mod label;
 pub mod landmark;
 mod model;

@@ -476,22 +476,12 @@ impl Segmenter for BlazePoseSegmenter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::blazepose::figure::sure_pose;
 
     fn pose_centred_at(c: [f64; 2]) -> DecodedPose {
         let mut xy = vec![[0.0, 0.0]; NUM_LANDMARKS];
         xy[landmark::ALIGN_CENTRE] = c;
-        DecodedPose {
-            roi: Roi {
-                centre_px: c,
-                side_px: 100.0,
-                angle_rad: 0.0,
-            },
-            flag: 1.0,
-            xy,
-            visibility: vec![1.0; NUM_LANDMARKS],
-            presence: vec![1.0; NUM_LANDMARKS],
-            mask: Vec::new(),
-        }
+        sure_pose(xy, c, 100.0, Vec::new())
     }
 
     /// A pose drifted onto a neighbour (centre beyond the region's 10 % slack) is not the

@@ -171,6 +171,12 @@ impl OnnxSegmenter {
             reason,
             path: crate::spec::sidecar_path(model_path),
         };
+        // The dims of a float32 tensor of rank 4, or an error naming the input or output.
+        let four_dims = |what: &str, name: &str, dtype: &ValueType, expected: &str| {
+            float_dims(dtype)
+                .filter(|d| d.len() == 4)
+                .ok_or_else(|| contract(format!("{what} {name} is {dtype:?}, expected {expected}")))
+        };
         if session.inputs().len() != 1 {
             return Err(contract(format!(
                 "it has {} inputs, expected 1 ([N,3,H,W] float32)",
@@ -178,15 +184,12 @@ impl OnnxSegmenter {
             )));
         }
         let input = &session.inputs()[0];
-        let dims = float_dims(input.dtype())
-            .filter(|d| d.len() == 4)
-            .ok_or_else(|| {
-                contract(format!(
-                    "input {} is {:?}, expected a float32 tensor [N,3,H,W]",
-                    input.name(),
-                    input.dtype()
-                ))
-            })?;
+        let dims = four_dims(
+            "input",
+            input.name(),
+            input.dtype(),
+            "a float32 tensor [N,3,H,W]",
+        )?;
         if dims[1] != 3 && dims[1] != -1 {
             return Err(contract(format!(
                 "input {} has {} channels, expected 3",
@@ -208,15 +211,12 @@ impl OnnxSegmenter {
         let Some(output) = session.outputs().first() else {
             return Err(contract("it has no output".into()));
         };
-        let out = float_dims(output.dtype())
-            .filter(|d| d.len() == 4)
-            .ok_or_else(|| {
-                contract(format!(
-                    "output {} is {:?}, expected float32 logits [N,7,h,w]",
-                    output.name(),
-                    output.dtype()
-                ))
-            })?;
+        let out = four_dims(
+            "output",
+            output.name(),
+            output.dtype(),
+            "float32 logits [N,7,h,w]",
+        )?;
         if out[1] != -1 && out[1] != NUM_CLASSES as i64 {
             return Err(ParsingError::OutputChannels {
                 got: out[1],

@@ -8,27 +8,13 @@
 use bodyseg_core::{Label, RgbImage};
 use bodyseg_parsing::{BlazePoseOptions, BlazePoseSegmenter};
 use bodyseg_parsing::{ParsingError, PersonRegion, PixelBox, Segmenter, ViewInput};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+#[path = "common/runtime.rs"]
+mod runtime;
 #[path = "common/two_people.rs"]
 mod two_people;
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// The ONNX Runtime library the tests load: ORT_DYLIB_PATH, else the project-local copy.
-fn runtime_library() -> PathBuf {
-    let path = std::env::var_os("ORT_DYLIB_PATH")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join(".deps/onnxruntime/libonnxruntime.so"));
-    assert!(
-        path.is_file(),
-        "{}: ONNX Runtime library missing: run scripts/setup_onnxruntime.sh (or set ORT_DYLIB_PATH)",
-        path.display()
-    );
-    path
-}
+use runtime::{root, runtime_library};
 
 fn load(model: &Path) -> Result<BlazePoseSegmenter, ParsingError> {
     load_with(model, 1)

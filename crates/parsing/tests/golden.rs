@@ -12,6 +12,10 @@ use bodyseg_parsing::{ModelSpec, OnnxOptions, OnnxSegmenter, ParsingError, Segme
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
+#[path = "common/runtime.rs"]
+mod runtime;
+use runtime::runtime_library;
+
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data")
@@ -29,21 +33,6 @@ fn floats(v: &Value) -> Vec<f64> {
         .iter()
         .map(|x| x.as_f64().expect("number"))
         .collect()
-}
-
-/// The ONNX Runtime library the tests load: ORT_DYLIB_PATH, else the project-local copy.
-fn runtime_library() -> PathBuf {
-    let path = std::env::var_os("ORT_DYLIB_PATH")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.deps/onnxruntime/libonnxruntime.so")
-        });
-    assert!(
-        path.is_file(),
-        "{}: ONNX Runtime library missing: run scripts/setup_onnxruntime.sh (or set ORT_DYLIB_PATH)",
-        path.display()
-    );
-    path
 }
 
 /// The image scripts/gen_parsing_test_model.py's `pattern_rgb` builds.

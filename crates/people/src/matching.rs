@@ -81,12 +81,7 @@ mod tests {
     use super::*;
 
     fn b(id: u32, x: f32) -> PersonBox {
-        PersonBox {
-            id,
-            center_m: [x, 0.0, 0.9],
-            half_extents_m: [0.3, 0.2, 0.9],
-            yaw_rad: 0.0,
-        }
+        PersonBox::axis_aligned(id, [x, 0.0, 0.9], [0.3, 0.2, 0.9])
     }
 
     #[test]

@@ -255,25 +255,14 @@ impl VoxelGraph {
         out
     }
 
-    /// Multi-source Dijkstra (Euclidean edge lengths plus `penalty(i, j)` metres on the
-    /// edge from `i` to `j`: one that crosses between people rather than along a body)
-    /// inside `members`: each member goes to the seed group it is closest to along the
-    /// graph. `seeds[k]` are the nodes of group k. Returns per member (same order) its
-    /// group; unreachable members get the group whose seed is nearest in a straight line.
-    pub fn split_with(
-        &self,
-        centers: &[Vec3],
-        members: &[u32],
-        seeds: &[Vec<u32>],
-        penalty: impl Fn(u32, u32) -> f32,
-    ) -> Vec<usize> {
-        self.split_scaled(centers, members, seeds, |_, _| 1.0, |_, i, j| penalty(i, j))
-    }
-
-    /// [`VoxelGraph::split_with`] where group g's edge lengths into voxel j count `scale(g, j)`
-    /// times and its edge from i to j pays `penalty(g, i, j)` metres more: a group that
-    /// spreads more cheaply claims more of what lies between it and the others, and one
-    /// that pays to cross a boundary (a colour edge) claims less of what lies beyond it.
+    /// Multi-source Dijkstra inside `members`: each member goes to the seed group it is
+    /// closest to along the graph. `seeds[k]` are the nodes of group k. Group g's edge
+    /// lengths (Euclidean) into voxel j count `scale(g, j)` times and its edge from i to j
+    /// pays `penalty(g, i, j)` metres more (one that crosses between people rather than
+    /// along a body): a group that spreads more cheaply claims more of what lies between
+    /// it and the others, and one that pays to cross a boundary (a colour edge) claims less
+    /// of what lies beyond it. Returns per member (same order) its group; unreachable
+    /// members get the group whose seed is nearest in a straight line.
     pub fn split_scaled(
         &self,
         centers: &[Vec3],
@@ -389,7 +378,8 @@ mod tests {
         let mut grown = g.grow(0, |j| pts[j as usize][0] < 0.18);
         grown.sort_unstable();
         assert_eq!(grown, [0, 2, 4, 6]);
-        let groups = g.split_with(&pts, &comps[0], &[vec![0], vec![18]], |_, _| 0.0);
+        let seeds = [vec![0], vec![18]];
+        let groups = g.split_scaled(&pts, &comps[0], &seeds, |_, _| 1.0, |_, _, _| 0.0);
         assert_eq!(groups[..5], [0; 5]);
         assert_eq!(groups[5..], [1; 5]);
     }

@@ -58,12 +58,11 @@ fn leaning_person(
     }
     // Extent: x ±0.285 (arms), y ±0.16 (torso), z 0–1.72, scaled; plus 0.05 on every
     // side and on top.
-    PersonBox {
-        id: 0,
-        center_m: [x, y, (height_m + 0.05) / 2.0],
-        half_extents_m: [s * 0.285 + 0.05, s * 0.16 + 0.05, (height_m + 0.05) / 2.0],
-        yaw_rad: 0.0,
-    }
+    PersonBox::axis_aligned(
+        0,
+        [x, y, (height_m + 0.05) / 2.0],
+        [s * 0.285 + 0.05, s * 0.16 + 0.05, (height_m + 0.05) / 2.0],
+    )
 }
 
 #[test]

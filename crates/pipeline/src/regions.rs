@@ -206,12 +206,7 @@ mod tests {
     }
 
     fn person(x: f32, y: f32) -> PersonBox {
-        PersonBox {
-            id: 0,
-            center_m: [x, y, 0.0],
-            half_extents_m: [0.3, 0.2, 0.9],
-            yaw_rad: 0.0,
-        }
+        PersonBox::axis_aligned(0, [x, y, 0.0], [0.3, 0.2, 0.9])
     }
 
     #[test]

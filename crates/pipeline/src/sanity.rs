@@ -140,12 +140,7 @@ mod tests {
     }
 
     fn person(id: u32, center: [f32; 3], half: [f32; 3]) -> PersonBox {
-        PersonBox {
-            id,
-            center_m: center,
-            half_extents_m: half,
-            yaw_rad: 0.0,
-        }
+        PersonBox::axis_aligned(id, center, half)
     }
 
     #[test]

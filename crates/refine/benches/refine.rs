@@ -14,6 +14,7 @@
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items.
 
+use bodyseg_core::{LabeledCloud, PersonBox};
 use bodyseg_refine::Steps;
 use bodyseg_refine::color::drop_foreign_arms;
 use bodyseg_refine::{
@@ -45,15 +46,52 @@ fn synth(n: usize) -> synth_cloud::SynthPersonCloud {
     synth_cloud::synth_person_cloud(n, SEED).expect("the synth preset renders")
 }
 
+/// Label-aware DBSCAN as the paper runs it: eps 0.05 m, min_points 40, labels never mix.
+const PARAMS: DbscanParams = DbscanParams {
+    eps_m: 0.05,
+    min_points: 40,
+    label_penalty_m: f32::INFINITY,
+};
+
+/// Per cloud size, 20 samples, throughput in points: group `dbscan{suffix}` times
+/// [`PARAMS`]' DBSCAN, then group `refine{suffix}` the default refinement of the one person
+/// in `clouds` = (size asked, cloud, the person's box).
+fn dbscan_and_refine(
+    c: &mut Criterion,
+    suffix: &str,
+    clouds: &[(usize, &LabeledCloud, &PersonBox)],
+) {
+    let mut g = c.benchmark_group(format!("dbscan{suffix}"));
+    g.sample_size(20);
+    for &(n, cloud, _) in clouds {
+        g.throughput(Throughput::Elements(cloud.len() as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), cloud, |b, cloud| {
+            b.iter(|| {
+                dbscan(
+                    black_box(&cloud.positions_m),
+                    black_box(&cloud.labels),
+                    &PARAMS,
+                )
+            })
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group(format!("refine{suffix}"));
+    g.sample_size(20);
+    let cfg = RefineConfig::default();
+    for &(n, cloud, person_box) in clouds {
+        let boxes = [person_box.clone()];
+        g.throughput(Throughput::Elements(cloud.len() as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), cloud, |b, cloud| {
+            b.iter(|| refine(black_box(cloud), &boxes, &cfg))
+        });
+    }
+    g.finish();
+}
+
 fn bench_synth(c: &mut Criterion) {
     // As the binary: freed memory stays with the allocator (`targets` runs this first).
     alloc::keep_freed_memory();
-    let params = DbscanParams {
-        eps_m: 0.05,
-        min_points: 40,
-        label_penalty_m: f32::INFINITY,
-    };
-    let cfg = RefineConfig::default();
     let clouds: Vec<_> = SIZES.iter().map(|&n| (n, synth(n))).collect();
     for (n, p) in &clouds {
         eprintln!(
@@ -61,31 +99,11 @@ fn bench_synth(c: &mut Criterion) {
             p.cameras, p.flying, p.mislabelled
         );
     }
-    let mut g = c.benchmark_group("dbscan_synth");
-    g.sample_size(20);
-    for (n, p) in &clouds {
-        g.throughput(Throughput::Elements(*n as u64));
-        g.bench_with_input(BenchmarkId::from_parameter(n), p, |b, p| {
-            b.iter(|| {
-                dbscan(
-                    black_box(&p.cloud.positions_m),
-                    black_box(&p.cloud.labels),
-                    &params,
-                )
-            })
-        });
-    }
-    g.finish();
-    let mut g = c.benchmark_group("refine_synth");
-    g.sample_size(20);
-    for (n, p) in &clouds {
-        let boxes = [p.person_box.clone()];
-        g.throughput(Throughput::Elements(*n as u64));
-        g.bench_with_input(BenchmarkId::from_parameter(n), p, |b, p| {
-            b.iter(|| refine(black_box(&p.cloud), &boxes, &cfg))
-        });
-    }
-    g.finish();
+    let sized: Vec<_> = clouds
+        .iter()
+        .map(|(n, p)| (*n, &p.cloud, &p.person_box))
+        .collect();
+    dbscan_and_refine(c, "_synth", &sized);
     let mut g = c.benchmark_group("refine_synth_steps");
     g.sample_size(20);
     let (n, p) = &clouds[1];
@@ -103,43 +121,14 @@ fn bench_synth(c: &mut Criterion) {
     g.finish();
 }
 
-fn bench_dbscan(c: &mut Criterion) {
-    let mut g = c.benchmark_group("dbscan");
-    g.sample_size(20);
-    let params = DbscanParams {
-        eps_m: 0.05,
-        min_points: 40,
-        label_penalty_m: f32::INFINITY,
-    };
-    for n in SIZES {
-        let p = human_cloud(n, SEED);
-        g.throughput(Throughput::Elements(p.cloud.len() as u64));
-        g.bench_with_input(BenchmarkId::from_parameter(n), &p, |b, p| {
-            b.iter(|| {
-                dbscan(
-                    black_box(&p.cloud.positions_m),
-                    black_box(&p.cloud.labels),
-                    &params,
-                )
-            })
-        });
-    }
-    g.finish();
-}
-
-fn bench_refine(c: &mut Criterion) {
-    let mut g = c.benchmark_group("refine");
-    g.sample_size(20);
-    let cfg = RefineConfig::default();
-    for n in SIZES {
-        let p = human_cloud(n, SEED);
-        let boxes = [p.person_box.clone()];
-        g.throughput(Throughput::Elements(p.cloud.len() as u64));
-        g.bench_with_input(BenchmarkId::from_parameter(n), &p, |b, p| {
-            b.iter(|| refine(black_box(&p.cloud), &boxes, &cfg))
-        });
-    }
-    g.finish();
+/// The capsule clouds of `bodyseg-testkit`: groups `dbscan` and `refine`.
+fn bench_testkit(c: &mut Criterion) {
+    let clouds: Vec<_> = SIZES.iter().map(|&n| (n, human_cloud(n, SEED))).collect();
+    let sized: Vec<_> = clouds
+        .iter()
+        .map(|(n, p)| (*n, &p.cloud, &p.person_box))
+        .collect();
+    dbscan_and_refine(c, "", &sized);
 }
 
 fn bench_refine_modes(c: &mut Criterion) {
@@ -268,6 +257,6 @@ fn bench_smooth(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default();
-    targets = bench_synth, bench_dbscan, bench_refine, bench_refine_modes, bench_foreign_colors, bench_smooth
+    targets = bench_synth, bench_testkit, bench_refine_modes, bench_foreign_colors, bench_smooth
 }
 criterion_main!(benches);

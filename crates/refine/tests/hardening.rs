@@ -77,12 +77,7 @@ fn person_with_far_outliers() -> (LabeledCloud, PersonBox, usize) {
             pixel: cloud.origins.len() as u32,
         });
     }
-    let person_box = PersonBox {
-        id: 0,
-        center_m: [0.0, 0.0, 0.0],
-        half_extents_m: [130_000.0, 130_000.0, 130_000.0],
-        yaw_rad: 0.0,
-    };
+    let person_box = PersonBox::axis_aligned(0, [0.0, 0.0, 0.0], [130_000.0, 130_000.0, 130_000.0]);
     (cloud, person_box, p.cloud.len())
 }
 

@@ -358,12 +358,7 @@ fn vote_mode_starts_the_steps_from_the_voted_labels_and_leaves_reference_alone()
     for i in s.parts[missed].clone() {
         voted[i] = l(Class::LowerArms);
     }
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.0, 0.0, 1.0],
-        half_extents_m: [0.6, 0.6, 1.0],
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(0, [0.0, 0.0, 1.0], [0.6, 0.6, 1.0])];
     let steps = [Steps::Reference, Steps::MRN];
     let off = paper("M-R-N");
     let on = RefineConfig {
@@ -454,12 +449,7 @@ fn probability_noise_relabels_a_band_the_parser_was_unsure_of() {
     slab_body(&mut s);
     let (below, band, unsure) = forearm_with_unsure_band(&mut s, 0.4);
     let cloud = s.cloud();
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.0, 0.0, 1.0],
-        half_extents_m: [0.6, 0.6, 1.0],
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(0, [0.0, 0.0, 1.0], [0.6, 0.6, 1.0])];
     let steps = [Steps::Run {
         merge: false,
         remove: false,
@@ -560,12 +550,7 @@ fn refine_with_probs(
     (center, half_extents): ([f32; 3], [f32; 3]),
     cfg: &RefineConfig,
 ) -> Vec<Label> {
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: center,
-        half_extents_m: half_extents,
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(0, center, half_extents)];
     let evidence = PointEvidence {
         label_probs: Some(probs),
         ..Default::default()
@@ -657,9 +642,9 @@ fn doubted_labels_are_voted_by_the_sure_points_across_the_limb() {
     }
 }
 
-/// Adds a cuboid part of `class` on a 2 cm lattice to the scene; its part index.
-fn part(s: &mut Scene, lo: [f32; 3], hi: [f32; 3], class: Class) -> usize {
-    s.add(cuboid(lo, hi, 0.02, l(class)))
+/// Adds cuboid parts `(lo, hi, class)` on a 2 cm lattice to the scene; their part indices.
+fn parts<const N: usize>(s: &mut Scene, table: [([f32; 3], [f32; 3], Class); N]) -> [usize; N] {
+    table.map(|(lo, hi, class)| s.add(cuboid(lo, hi, 0.02, l(class))))
 }
 
 #[test]
@@ -670,29 +655,14 @@ fn r_through_noise_keeps_a_forearm_joined_by_a_doubted_elbow_and_removes_a_loose
     // only by an elbow band the parser doubted (3 layers: an 8 cm gap between the two arm
     // clusters, more than twice the contact gap), and a piece labelled forearm 0.3 m from
     // everything (an object).
-    part(
+    let [_, elbow, forearm, object] = parts(
         &mut s,
-        [0.17, -0.04, 1.2],
-        [0.21, 0.0, 1.48],
-        Class::UpperArms,
-    );
-    let elbow = part(
-        &mut s,
-        [0.23, -0.04, 1.2],
-        [0.27, 0.0, 1.24],
-        Class::UpperArms,
-    );
-    let forearm = part(
-        &mut s,
-        [0.29, -0.04, 1.2],
-        [0.5, 0.0, 1.24],
-        Class::LowerArms,
-    );
-    let object = part(
-        &mut s,
-        [0.5, -0.04, 0.8],
-        [0.54, 0.0, 0.9],
-        Class::LowerArms,
+        [
+            ([0.17, -0.04, 1.2], [0.21, 0.0, 1.48], Class::UpperArms),
+            ([0.23, -0.04, 1.2], [0.27, 0.0, 1.24], Class::UpperArms),
+            ([0.29, -0.04, 1.2], [0.5, 0.0, 1.24], Class::LowerArms),
+            ([0.5, -0.04, 0.8], [0.54, 0.0, 0.9], Class::LowerArms),
+        ],
     );
     let mut probs = vec![0.9; s.pos.len()];
     for i in s.parts[elbow].clone() {
@@ -734,32 +704,17 @@ fn merge_into_background_takes_a_patch_on_a_wall_but_never_a_foot_on_the_floor()
     slab_body(&mut s);
     // A floor under the body with a foot standing on it (lower leg points in the floor's
     // layer), and a wall behind it with a patch the parser called forearm in it.
-    part(
+    let [_, foot, _, patch] = parts(
         &mut s,
-        [-0.5, -0.5, 0.0],
-        [0.5, 0.5, 0.04],
-        Class::Background,
+        [
+            ([-0.5, -0.5, 0.0], [0.5, 0.5, 0.04], Class::Background),
+            ([0.2, 0.21, 0.01], [0.3, 0.27, 0.03], Class::LowerLegs),
+            ([-0.5, 0.6, 0.2], [0.5, 0.64, 1.4], Class::Background),
+            ([0.0, 0.61, 0.6], [0.1, 0.63, 0.7], Class::LowerArms),
+        ],
     );
-    let foot = part(
-        &mut s,
-        [0.2, 0.21, 0.01],
-        [0.3, 0.27, 0.03],
-        Class::LowerLegs,
-    );
-    part(
-        &mut s,
-        [-0.5, 0.6, 0.2],
-        [0.5, 0.64, 1.4],
-        Class::Background,
-    );
-    let patch = part(&mut s, [0.0, 0.61, 0.6], [0.1, 0.63, 0.7], Class::LowerArms);
     let cloud = s.cloud();
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.0, 0.1, 1.0],
-        half_extents_m: [0.6, 0.6, 1.0],
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(0, [0.0, 0.1, 1.0], [0.6, 0.6, 1.0])];
     let m = contact("M");
     let into_background = RefineConfig {
         merge_into_background: true,
@@ -782,23 +737,13 @@ fn foreign_colors_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm(
     let torso = slab_body(&mut s);
     // An arm held out from the body's side, and an orange bar (a robot link) the parser
     // also called forearm, touching the hand: one forearm cluster with it.
-    let upper = part(
+    let [upper, forearm, bar] = parts(
         &mut s,
-        [0.17, -0.04, 1.2],
-        [0.21, 0.0, 1.48],
-        Class::UpperArms,
-    );
-    let forearm = part(
-        &mut s,
-        [0.21, -0.04, 1.2],
-        [0.45, 0.0, 1.24],
-        Class::LowerArms,
-    );
-    let bar = part(
-        &mut s,
-        [0.47, -0.1, 1.16],
-        [0.55, 0.3, 1.24],
-        Class::LowerArms,
+        [
+            ([0.17, -0.04, 1.2], [0.21, 0.0, 1.48], Class::UpperArms),
+            ([0.21, -0.04, 1.2], [0.45, 0.0, 1.24], Class::LowerArms),
+            ([0.47, -0.1, 1.16], [0.55, 0.3, 1.24], Class::LowerArms),
+        ],
     );
     let mut cloud = s.cloud();
     let (skin, shirt, orange) = ([200, 150, 120], [40, 60, 160], [215, 115, 15]);
@@ -812,12 +757,11 @@ fn foreign_colors_take_an_object_labelled_forearm_off_the_arm_and_leave_the_arm(
         colors[s.parts[p].clone()].fill(c);
     }
     cloud.colors = Some(colors);
-    let boxes = [PersonBox {
-        id: 0,
-        center_m: [0.15, 0.1, 1.2],
-        half_extents_m: [0.5, 0.5, 0.6],
-        yaw_rad: 0.0,
-    }];
+    let boxes = [PersonBox::axis_aligned(
+        0,
+        [0.15, 0.1, 1.2],
+        [0.5, 0.5, 0.6],
+    )];
     let off = contact("M-R-N");
     let on = RefineConfig {
         foreign_color_density: 0.03,
@@ -849,19 +793,19 @@ fn foreign_colors_leave_a_hand_reaching_into_another_persons_box_to_its_owner() 
     // projected label cannot settle it.
     let mut s = Scene::default();
     let torso_a = slab_body(&mut s);
-    let torso_b = part(&mut s, [0.65, -0.1, 0.9], [0.95, 0.1, 1.5], Class::Torso);
+    let torso_b = s.add(cuboid(
+        [0.65, -0.1, 0.9],
+        [0.95, 0.1, 1.5],
+        0.02,
+        l(Class::Torso),
+    ));
     let head_b = s.add(ball([0.8, 0.0, 1.6], 0.08, 0.02, l(Class::Head)));
-    let upper_b = part(
+    let [upper_b, forearm_b] = parts(
         &mut s,
-        [0.45, -0.04, 1.2],
-        [0.63, 0.0, 1.24],
-        Class::UpperArms,
-    );
-    let forearm_b = part(
-        &mut s,
-        [0.21, -0.04, 1.2],
-        [0.43, 0.0, 1.24],
-        Class::LowerArms,
+        [
+            ([0.45, -0.04, 1.2], [0.63, 0.0, 1.24], Class::UpperArms),
+            ([0.21, -0.04, 1.2], [0.43, 0.0, 1.24], Class::LowerArms),
+        ],
     );
     let mut cloud = s.cloud();
     let forearm = s.parts[forearm_b].clone();
@@ -885,18 +829,8 @@ fn foreign_colors_leave_a_hand_reaching_into_another_persons_box_to_its_owner() 
     }
     cloud.colors = Some(colors);
     let boxes = [
-        PersonBox {
-            id: 0,
-            center_m: [0.0, 0.0, 1.0],
-            half_extents_m: [0.45, 0.3, 1.0],
-            yaw_rad: 0.0,
-        },
-        PersonBox {
-            id: 1,
-            center_m: [0.8, 0.0, 1.0],
-            half_extents_m: [0.65, 0.3, 1.0],
-            yaw_rad: 0.0,
-        },
+        PersonBox::axis_aligned(0, [0.0, 0.0, 1.0], [0.45, 0.3, 1.0]),
+        PersonBox::axis_aligned(1, [0.8, 0.0, 1.0], [0.65, 0.3, 1.0]),
     ];
     let cfg = RefineConfig {
         foreign_color_density: 0.03,

@@ -141,12 +141,7 @@ fn person(point_labels: Vec<Label>) -> PersonRefinement {
 }
 
 fn unit_box(id: u32, x: f32) -> PersonBox {
-    PersonBox {
-        id,
-        center_m: [x, 0.0, 1.0],
-        half_extents_m: [0.5, 0.5, 1.0],
-        yaw_rad: 0.0,
-    }
+    PersonBox::axis_aligned(id, [x, 0.0, 1.0], [0.5, 0.5, 1.0])
 }
 
 #[test]

@@ -2,6 +2,7 @@
 
 use super::bone::*;
 use super::decode::*;
+use super::figure::{sure_pose, upright_figure_xy};
 use super::label::*;
 use super::landmark;
 use super::model::*;
@@ -76,54 +77,12 @@ fn heatmap_moves_a_landmark_to_its_peak() {
 
 /// An upright figure (image px), mask 1 everywhere.
 fn figure() -> DecodedPose {
-    use landmark::*;
-    let mut xy = vec![[50.0, 25.0]; NUM_LANDMARKS];
-    xy[LEFT_EYE] = [53.0, 23.0];
-    xy[RIGHT_EYE] = [47.0, 23.0];
-    xy[MOUTH_LEFT] = [52.0, 28.0];
-    xy[MOUTH_RIGHT] = [48.0, 28.0];
-    xy[LEFT_EAR] = [56.0, 24.0];
-    xy[RIGHT_EAR] = [44.0, 24.0];
-    for (i, p) in [
-        (LEFT_SHOULDER, [60.0, 40.0]),
-        (RIGHT_SHOULDER, [40.0, 40.0]),
-        (LEFT_HIP, [58.0, 80.0]),
-        (RIGHT_HIP, [42.0, 80.0]),
-        (LEFT_ELBOW, [70.0, 60.0]),
-        (RIGHT_ELBOW, [30.0, 60.0]),
-        (LEFT_WRIST, [72.0, 78.0]),
-        (RIGHT_WRIST, [28.0, 78.0]),
-        (LEFT_KNEE, [58.0, 110.0]),
-        (RIGHT_KNEE, [42.0, 110.0]),
-        (LEFT_ANKLE, [58.0, 140.0]),
-        (RIGHT_ANKLE, [42.0, 140.0]),
-    ] {
-        xy[i] = p;
-    }
-    for i in LEFT_HAND {
-        xy[i] = [72.0, 84.0];
-    }
-    for i in RIGHT_HAND {
-        xy[i] = [28.0, 84.0];
-    }
-    for i in LEFT_FOOT {
-        xy[i] = [58.0, 146.0];
-    }
-    for i in RIGHT_FOOT {
-        xy[i] = [42.0, 146.0];
-    }
-    DecodedPose {
-        roi: Roi {
-            centre_px: [50.0, 80.0],
-            side_px: 160.0,
-            angle_rad: 0.0,
-        },
-        flag: 1.0,
-        xy,
-        visibility: vec![1.0; NUM_LANDMARKS],
-        presence: vec![1.0; NUM_LANDMARKS],
-        mask: vec![1.0; INPUT * INPUT],
-    }
+    sure_pose(
+        upright_figure_xy(),
+        [50.0, 80.0],
+        160.0,
+        vec![1.0; INPUT * INPUT],
+    )
 }
 
 #[test]

@@ -78,13 +78,19 @@ pub(crate) fn labels_mode(cloud: &LabeledCloud, cfg: &BoxesConfig) -> Vec<Person
         if seeds.len() >= 2 {
             // Along bodies: a step between parts not joined in a body (a hand on someone's
             // head) costs a contact penalty, so an arm reaching someone stays its owner's.
-            let split = graph.split_with(&v.centers, &cluster, &seeds, |i, j| {
-                if adjacent_parts(v.labels[i as usize], v.labels[j as usize]) {
-                    0.0
-                } else {
-                    CONTACT_PENALTY_M
-                }
-            });
+            let split = graph.split_scaled(
+                &v.centers,
+                &cluster,
+                &seeds,
+                |_, _| 1.0,
+                |_, i, j| {
+                    if adjacent_parts(v.labels[i as usize], v.labels[j as usize]) {
+                        0.0
+                    } else {
+                        CONTACT_PENALTY_M
+                    }
+                },
+            );
             for (&i, &g) in cluster.iter().zip(&split) {
                 owner[i as usize] = people + g as u32;
             }
