@@ -27,6 +27,13 @@ fn kinect() -> RgbdCamera {
     read_iai_kinect2(&kinect_dir()).expect("the shared iai_kinect2 folder is valid")
 }
 
+/// Exact equality of one sensor's fx fy cx cy, Brown-Conrady coefficients and size.
+fn assert_sensor(s: &Intrinsics, fx_fy_cx_cy: [f64; 4], brown_conrady: [f64; 5], size: (u32, u32)) {
+    assert_eq!([s.fx, s.fy, s.cx, s.cy], fx_fy_cx_cy);
+    assert_eq!(s.distortion, Distortion::BrownConrady(brown_conrady));
+    assert_eq!((s.width, s.height), size);
+}
+
 #[test]
 // The expected values are copied digit for digit from the files, as OpenCV printed them.
 #[allow(clippy::excessive_precision)]
@@ -34,36 +41,40 @@ fn iai_kinect2_folder_loads_with_the_files_exact_values() {
     let cam = kinect();
     assert_eq!(cam.name, "196605135147");
     // Exact equality: Rust and OpenCV both print/parse f64 with correct rounding.
-    assert_eq!(cam.color.fx, 1.0599465578241038e+03);
-    assert_eq!(cam.color.fy, 1.0539326808799726e+03);
-    assert_eq!(cam.color.cx, 9.5488326677588441e+02);
-    assert_eq!(cam.color.cy, 5.2373858291060583e+02);
-    assert_eq!(
-        cam.color.distortion,
-        Distortion::BrownConrady([
+    assert_sensor(
+        &cam.color,
+        [
+            1.0599465578241038e+03,
+            1.0539326808799726e+03,
+            9.5488326677588441e+02,
+            5.2373858291060583e+02,
+        ],
+        [
             5.6268441170930321e-02,
             -7.4199141308694802e-02,
             1.4250797540545752e-03,
             -1.6951722389720336e-03,
-            2.4107681263086548e-02
-        ])
+            2.4107681263086548e-02,
+        ],
+        (1920, 1080),
     );
-    assert_eq!((cam.color.width, cam.color.height), (1920, 1080));
-    assert_eq!(cam.depth.fx, 3.6694757270064110e+02);
-    assert_eq!(cam.depth.fy, 3.6479117165721783e+02);
-    assert_eq!(cam.depth.cx, 2.4298551682775121e+02);
-    assert_eq!(cam.depth.cy, 2.0769853575457685e+02);
-    assert_eq!(
-        cam.depth.distortion,
-        Distortion::BrownConrady([
+    assert_sensor(
+        &cam.depth,
+        [
+            3.6694757270064110e+02,
+            3.6479117165721783e+02,
+            2.4298551682775121e+02,
+            2.0769853575457685e+02,
+        ],
+        [
             9.6558110377123016e-02,
             -2.8298244017989416e-01,
             1.5889951609432634e-04,
             -5.0751483524871712e-04,
-            1.0523948765859192e-01
-        ])
+            1.0523948765859192e-01,
+        ],
+        (512, 424),
     );
-    assert_eq!((cam.depth.width, cam.depth.height), (512, 424));
     assert_eq!(
         cam.color_from_depth.translation_m(),
         [

@@ -88,6 +88,21 @@ impl<'a> CdrReader<'a> {
         Ok(out)
     }
 
+    /// A number of `N` bytes, aligned to `N`, in the payload's byte order.
+    fn number<T, const N: usize>(
+        &mut self,
+        field: &str,
+        from_le: fn([u8; N]) -> T,
+        from_be: fn([u8; N]) -> T,
+    ) -> Result<T, Ros2Error> {
+        let b = self.array::<N>(field)?;
+        Ok(if self.little_endian {
+            from_le(b)
+        } else {
+            from_be(b)
+        })
+    }
+
     /// A `uint8` (also `bool`, `byte`, `char`).
     pub fn u8(&mut self, field: &str) -> Result<u8, Ros2Error> {
         Ok(self.take(1, 1, field)?[0])
@@ -95,32 +110,17 @@ impl<'a> CdrReader<'a> {
 
     /// A `uint32`.
     pub fn u32(&mut self, field: &str) -> Result<u32, Ros2Error> {
-        let b = self.array::<4>(field)?;
-        Ok(if self.little_endian {
-            u32::from_le_bytes(b)
-        } else {
-            u32::from_be_bytes(b)
-        })
+        self.number(field, u32::from_le_bytes, u32::from_be_bytes)
     }
 
     /// An `int32`.
     pub fn i32(&mut self, field: &str) -> Result<i32, Ros2Error> {
-        let b = self.array::<4>(field)?;
-        Ok(if self.little_endian {
-            i32::from_le_bytes(b)
-        } else {
-            i32::from_be_bytes(b)
-        })
+        self.number(field, i32::from_le_bytes, i32::from_be_bytes)
     }
 
     /// A `float64`.
     pub fn f64(&mut self, field: &str) -> Result<f64, Ros2Error> {
-        let b = self.array::<8>(field)?;
-        Ok(if self.little_endian {
-            f64::from_le_bytes(b)
-        } else {
-            f64::from_be_bytes(b)
-        })
+        self.number(field, f64::from_le_bytes, f64::from_be_bytes)
     }
 
     /// A `float64[N]`.

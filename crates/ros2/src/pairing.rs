@@ -20,9 +20,19 @@ pub fn pair_nearest(a: &[i64], b: &[i64], max_skew_ns: i64) -> Vec<(usize, usize
             candidates.push(((s - t).abs(), i, j));
         }
     }
+    one_to_one(candidates, a.len(), b.len())
+}
+
+/// The greedy one-to-one choice among `candidates` `(|Δt|, i, j)` (`i < len_a`,
+/// `j < len_b`): smallest |Δt| first, ties on the earlier indices; sorted by `i`.
+fn one_to_one(
+    mut candidates: Vec<(i64, usize, usize)>,
+    len_a: usize,
+    len_b: usize,
+) -> Vec<(usize, usize)> {
     candidates.sort_unstable();
-    let mut used_a = vec![false; a.len()];
-    let mut used_b = vec![false; b.len()];
+    let mut used_a = vec![false; len_a];
+    let mut used_b = vec![false; len_b];
     let mut pairs = Vec::new();
     for (_, i, j) in candidates {
         if !used_a[i] && !used_b[j] {
@@ -78,17 +88,8 @@ mod tests {
                 }
             }
         }
-        all.sort_unstable();
-        let (mut ua, mut ub, mut out) = (vec![false; a.len()], vec![false; b.len()], vec![]);
-        for (_, i, j) in all {
-            if !ua[i] && !ub[j] {
-                ua[i] = true;
-                ub[j] = true;
-                out.push((i, j));
-            }
-        }
-        out.sort_unstable();
-        out
+        // The greedy choice is shared; what this checks is the windowed candidate search.
+        one_to_one(all, a.len(), b.len())
     }
 
     #[test]

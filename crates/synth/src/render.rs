@@ -327,11 +327,7 @@ pub fn intersect(shape: &Shape, o: V3, d: V3) -> Option<f32> {
 // Capsule: the classic quadratic for the infinite cylinder, then the two end spheres
 // (Inigo Quilez's formulation).
 fn capsule(o: V3, d: V3, a: V3, b: V3, r: f32) -> Option<f32> {
-    let ba = sub(b, a);
-    let oa = sub(o, a);
-    let baba = dot(ba, ba);
-    let bard = dot(ba, d);
-    let baoa = dot(ba, oa);
+    let (oa, baba, bard, baoa) = axis_terms(o, d, a, b);
     let rdoa = dot(d, oa);
     let oaoa = dot(oa, oa);
     let qa = baba - bard * bard;
@@ -371,12 +367,16 @@ fn sphere(oc: V3, d: V3, r: f32) -> Option<f32> {
     Some(-b - h.sqrt())
 }
 
-fn cylinder(o: V3, d: V3, a: V3, b: V3, r: f32) -> Option<f32> {
+/// What the capsule and the cylinder tests start from, for the axis `ba = b − a`: the ray
+/// origin relative to `a` (`oa`), and `ba·ba`, `ba·d`, `ba·oa`.
+fn axis_terms(o: V3, d: V3, a: V3, b: V3) -> (V3, f32, f32, f32) {
     let ba = sub(b, a);
-    let oc = sub(o, a);
-    let baba = dot(ba, ba);
-    let bard = dot(ba, d);
-    let baoc = dot(ba, oc);
+    let oa = sub(o, a);
+    (oa, dot(ba, ba), dot(ba, d), dot(ba, oa))
+}
+
+fn cylinder(o: V3, d: V3, a: V3, b: V3, r: f32) -> Option<f32> {
+    let (oc, baba, bard, baoc) = axis_terms(o, d, a, b);
     let k2 = baba - bard * bard;
     let k1 = baba * dot(oc, d) - baoc * bard;
     let k0 = baba * dot(oc, oc) - baoc * baoc - r * r * baba;

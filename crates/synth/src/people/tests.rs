@@ -19,6 +19,28 @@ fn config(poses: &[&str], count: u32) -> PeopleConfig {
     }
 }
 
+/// For each pose, the people [`make_people`] makes with `count` people of that pose and
+/// seeds `0..seeds`, the config changed by `tweak` first: (pose name, seed, person).
+fn people_of_each_pose(
+    count: u32,
+    seeds: u64,
+    tweak: impl Fn(&mut PeopleConfig),
+) -> Vec<(&'static str, u64, Person)> {
+    let mut out = Vec::new();
+    for name in POSE_NAMES {
+        let mut c = config(&[name], count);
+        tweak(&mut c);
+        for seed in 0..seeds {
+            out.extend(
+                make_people(&c, seed, &[])
+                    .into_iter()
+                    .map(|p| (name, seed, p)),
+            );
+        }
+    }
+    out
+}
+
 fn prims(p: &Person, t: f64) -> Vec<Primitive> {
     let mut out = Vec::new();
     p.primitives_at(t, &mut out);
@@ -123,29 +145,24 @@ fn heights_within_config_range() {
 
 #[test]
 fn feet_stand_on_the_floor_in_every_pose() {
-    for name in POSE_NAMES {
-        let c = config(&[name], 2);
-        for seed in 0..6 {
-            for p in make_people(&c, seed, &[]) {
-                for k in 0..40 {
-                    let t = f64::from(k) * 0.173;
-                    let out = prims(&p, t);
-                    assert!(min_z(&out) >= -0.01, "{name}: body below the floor");
-                    let feet: Vec<Primitive> = [Segment::FootLeft, Segment::FootRight]
-                        .into_iter()
-                        .flat_map(|s| of(&out, s))
-                        .collect();
-                    let lowest = min_z(&feet);
-                    assert!(
-                        (-0.01..=0.01).contains(&lowest),
-                        "{name} seed {seed} t {t}: lowest foot point {lowest}"
-                    );
-                    if name != "walking" {
-                        for f in &feet {
-                            let z = f.shape.aabb().0[2];
-                            assert!(z < 0.03, "{name}: a planted foot floats at {z}");
-                        }
-                    }
+    for (name, seed, p) in people_of_each_pose(2, 6, |_| {}) {
+        for k in 0..40 {
+            let t = f64::from(k) * 0.173;
+            let out = prims(&p, t);
+            assert!(min_z(&out) >= -0.01, "{name}: body below the floor");
+            let feet: Vec<Primitive> = [Segment::FootLeft, Segment::FootRight]
+                .into_iter()
+                .flat_map(|s| of(&out, s))
+                .collect();
+            let lowest = min_z(&feet);
+            assert!(
+                (-0.01..=0.01).contains(&lowest),
+                "{name} seed {seed} t {t}: lowest foot point {lowest}"
+            );
+            if name != "walking" {
+                for f in &feet {
+                    let z = f.shape.aabb().0[2];
+                    assert!(z < 0.03, "{name}: a planted foot floats at {z}");
                 }
             }
         }
@@ -218,36 +235,30 @@ fn handover_hands_meet_between_close_people() {
 
 #[test]
 fn every_pose_gives_valid_finite_primitives() {
-    for name in POSE_NAMES {
-        let mut c = config(&[name], 3);
-        c.joint_noise_deg = 15.0;
-        for seed in 0..5 {
-            for p in make_people(&c, seed, &[]) {
-                assert_eq!(p.pose().name(), name);
-                for t in TIMES {
-                    let out = prims(&p, t);
-                    assert!(out.len() >= 18);
-                    for q in &out {
-                        let (lo, hi) = q.shape.aabb();
-                        assert!(lo.iter().chain(&hi).all(|x| x.is_finite()), "{name}");
-                        assert!(hi[2] < 2.2, "{name}: too tall");
-                        match q.shape {
-                            Shape::Capsule { radius, .. } => assert!(radius > 0.0),
-                            Shape::Ellipsoid { axes, radii, .. }
-                            | Shape::Box {
-                                axes, half: radii, ..
-                            } => {
-                                assert!(radii.iter().all(|r| *r > 0.0));
-                                for i in 0..3 {
-                                    assert!((norm(axes[i]) - 1.0).abs() < 1e-3);
-                                    for j in 0..i {
-                                        assert!(dot(axes[i], axes[j]).abs() < 1e-3);
-                                    }
-                                }
+    for (name, _, p) in people_of_each_pose(3, 5, |c| c.joint_noise_deg = 15.0) {
+        assert_eq!(p.pose().name(), name);
+        for t in TIMES {
+            let out = prims(&p, t);
+            assert!(out.len() >= 18);
+            for q in &out {
+                let (lo, hi) = q.shape.aabb();
+                assert!(lo.iter().chain(&hi).all(|x| x.is_finite()), "{name}");
+                assert!(hi[2] < 2.2, "{name}: too tall");
+                match q.shape {
+                    Shape::Capsule { radius, .. } => assert!(radius > 0.0),
+                    Shape::Ellipsoid { axes, radii, .. }
+                    | Shape::Box {
+                        axes, half: radii, ..
+                    } => {
+                        assert!(radii.iter().all(|r| *r > 0.0));
+                        for i in 0..3 {
+                            assert!((norm(axes[i]) - 1.0).abs() < 1e-3);
+                            for j in 0..i {
+                                assert!(dot(axes[i], axes[j]).abs() < 1e-3);
                             }
-                            Shape::Cylinder { .. } => panic!("people have no cylinders"),
                         }
                     }
+                    Shape::Cylinder { .. } => panic!("people have no cylinders"),
                 }
             }
         }
@@ -339,20 +350,14 @@ fn max_step(p: &Person, t: f64, dt: f64) -> f32 {
 
 #[test]
 fn motion_is_continuous_between_frames() {
-    for name in POSE_NAMES {
-        let mut c = config(&[name], 2);
-        c.walk_speed_m_s = 0.35;
-        for seed in 0..4 {
-            for p in make_people(&c, seed, &[]) {
-                for k in 0..200 {
-                    let t = f64::from(k) * 0.093;
-                    let step = max_step(&p, t, 1.0 / 30.0);
-                    assert!(step < 0.05, "{name} t {t}: moved {step} m in a frame");
-                }
-                // It does move.
-                assert!(prims(&p, 0.0) != prims(&p, 2.0), "{name} frozen");
-            }
+    for (name, _, p) in people_of_each_pose(2, 4, |c| c.walk_speed_m_s = 0.35) {
+        for k in 0..200 {
+            let t = f64::from(k) * 0.093;
+            let step = max_step(&p, t, 1.0 / 30.0);
+            assert!(step < 0.05, "{name} t {t}: moved {step} m in a frame");
         }
+        // It does move.
+        assert!(prims(&p, 0.0) != prims(&p, 2.0), "{name} frozen");
     }
     // At the default walking speed the swing foot is fast: 60 fps.
     let c = config(&["walking"], 1);
@@ -392,36 +397,31 @@ fn walkers_move_at_the_configured_speed() {
 
 #[test]
 fn knees_bend_forward() {
-    for name in POSE_NAMES {
-        let c = config(&[name], 2);
-        for seed in 0..5 {
-            for p in make_people(&c, seed, &[]) {
-                for t in TIMES {
-                    let out = prims(&p, t);
-                    for (thigh, shin, foot) in [
-                        (Segment::ThighLeft, Segment::ShinLeft, Segment::FootLeft),
-                        (Segment::ThighRight, Segment::ShinRight, Segment::FootRight),
-                    ] {
-                        let (
-                            Shape::Capsule {
-                                a: hip, b: knee, ..
-                            },
-                            Shape::Capsule { b: ankle, .. },
-                            Shape::Box { axes, .. },
-                        ) = (
-                            of(&out, thigh)[0].shape,
-                            of(&out, shin)[0].shape,
-                            of(&out, foot)[0].shape,
-                        )
-                        else {
-                            panic!("unexpected leg shapes");
-                        };
-                        let line = normalize(sub(ankle, hip));
-                        let rel = sub(knee, hip);
-                        let off = sub(rel, scale(line, dot(rel, line)));
-                        assert!(dot(off, axes[0]) >= -1e-3, "{name}: knee bends backwards");
-                    }
-                }
+    for (name, _, p) in people_of_each_pose(2, 5, |_| {}) {
+        for t in TIMES {
+            let out = prims(&p, t);
+            for (thigh, shin, foot) in [
+                (Segment::ThighLeft, Segment::ShinLeft, Segment::FootLeft),
+                (Segment::ThighRight, Segment::ShinRight, Segment::FootRight),
+            ] {
+                let (
+                    Shape::Capsule {
+                        a: hip, b: knee, ..
+                    },
+                    Shape::Capsule { b: ankle, .. },
+                    Shape::Box { axes, .. },
+                ) = (
+                    of(&out, thigh)[0].shape,
+                    of(&out, shin)[0].shape,
+                    of(&out, foot)[0].shape,
+                )
+                else {
+                    panic!("unexpected leg shapes");
+                };
+                let line = normalize(sub(ankle, hip));
+                let rel = sub(knee, hip);
+                let off = sub(rel, scale(line, dot(rel, line)));
+                assert!(dot(off, axes[0]) >= -1e-3, "{name}: knee bends backwards");
             }
         }
     }
