@@ -233,9 +233,9 @@ impl ColorProjection {
         z_color_m: &mut [f32],
     ) {
         if self.rational {
-            self.batch::<true>(x, y, z, out_u, out_v, z_color_m);
+            self.batch::<true>([x, y, z], (out_u, out_v, z_color_m));
         } else {
-            self.batch::<false>(x, y, z, out_u, out_v, z_color_m);
+            self.batch::<false>([x, y, z], (out_u, out_v, z_color_m));
         }
     }
 
@@ -243,12 +243,8 @@ impl ColorProjection {
     #[inline(always)]
     fn batch<const RATIONAL: bool>(
         &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        out_u: &mut [u32],
-        out_v: &mut [u32],
-        z_color_m: &mut [f32],
+        [x, y, z]: [&[f32]; 3],
+        (out_u, out_v, z_color_m): (&mut [u32], &mut [u32], &mut [f32]),
     ) {
         let n = x.len();
         // Equal lengths up front so the loop below has no bounds checks and vectorises.

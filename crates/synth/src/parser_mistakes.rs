@@ -114,12 +114,17 @@ pub fn predict_labels(truth: &TruthView<'_>, config: &ParserMistakesConfig, seed
         let swap = config.swap_prob > 0.0 && swap_band_px > 0.0;
         if miss || swap {
             let limbs = LimbTable::scan(truth, img);
+            let at = LimbScene {
+                truth,
+                limbs: &limbs,
+                img,
+                seed,
+            };
             if miss {
-                apply_miss(&mut labels, truth, &limbs, img, config.miss_prob, seed);
+                apply_miss(&mut labels, &at, config.miss_prob);
             }
             if swap {
-                let prob = config.swap_prob;
-                apply_swap(&mut labels, truth, &limbs, img, prob, swap_band_px, seed);
+                apply_swap(&mut labels, &at, config.swap_prob, swap_band_px);
             }
         }
     }
@@ -326,16 +331,25 @@ impl LimbTable {
     }
 }
 
+/// What the limb mistakes (miss, swap) read: the truth, its limb table, the image size
+/// and the frame's seed.
+#[derive(Clone, Copy)]
+struct LimbScene<'a> {
+    truth: &'a TruthView<'a>,
+    limbs: &'a LimbTable,
+    img: Dims,
+    seed: u64,
+}
+
 /// Miss: each lower limb part (forearm + hand, shin + foot) of each person becomes
 /// background with probability `prob`.
-fn apply_miss(
-    labels: &mut [u8],
-    truth: &TruthView<'_>,
-    limbs: &LimbTable,
-    img: Dims,
-    prob: f64,
-    seed: u64,
-) {
+fn apply_miss(labels: &mut [u8], at: &LimbScene<'_>, prob: f64) {
+    let LimbScene {
+        truth,
+        limbs,
+        img,
+        seed,
+    } = *at;
     for person in 1..256usize {
         for limb in 0..LIMBS {
             let Some(rect) = limbs.part(person, limb, true).grow(0, img) else {
@@ -361,15 +375,13 @@ fn apply_miss(
 
 /// Swap: for each limb with probability `prob`, the pixels of one part (upper or lower, at
 /// random) within `band_px` of the other part of the same limb take the other part's class.
-fn apply_swap(
-    labels: &mut [u8],
-    truth: &TruthView<'_>,
-    limbs: &LimbTable,
-    img: Dims,
-    prob: f64,
-    band_px: f64,
-    seed: u64,
-) {
+fn apply_swap(labels: &mut [u8], at: &LimbScene<'_>, prob: f64, band_px: f64) {
+    let LimbScene {
+        truth,
+        limbs,
+        img,
+        seed,
+    } = *at;
     let cap = radius_px(band_px);
     let band2 = band_px * band_px;
     for person in 1..256usize {

@@ -125,38 +125,44 @@ pub(crate) fn perturb(rng: &mut ChaCha8Rng, person: &mut Person, sigma: f32) {
     // The spine (pelvis, lumbar, thoracic) and the neck-head chain are each one anatomical
     // joint split in parts: the noise is shared so that the chain bends by about `sigma`.
     let spine = sigma / 3f32.sqrt();
-    for c in [
-        &mut tr.pelvis_pitch,
-        &mut tr.pelvis_roll,
-        &mut tr.lumbar_flex,
-        &mut tr.lumbar_lat,
-        &mut tr.lumbar_twist,
-        &mut tr.thor_flex,
-        &mut tr.thor_lat,
-        &mut tr.thor_twist,
-    ] {
-        c.base += spine * gauss(rng);
-    }
+    shake(
+        rng,
+        spine,
+        [
+            &mut tr.pelvis_pitch,
+            &mut tr.pelvis_roll,
+            &mut tr.lumbar_flex,
+            &mut tr.lumbar_lat,
+            &mut tr.lumbar_twist,
+            &mut tr.thor_flex,
+            &mut tr.thor_lat,
+            &mut tr.thor_twist,
+        ],
+    );
     let neck = sigma / 2f32.sqrt();
-    for c in [
-        &mut tr.neck_flex,
-        &mut tr.neck_lat,
-        &mut tr.neck_yaw,
-        &mut tr.head_nod,
-        &mut tr.head_yaw,
-    ] {
-        c.base += neck * gauss(rng);
-    }
+    shake(
+        rng,
+        neck,
+        [
+            &mut tr.neck_flex,
+            &mut tr.neck_lat,
+            &mut tr.neck_yaw,
+            &mut tr.head_nod,
+            &mut tr.head_yaw,
+        ],
+    );
     for arm in &mut person.arms {
-        for c in [
-            &mut arm.flex,
-            &mut arm.abd,
-            &mut arm.twist,
-            &mut arm.elbow,
-            &mut arm.wrist,
-        ] {
-            c.base += sigma * gauss(rng);
-        }
+        shake(
+            rng,
+            sigma,
+            [
+                &mut arm.flex,
+                &mut arm.abd,
+                &mut arm.twist,
+                &mut arm.elbow,
+                &mut arm.wrist,
+            ],
+        );
         arm.elbow.base = arm.elbow.base.clamp(ELBOW_MIN_RAD, ELBOW_MAX_RAD);
     }
     // Hip flexion / abduction / rotation move the planted foot; the knee follows by IK.
@@ -172,6 +178,13 @@ pub(crate) fn perturb(rng: &mut ChaCha8Rng, person: &mut Person, sigma: f32) {
         } else {
             leg.ankle_xy[1].min(-min_w)
         };
+    }
+}
+
+/// Adds `sigma` × a standard normal draw to the base of each channel, in order.
+fn shake<'a>(rng: &mut ChaCha8Rng, sigma: f32, chans: impl IntoIterator<Item = &'a mut Chan>) {
+    for c in chans {
+        c.base += sigma * gauss(rng);
     }
 }
 
