@@ -57,6 +57,19 @@ pub fn lerp(a: Vec3, b: Vec3, t: f32) -> Vec3 {
     add(a, scale(sub(b, a), t))
 }
 
+/// An orthonormal frame `[x, y, z]` whose third axis is the unit vector `z` (not
+/// normalised again): x ⟂ z from a helper axis (world z, or world x when `z` is near it),
+/// y = z × x.
+pub fn frame_around_unit_axis(z: Vec3) -> [Vec3; 3] {
+    let helper = if z[2].abs() < 0.9 {
+        [0.0, 0.0, 1.0]
+    } else {
+        [1.0, 0.0, 0.0]
+    };
+    let x = normalize(cross(helper, z));
+    [x, cross(z, x), z]
+}
+
 /// Squared Euclidean distance, m². Every stage that compares a distance to a radius uses
 /// this one function, so brute-force references and fast paths round identically.
 #[inline]

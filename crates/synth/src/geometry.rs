@@ -8,6 +8,7 @@ use bodyseg_core::Class;
 /// A point or direction, metres.
 pub type V3 = [f32; 3];
 
+use bodyseg_core::math::frame_around_unit_axis;
 pub use bodyseg_core::math::{add, cross, dot, lerp, norm, normalize, scale, sub};
 
 /// The body segments of a synthetic person (at least the 15 the synth issue asks for),
@@ -322,13 +323,5 @@ pub fn rotate_z(v: V3, yaw_rad: f32) -> V3 {
 
 /// An orthonormal frame whose third axis is `dir` (normalised), for shapes given by an axis.
 pub fn frame_from_axis(dir: V3) -> [V3; 3] {
-    let z = normalize(dir);
-    let helper = if z[2].abs() < 0.9 {
-        [0.0, 0.0, 1.0]
-    } else {
-        [1.0, 0.0, 0.0]
-    };
-    let x = normalize(cross(helper, z));
-    let y = cross(z, x);
-    [x, y, z]
+    frame_around_unit_axis(normalize(dir))
 }

@@ -344,12 +344,7 @@ struct LimbScene<'a> {
 /// Miss: each lower limb part (forearm + hand, shin + foot) of each person becomes
 /// background with probability `prob`.
 fn apply_miss(labels: &mut [u8], at: &LimbScene<'_>, prob: f64) {
-    let LimbScene {
-        truth,
-        limbs,
-        img,
-        seed,
-    } = *at;
+    let (truth, limbs, img, seed) = (at.truth, at.limbs, at.img, at.seed);
     for person in 1..256usize {
         for limb in 0..LIMBS {
             let Some(rect) = limbs.part(person, limb, true).grow(0, img) else {
@@ -376,12 +371,7 @@ fn apply_miss(labels: &mut [u8], at: &LimbScene<'_>, prob: f64) {
 /// Swap: for each limb with probability `prob`, the pixels of one part (upper or lower, at
 /// random) within `band_px` of the other part of the same limb take the other part's class.
 fn apply_swap(labels: &mut [u8], at: &LimbScene<'_>, prob: f64, band_px: f64) {
-    let LimbScene {
-        truth,
-        limbs,
-        img,
-        seed,
-    } = *at;
+    let (truth, limbs, img, seed) = (at.truth, at.limbs, at.img, at.seed);
     let cap = radius_px(band_px);
     let band2 = band_px * band_px;
     for person in 1..256usize {

@@ -11,7 +11,7 @@
 //! World frame, metres, z up, floor at z = 0; the person stands at `(x, y)` facing +y.
 //! The same seed gives the same cloud on every machine (ChaCha8).
 
-use bodyseg_core::math::{Vec3, add, cross, dist2, dot, normalize, scale, sub};
+use bodyseg_core::math::{Vec3, add, dist2, dot, frame_around_unit_axis, scale, sub};
 use bodyseg_core::{Class, Label, LabeledCloud, PersonBox, PointOrigin};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -287,14 +287,10 @@ fn sample_capsule(rng: &mut ChaCha8Rng, s: &Capsule) -> Vec3 {
     } else {
         [0.0, 0.0, 1.0]
     };
-    // Orthonormal frame around the axis.
-    let helper = if axis[2].abs() < 0.9 {
-        [0.0, 0.0, 1.0]
-    } else {
-        [1.0, 0.0, 0.0]
-    };
-    let u = normalize(cross(axis, helper));
-    let v = cross(axis, u);
+    // Orthonormal frame around the axis; x and y negated (exactly) keep the points these
+    // clouds have always had (they were drawn with u = axis × helper).
+    let [x, y, _] = frame_around_unit_axis(axis);
+    let (u, v) = (scale(x, -1.0), scale(y, -1.0));
     let cyl = 2.0 * std::f32::consts::PI * s.radius_m * l;
     let caps = 4.0 * std::f32::consts::PI * s.radius_m * s.radius_m;
     if rng.random_range(0.0..cyl + caps) < cyl {
