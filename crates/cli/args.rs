@@ -3,12 +3,9 @@
 
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
-    AzureColorResolution, AzureDepthMode, AzureKinectMode, Board, ConvertFormat, ConvertOptions,
-    DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice, FloorHint, ImportCloudOptions,
-    IntrinsicsCalibOptions, NamedPrediction, ParseOptions, ParseSource, ParserChoice,
+    DEFAULT_PREDICTION_NAME, EvalOptions, NamedPrediction, ParseOptions, ParseSource,
     PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
-    RigFormat, RigImportOptions, RigInput, Ros2ImportOptions, RunOptions, SceneSource,
-    StereoCalibOptions, SynthOptions, ThreeDPeopleCamera, WorldCalibOptions,
+    SceneSource, SynthOptions,
 };
 use bodyseg_refine::Steps;
 use bodyseg_synth::ChessboardConfig;
@@ -17,6 +14,7 @@ use std::path::PathBuf;
 
 mod batch;
 mod calib;
+mod floor;
 mod import;
 #[cfg(test)]
 mod tests;
@@ -24,6 +22,7 @@ pub use batch::*;
 use batch::{CONVERT_EXAMPLES, CONVERT_LONG_ABOUT, RUN_EXAMPLES, RUN_LONG_ABOUT};
 use calib::CALIBRATE_LONG_ABOUT;
 pub use calib::*;
+pub use floor::*;
 pub use import::*;
 
 const ABOUT: &str = "Body-part labelled 3D point clouds from multi-camera RGB-D recordings";
@@ -574,64 +573,6 @@ pub struct BoxesArgs {
 
     #[command(flatten)]
     pub floor: FloorArgs,
-}
-
-/// `--ground` and `--up`: the floor of a cloud, when the user knows it.
-#[derive(Debug, Args)]
-pub struct FloorArgs {
-    /// The floor of the cloud: the plane a*x + b*y + c*z + d = 0 in the cloud's frame,
-    /// metres (PCL's ground coefficients) [default: found]
-    #[arg(long, value_name = "A,B,C,D", value_parser = parse_plane, allow_hyphen_values = true)]
-    pub ground: Option<[f32; 4]>,
-
-    /// The axis of the cloud's frame that points up, roughly (within 45 degrees): x, y,
-    /// z, -x, -y or -z (a camera's optical frame: -y) [default: found]
-    #[arg(long, value_name = "AXIS", value_parser = parse_up, allow_hyphen_values = true)]
-    pub up: Option<bodyseg_pipeline::Up>,
-}
-
-impl FloorArgs {
-    /// The pipeline's floor hint.
-    pub fn hint(&self) -> FloorHint {
-        FloorHint {
-            ground: self.ground,
-            up: self.up,
-        }
-    }
-
-    /// Whether either flag is given.
-    fn given(&self) -> bool {
-        self.ground.is_some() || self.up.is_some()
-    }
-}
-
-/// `--ground a,b,c,d`: four finite numbers, (a, b, c) not all zero.
-fn parse_plane(text: &str) -> std::result::Result<[f32; 4], String> {
-    let values: Vec<f32> = text
-        .split(',')
-        .map(|v| {
-            v.trim()
-                .parse::<f32>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("'{}' is not a finite number", v.trim()))
-        })
-        .collect::<std::result::Result<_, _>>()?;
-    let [a, b, c, d] = values[..] else {
-        return Err(format!(
-            "expected four numbers a,b,c,d (the plane a*x + b*y + c*z + d = 0), got {}",
-            values.len()
-        ));
-    };
-    if a == 0.0 && b == 0.0 && c == 0.0 {
-        return Err("a, b and c are all 0: no plane".into());
-    }
-    Ok([a, b, c, d])
-}
-
-/// `--up AXIS`.
-fn parse_up(text: &str) -> std::result::Result<bodyseg_pipeline::Up, String> {
-    text.parse()
 }
 
 /// `bodyseg boxes --mode`.

@@ -3,16 +3,11 @@
 
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
-    AzureColorResolution, AzureDepthMode, AzureKinectMode, Board, ConvertFormat, ConvertOptions,
-    DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice, FloorHint, ImportCloudOptions,
-    IntrinsicsCalibOptions, NamedPrediction, ParseOptions, ParseSource, ParserChoice,
-    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
-    RigFormat, RigImportOptions, RigInput, Ros2ImportOptions, RunOptions, SceneSource,
-    StereoCalibOptions, SynthOptions, ThreeDPeopleCamera, WorldCalibOptions,
+    ConvertFormat, ConvertOptions, FigureChoice, ParserChoice, PipelineConfig, ProjectMode,
+    RefineOverrides, RunOptions, ThreeDPeopleCamera,
 };
 use bodyseg_refine::Steps;
-use bodyseg_synth::ChessboardConfig;
-use clap::{ArgAction, Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 
 /// `--config` and `--set`: the pipeline configuration of every command that reads one.

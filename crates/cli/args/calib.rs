@@ -2,16 +2,10 @@
 
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
-    AzureColorResolution, AzureDepthMode, AzureKinectMode, Board, ConvertFormat, ConvertOptions,
-    DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice, FloorHint, ImportCloudOptions,
-    IntrinsicsCalibOptions, NamedPrediction, ParseOptions, ParseSource, ParserChoice,
-    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
-    RigFormat, RigImportOptions, RigInput, Ros2ImportOptions, RunOptions, SceneSource,
-    StereoCalibOptions, SynthOptions, ThreeDPeopleCamera, WorldCalibOptions,
+    AzureColorResolution, AzureDepthMode, AzureKinectMode, Board, IntrinsicsCalibOptions,
+    RigFormat, RigImportOptions, RigInput, StereoCalibOptions, WorldCalibOptions,
 };
-use bodyseg_refine::Steps;
-use bodyseg_synth::ChessboardConfig;
-use clap::{ArgAction, Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
 /// `bodyseg rig ...`.

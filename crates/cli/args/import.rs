@@ -1,18 +1,11 @@
 //! `bodyseg import ros2` and `bodyseg import cloud`.
 
-use anyhow::{Result, bail};
-use bodyseg_pipeline::{
-    AzureColorResolution, AzureDepthMode, AzureKinectMode, Board, ConvertFormat, ConvertOptions,
-    DEFAULT_PREDICTION_NAME, EvalOptions, FigureChoice, FloorHint, ImportCloudOptions,
-    IntrinsicsCalibOptions, NamedPrediction, ParseOptions, ParseSource, ParserChoice,
-    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
-    RigFormat, RigImportOptions, RigInput, Ros2ImportOptions, RunOptions, SceneSource,
-    StereoCalibOptions, SynthOptions, ThreeDPeopleCamera, WorldCalibOptions,
-};
-use bodyseg_refine::Steps;
-use bodyseg_synth::ChessboardConfig;
-use clap::{ArgAction, Args, Parser, Subcommand, ValueEnum};
+use anyhow::Result;
+use bodyseg_pipeline::{ImportCloudOptions, Ros2ImportOptions};
+use clap::{Args, Subcommand};
 use std::path::PathBuf;
+
+use super::floor::FloorArgs;
 
 /// `bodyseg import ...`.
 #[derive(Debug, Subcommand)]

@@ -1,4 +1,5 @@
 use super::*;
+use bodyseg_pipeline::{AzureColorResolution, AzureDepthMode, RigFormat, RigInput};
 use clap::CommandFactory;
 
 /// `bodyseg BASE EXTRA` as clap parses it (a test's fixed words, then the case's).
