@@ -4,8 +4,8 @@
 use anyhow::{Result, bail};
 use bodyseg_pipeline::{
     DEFAULT_PREDICTION_NAME, EvalOptions, NamedPrediction, ParseOptions, ParseSource,
-    PipelineConfig, ProjectMode, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat,
-    SceneSource, SynthOptions,
+    PipelineConfig, ProjectOptions, RefineOptions, RefineOverrides, ReportFormat, SceneSource,
+    SynthOptions,
 };
 use bodyseg_refine::Steps;
 use bodyseg_synth::ChessboardConfig;
@@ -462,9 +462,7 @@ pub struct ProjectArgs {
 impl ProjectArgs {
     /// The resolved configuration: defaults < --config < --set < --mode, validated.
     pub fn config(&self) -> Result<PipelineConfig> {
-        let mut config = self.config.load()?;
-        config.apply_project_mode(self.mode.map(ProjectMode::from));
-        Ok(config)
+        self.config.load_with_mode(self.mode)
     }
 
     /// The pipeline's options for `project_file`.

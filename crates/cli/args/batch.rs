@@ -30,6 +30,13 @@ impl ConfigArgs {
     pub fn load(&self) -> Result<PipelineConfig> {
         PipelineConfig::resolve(&self.files, &self.settings)
     }
+
+    /// [`ConfigArgs::load`], then `--mode` over `project.mode` when given.
+    pub fn load_with_mode(&self, mode: Option<Mode>) -> Result<PipelineConfig> {
+        let mut config = self.load()?;
+        config.apply_project_mode(mode.map(ProjectMode::from));
+        Ok(config)
+    }
 }
 
 /// `--mode`.
@@ -144,8 +151,7 @@ pub struct BatchArgs {
 impl BatchArgs {
     /// The resolved configuration: defaults < --config < --set < flags, validated.
     pub fn config(&self) -> Result<PipelineConfig> {
-        let mut config = self.config.load()?;
-        config.apply_project_mode(self.mode.map(ProjectMode::from));
+        let mut config = self.config.load_with_mode(self.mode)?;
         config.apply_refine_overrides(&RefineOverrides {
             steps: self.steps,
             ..RefineOverrides::default()

@@ -1,5 +1,5 @@
 use super::*;
-use bodyseg_pipeline::{AzureColorResolution, AzureDepthMode, RigFormat, RigInput};
+use bodyseg_pipeline::{AzureColorResolution, AzureDepthMode, ProjectMode, RigFormat, RigInput};
 use clap::CommandFactory;
 
 /// `bodyseg BASE EXTRA` as clap parses it (a test's fixed words, then the case's).
