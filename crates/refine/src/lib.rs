@@ -487,9 +487,15 @@ pub fn refine_variants_with(
             .par_iter()
             .map(|b| {
                 let test = b.test();
-                let idx: Vec<u32> = (0..cloud.len() as u32)
-                    .filter(|&i| test.contains(cloud.positions_m[i as usize]))
-                    .collect();
+                // Branch-free: every index is written, the end advances only for points
+                // inside (a `filter().collect()` pushed with a capacity test per point).
+                let mut idx: Vec<u32> = vec![0; cloud.len()];
+                let mut inside = 0;
+                for (i, &p) in cloud.positions_m.iter().enumerate() {
+                    idx[inside] = i as u32;
+                    inside += usize::from(test.contains(p));
+                }
+                idx.truncate(inside);
                 // A box holding the whole cloud (a cloud cropped to one person) needs no
                 // copy.
                 let copied;

@@ -40,6 +40,21 @@ const DENSE_FACTOR: u64 = 256;
 /// ...or this many in any case (4 MiB).
 const DENSE_ALWAYS: u64 = 1 << 20;
 
+/// The larger of two finite values, as one `maxss`: `f32::max`'s NaN handling costs five
+/// more instructions, and on the distance bounds below (called per point and neighbour
+/// cell) that was ~6M instructions per refinement at 100k points. For finite operands the
+/// value is `f32::max`'s (at most the sign of a zero differs, which squares away).
+#[inline(always)]
+pub(crate) fn max_finite(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// The smaller of two finite values, as one `minss` (see [`max_finite`]).
+#[inline(always)]
+pub(crate) fn min_finite(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
 /// Axis-aligned box, metres.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Aabb {
@@ -100,10 +115,16 @@ impl Aabb {
     /// `near ≤ dist2(q, p) ≤ far` holds exactly in f32 (rounding is monotonic).
     #[inline]
     pub(crate) fn near_far2(&self, q: Vec3) -> (f32, f32) {
-        let g = |a: usize| (self.lo[a] - q[a]).max(q[a] - self.hi[a]).max(0.0);
-        let f = |a: usize| (q[a] - self.lo[a]).abs().max((self.hi[a] - q[a]).abs());
-        let (g0, g1, g2) = (g(0), g(1), g(2));
-        let (f0, f1, f2) = (f(0), f(1), f(2));
+        // One pair of differences per axis serves both bounds: `|q − lo| = |lo − q|`
+        // exactly (rounding is symmetric).
+        let gf = |a: usize| {
+            let (below, above) = (self.lo[a] - q[a], q[a] - self.hi[a]);
+            (
+                max_finite(max_finite(below, above), 0.0),
+                max_finite(below.abs(), above.abs()),
+            )
+        };
+        let ((g0, f0), (g1, f1), (g2, f2)) = (gf(0), gf(1), gf(2));
         (g0 * g0 + g1 * g1 + g2 * g2, f0 * f0 + f1 * f1 + f2 * f2)
     }
 
@@ -111,7 +132,7 @@ impl Aabb {
     /// point inside it, exact in f32 as [`Aabb::near_far2`]'s.
     #[inline]
     pub(crate) fn dist2(&self, q: Vec3) -> f32 {
-        let g = |a: usize| (self.lo[a] - q[a]).max(q[a] - self.hi[a]).max(0.0);
+        let g = |a: usize| max_finite(max_finite(self.lo[a] - q[a], q[a] - self.hi[a]), 0.0);
         let (g0, g1, g2) = (g(0), g(1), g(2));
         g0 * g0 + g1 * g1 + g2 * g2
     }
@@ -120,7 +141,7 @@ impl Aabb {
     /// between any point of one and any point of the other.
     #[inline]
     pub(crate) fn gap2(&self, o: &Aabb) -> f32 {
-        let g = |a: usize| (self.lo[a] - o.hi[a]).max(o.lo[a] - self.hi[a]).max(0.0);
+        let g = |a: usize| max_finite(max_finite(self.lo[a] - o.hi[a], o.lo[a] - self.hi[a]), 0.0);
         let (g0, g1, g2) = (g(0), g(1), g(2));
         g0 * g0 + g1 * g1 + g2 * g2
     }
@@ -198,6 +219,19 @@ impl GridFrame {
             .map(|(lo, inv)| (lo, inv, self.max_key.map(|k| k as i32)))
     }
 
+    /// [`GridFrame::key`] of a point not below the corner on any axis (a point of the
+    /// box the frame was made from): `p − corner ≥ 0` is exact in f32, so the key needs no
+    /// lower clamp (the same key, one compare and branch fewer per axis).
+    #[inline]
+    pub(crate) fn key_above_corner(&self, p: Vec3) -> [i32; 3] {
+        if let Some((lo, inv)) = self.fast {
+            debug_assert!((0..3).all(|a| p[a] >= lo[a]));
+            let k = |a: usize| (((p[a] - lo[a]) * inv) as i32).min(self.max_key[a] as i32);
+            return [k(0), k(1), k(2)];
+        }
+        self.key(p)
+    }
+
     /// The key of `p`'s cell (clamped into the frame, so a point outside the points it
     /// was made from gets the nearest border cell).
     #[inline]
@@ -250,6 +284,18 @@ enum CellLookup {
     Hashed(FxHashMap<[i32; 3], u32>),
 }
 
+/// The slot of key `k` in a dense table whose first slot has the key `corner` and whose
+/// dimensions are `dims` (x fastest). Slots fit in u32: the tables [`CellGrid::new`] makes
+/// are bounded by [`COUNTING_FACTOR`] slots per point.
+#[inline]
+fn slot_of(k: [i32; 3], corner: [i64; 3], dims: [u64; 3]) -> u32 {
+    let (dx, dy) = (dims[0] as u32, dims[1] as u32);
+    let x = (i64::from(k[0]) - corner[0]) as u32;
+    let y = (i64::from(k[1]) - corner[1]) as u32;
+    let z = (i64::from(k[2]) - corner[2]) as u32;
+    (z * dy + y) * dx + x
+}
+
 /// Marks an empty slot of a dense table.
 pub(crate) const EMPTY: u32 = u32::MAX;
 
@@ -266,20 +312,30 @@ pub(crate) fn number_cells(
     let mut keys = Vec::new();
     let mut start = Vec::new();
     let mut n = 0u32;
-    for (s, t) in table.iter_mut().enumerate() {
-        if *t == 0 {
-            *t = EMPTY;
+    // Most slots are empty (a surface's cells fill a few percent of their block): a run
+    // of them is found by one OR over the run (vectorised) and marked in one fill, and
+    // only runs holding a cell are walked slot by slot.
+    const RUN: usize = 16;
+    for (r, run) in table.chunks_mut(RUN).enumerate() {
+        if run.iter().fold(0, |a, &t| a | t) == 0 {
+            run.fill(EMPTY);
             continue;
         }
-        let s = s as u64;
-        keys.push(key_of([
-            s % dims[0],
-            (s / dims[0]) % dims[1],
-            s / (dims[0] * dims[1]),
-        ]));
-        start.push(n);
-        n += *t;
-        *t = keys.len() as u32 - 1;
+        for (j, t) in run.iter_mut().enumerate() {
+            if *t == 0 {
+                *t = EMPTY;
+                continue;
+            }
+            let s = (r * RUN + j) as u64;
+            keys.push(key_of([
+                s % dims[0],
+                (s / dims[0]) % dims[1],
+                s / (dims[0] * dims[1]),
+            ]));
+            start.push(n);
+            n += *t;
+            *t = keys.len() as u32 - 1;
+        }
     }
     start.push(n);
     (keys, start)
@@ -308,34 +364,70 @@ impl CellGrid {
             .max(COUNTING_ALWAYS);
         match volume {
             Some(volume) if m > 0 && volume <= limit => {
-                Self::counted(positions, ids, keys, lo, pad, dims, volume as usize)
+                let corner = [0, 1, 2].map(|a| i64::from(lo[a]) - i64::from(pad));
+                let slots = keys.iter().map(|k| slot_of(*k, corner, dims)).collect();
+                Self::counted(positions, ids, slots, corner, dims, volume as usize)
             }
             _ => Self::sorted(positions, ids, keys, pad),
         }
     }
 
-    /// [`CellGrid::new`] through one dense table over the padded block of the keys.
+    /// [`CellGrid::new`] with the keys of `frame` (`ids[k]` in cell
+    /// `frame.key(positions[ids[k]])`), `bounds` being the tight box of those points and
+    /// lying in the box `frame` was made from:
+    /// the same grid, built without a key array. Keys are monotonic in each coordinate, so
+    /// the keys of the box's corners are the smallest and largest keys exactly, and in the
+    /// counted case each point's table slot comes straight from its position.
+    pub(crate) fn binned(
+        positions: &[Vec3],
+        ids: &[u32],
+        frame: &GridFrame,
+        bounds: &Aabb,
+        pad: i32,
+    ) -> Self {
+        let m = ids.len();
+        let pad = pad.clamp(0, 4);
+        let (lo, hi) = (frame.key(bounds.lo), frame.key(bounds.hi));
+        let dims = [0, 1, 2]
+            .map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * i64::from(pad)).max(1) as u64);
+        let volume = dims.iter().try_fold(1u64, |v, &d| v.checked_mul(d));
+        let limit = (m as u64)
+            .saturating_mul(COUNTING_FACTOR)
+            .max(COUNTING_ALWAYS);
+        match volume {
+            Some(volume) if m > 0 && volume <= limit => {
+                let corner = [0, 1, 2].map(|a| i64::from(lo[a]) - i64::from(pad));
+                let slots = ids
+                    .iter()
+                    .map(|&id| {
+                        let p = positions[id as usize];
+                        slot_of(frame.key_above_corner(p), corner, dims)
+                    })
+                    .collect();
+                Self::counted(positions, ids, slots, corner, dims, volume as usize)
+            }
+            _ => {
+                let keys: Vec<[i32; 3]> = ids
+                    .iter()
+                    .map(|&id| frame.key(positions[id as usize]))
+                    .collect();
+                debug_assert_eq!(key_bounds(&keys), (lo, hi));
+                Self::sorted(positions, ids, &keys, pad)
+            }
+        }
+    }
+
+    /// [`CellGrid::new`] through one dense table over the padded block of the keys,
+    /// whose first slot has the key `corner`; `slots[k]` is point `ids[k]`'s slot.
     fn counted(
         positions: &[Vec3],
         ids: &[u32],
-        keys: &[[i32; 3]],
-        lo: [i32; 3],
-        pad: i32,
+        slots: Vec<u32>,
+        corner: [i64; 3],
         dims: [u64; 3],
         volume: usize,
     ) -> Self {
         let m = ids.len();
-        // The table's first slot is the key `lo - pad`; slots fit in u32 (the volume is
-        // bounded by COUNTING_FACTOR per point).
-        let corner = [0, 1, 2].map(|a| i64::from(lo[a]) - i64::from(pad));
-        let (dx, dy) = (dims[0] as u32, dims[1] as u32);
-        let mut slots: Vec<u32> = Vec::with_capacity(m);
-        for k in keys {
-            let x = (i64::from(k[0]) - corner[0]) as u32;
-            let y = (i64::from(k[1]) - corner[1]) as u32;
-            let z = (i64::from(k[2]) - corner[2]) as u32;
-            slots.push((z * dy + y) * dx + x);
-        }
         let mut table = vec![0u32; volume];
         for &s in &slots {
             table[s as usize] += 1;

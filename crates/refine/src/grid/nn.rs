@@ -1,7 +1,11 @@
 //! [`NnIndex`]: exact nearest-neighbour and radius queries on a [`CellGrid`].
 
-use super::{Aabb, CellGrid, EMPTY, GridFrame, number_cells, sort_by_key};
+use super::{Aabb, CellGrid, EMPTY, GridFrame, min_finite, number_cells, sort_by_key};
 use bodyseg_core::math::{Vec3, dist2};
+
+/// N's search opens this many blocks by linear passes for the nearest one before sorting
+/// the rest (most searches end within the first few; a pass is cheaper than a sort then).
+const SELECTED_BLOCKS: usize = 4;
 
 /// Scratch space of [`NnIndex::nearest_with`], kept between queries.
 #[derive(Debug, Default)]
@@ -399,24 +403,58 @@ impl NnIndex {
         // The blocks that can hold a nearer point, opened nearest first: the best point
         // found in the nearer ones rules out the cells, then the blocks, farther away
         // (exact, as in `scan_nearest_first`).
+        // The first few by linear passes (most searches end there), the rest sorted.
+        let mut rest = open.len();
+        for _ in 0..SELECTED_BLOCKS {
+            if rest == 0 {
+                return best.map(|(_, j)| j);
+            }
+            let mut m = 0;
+            for i in 1..rest {
+                if open[i].0 < open[m].0 {
+                    m = i;
+                }
+            }
+            let (lb, b) = open[m];
+            if best.is_some_and(|(b2, _)| lb > b2) {
+                return best.map(|(_, j)| j);
+            }
+            self.scan_block(q, b, c0, cells, &mut best);
+            rest -= 1;
+            open.swap(m, rest);
+        }
+        let open = &mut open[..rest];
         open.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         for &(lb, b) in open.iter() {
             if best.is_some_and(|(b2, _)| lb > b2) {
                 break;
             }
-            cells.clear();
-            for &c in self.cells_of_block(b as usize) {
-                if c == c0 {
-                    continue;
-                }
-                let lb = self.cell_box[c as usize].dist2(q);
-                if best.is_none_or(|(b2, _)| lb <= b2) {
-                    cells.push((lb, c));
-                }
-            }
-            self.scan_nearest_first(q, cells, &mut best);
+            self.scan_block(q, b, c0, cells, &mut best);
         }
         best.map(|(_, j)| j)
+    }
+
+    /// Scans the cells of block `b` (but `skip`, scanned already) whose boxes are not
+    /// farther than the best point, nearest first.
+    fn scan_block(
+        &self,
+        q: Vec3,
+        b: u32,
+        skip: u32,
+        cells: &mut Vec<(f32, u32)>,
+        best: &mut Option<(f32, u32)>,
+    ) {
+        cells.clear();
+        for &c in self.cells_of_block(b as usize) {
+            if c == skip {
+                continue;
+            }
+            let lb = self.cell_box[c as usize].dist2(q);
+            if best.is_none_or(|(b2, _)| lb <= b2) {
+                cells.push((lb, c));
+            }
+        }
+        self.scan_nearest_first(q, cells, best);
     }
 
     /// Scans the cells of `cells` (lower bound of the squared distance to `q`, cell) in
@@ -424,13 +462,27 @@ impl NnIndex {
     /// those cells cannot hold a nearer point, nor one as near (the bound is exact in
     /// f32, see [`Aabb::near_far2`]), so the best point is the one a scan of all of them
     /// finds. Reorders `cells`.
+    ///
+    /// The nearest remaining cell is picked by a linear pass each time rather than by
+    /// sorting them all: the search stops after a few cells (the best point is then nearer
+    /// than the rest), and the order among cells of equal bounds does not change the
+    /// answer (ties between points go to the smaller id whatever the scan order).
     fn scan_nearest_first(&self, q: Vec3, cells: &mut [(f32, u32)], best: &mut Option<(f32, u32)>) {
-        cells.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for &(lb, c) in cells.iter() {
+        let mut rest = cells.len();
+        while rest > 0 {
+            let mut m = 0;
+            for i in 1..rest {
+                if cells[i].0 < cells[m].0 {
+                    m = i;
+                }
+            }
+            let (lb, c) = cells[m];
             if best.is_some_and(|(b2, _)| lb > b2) {
                 break;
             }
             self.scan_cell(q, c as usize, best);
+            rest -= 1;
+            cells.swap(m, rest);
         }
     }
 
@@ -630,7 +682,7 @@ impl NnIndex {
                 dist2(q, bp[2]),
                 dist2(q, bp[3]),
             ];
-            let m = d[0].min(d[1]).min(d[2].min(d[3]));
+            let m = min_finite(min_finite(d[0], d[1]), min_finite(d[2], d[3]));
             if best.is_some_and(|(b2, _)| m > b2) {
                 continue;
             }
