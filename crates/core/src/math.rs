@@ -203,6 +203,33 @@ mod tests {
     }
 
     #[test]
+    fn the_frame_around_an_axis_is_orthonormal_right_handed_and_keeps_the_axis() {
+        // Axes far from and near world z (the helper switches at |z_z| = 0.9), both signs,
+        // and the world axes themselves.
+        let axes = [
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            normalize([1.0, 2.0, 3.0]),
+            normalize([-0.3, 0.1, 0.95]),
+            normalize([0.2, -0.9, 0.1]),
+        ];
+        for z in axes {
+            let [x, y, frame_z] = frame_around_unit_axis(z);
+            assert_eq!(frame_z, z, "the third axis is the input, unchanged");
+            for (name, v) in [("x", x), ("y", y)] {
+                assert!((norm(v) - 1.0).abs() < 1e-6, "|{name}| = {} for {z:?}", norm(v));
+            }
+            for (pair, d) in [("x.y", dot(x, y)), ("x.z", dot(x, z)), ("y.z", dot(y, z))] {
+                assert!(d.abs() < 1e-6, "{pair} = {d} for {z:?}");
+            }
+            // Right-handed: x × y = z.
+            assert!(dist(cross(x, y), z) < 1e-6, "x × y ≠ z for {z:?}");
+        }
+    }
+
+    #[test]
     fn a_rigid_transform_and_its_inverse_cancel() {
         // 90° about z, then 1 m along x.
         let t = RigidTransform {
