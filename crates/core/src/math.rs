@@ -219,7 +219,11 @@ mod tests {
             let [x, y, frame_z] = frame_around_unit_axis(z);
             assert_eq!(frame_z, z, "the third axis is the input, unchanged");
             for (name, v) in [("x", x), ("y", y)] {
-                assert!((norm(v) - 1.0).abs() < 1e-6, "|{name}| = {} for {z:?}", norm(v));
+                assert!(
+                    (norm(v) - 1.0).abs() < 1e-6,
+                    "|{name}| = {} for {z:?}",
+                    norm(v)
+                );
             }
             for (pair, d) in [("x.y", dot(x, y)), ("x.z", dot(x, z)), ("y.z", dot(y, z))] {
                 assert!(d.abs() < 1e-6, "{pair} = {d} for {z:?}");

@@ -78,18 +78,29 @@ pub fn group_cameras(stamps: &[Vec<i64>], max_skew_ns: i64) -> Vec<Vec<usize>> {
 mod tests {
     use super::*;
 
-    /// Brute force: greedy by |Δt| over all pairs of the two streams.
+    /// Brute force, written apart from the code under test: over all pairs of the two
+    /// streams, repeatedly take the free pair of smallest (|Δt|, i, j) by a full scan
+    /// (no window, no sort), until no free pair lies within the skew.
     fn brute(a: &[i64], b: &[i64], skew: i64) -> Vec<(usize, usize)> {
-        let mut all: Vec<(i64, usize, usize)> = Vec::new();
-        for (i, x) in a.iter().enumerate() {
-            for (j, y) in b.iter().enumerate() {
-                if (x - y).abs() <= skew {
-                    all.push(((x - y).abs(), i, j));
+        let (mut used_a, mut used_b) = (vec![false; a.len()], vec![false; b.len()]);
+        let mut pairs = Vec::new();
+        loop {
+            let mut best: Option<(i64, usize, usize)> = None;
+            for (i, x) in a.iter().enumerate().filter(|&(i, _)| !used_a[i]) {
+                for (j, y) in b.iter().enumerate().filter(|&(j, _)| !used_b[j]) {
+                    let d = (x - y).abs();
+                    if d <= skew && best.is_none_or(|b| (d, i, j) < b) {
+                        best = Some((d, i, j));
+                    }
                 }
             }
+            let Some((_, i, j)) = best else { break };
+            used_a[i] = true;
+            used_b[j] = true;
+            pairs.push((i, j));
         }
-        // The greedy choice is shared; what this checks is the windowed candidate search.
-        one_to_one(all, a.len(), b.len())
+        pairs.sort_unstable();
+        pairs
     }
 
     #[test]
