@@ -277,6 +277,45 @@ impl BlazePoseSegmenter {
         regions: Option<&[PersonRegion]>,
     ) -> Result<LabelImage, ParsingError> {
         let (w, h) = (image.width as usize, image.height as usize);
+        let people: Vec<PersonLabels> = self
+            .per_region(image, regions, Worker::person)?
+            .into_iter()
+            .flatten()
+            .collect();
+        Ok(merge_people(w, h, &people))
+    }
+
+    /// The pose found for each region (in region order; the whole image as one region when
+    /// `regions` is `None`), as [`BlazePoseSegmenter::segment_image`] labels them: `None`
+    /// where the region is unusable or its pose flag is below
+    /// [`BlazePoseOptions::min_pose_flag`]. For figures and studies of the rule.
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`].
+    pub fn poses(
+        &mut self,
+        image: &RgbImage,
+        regions: Option<&[PersonRegion]>,
+    ) -> Result<Vec<Option<DecodedPose>>, ParsingError> {
+        self.per_region(image, regions, Worker::accepted_pose)
+    }
+
+    /// `f` on every region (the whole image when `regions` is `None`), results in region
+    /// order: one region on the wide session, several shared out over the single-threaded
+    /// ones and run at once.
+    fn per_region<T: Send>(
+        &mut self,
+        image: &RgbImage,
+        regions: Option<&[PersonRegion]>,
+        f: fn(
+            &mut Worker,
+            &RgbImage,
+            &PersonRegion,
+            &Path,
+            &BlazePoseOptions,
+        ) -> Result<T, ParsingError>,
+    ) -> Result<Vec<T>, ParsingError> {
+        let (w, h) = (image.width as usize, image.height as usize);
         let whole = [PersonRegion {
             bounds: PixelBox {
                 x0: 0.0,
@@ -289,34 +328,32 @@ impl BlazePoseSegmenter {
         let regions = regions.unwrap_or(&whole);
         let (model_path, options) = (&self.model_path, &self.options);
         if regions.len() < 2 || self.narrow.is_empty() {
-            let mut people = Vec::with_capacity(regions.len());
-            for region in regions {
-                people.extend(self.wide.person(image, region, model_path, options)?);
-            }
-            return Ok(merge_people(w, h, &people));
+            return regions
+                .iter()
+                .map(|region| f(&mut self.wide, image, region, model_path, options))
+                .collect();
         }
         let n = self.narrow.len();
-        let per_worker: Vec<Result<Vec<(usize, PersonLabels)>, ParsingError>> = self
+        let per_worker: Vec<Result<Vec<(usize, T)>, ParsingError>> = self
             .narrow
             .par_iter_mut()
             .enumerate()
             .map(|(k, worker)| {
-                let mut people = Vec::new();
-                for (i, region) in regions.iter().enumerate().skip(k).step_by(n) {
-                    if let Some(person) = worker.person(image, region, model_path, options)? {
-                        people.push((i, person));
-                    }
-                }
-                Ok(people)
+                regions
+                    .iter()
+                    .enumerate()
+                    .skip(k)
+                    .step_by(n)
+                    .map(|(i, region)| Ok((i, f(worker, image, region, model_path, options)?)))
+                    .collect()
             })
             .collect();
-        let mut people = Vec::with_capacity(regions.len());
+        let mut out = Vec::with_capacity(regions.len());
         for part in per_worker {
-            people.extend(part?);
+            out.extend(part?);
         }
-        people.sort_by_key(|&(i, _)| i);
-        let people: Vec<PersonLabels> = people.into_iter().map(|(_, p)| p).collect();
-        Ok(merge_people(w, h, &people))
+        out.sort_by_key(|&(i, _)| i);
+        Ok(out.into_iter().map(|(_, t)| t).collect())
     }
 }
 
@@ -330,6 +367,26 @@ impl Worker {
         model_path: &Path,
         options: &BlazePoseOptions,
     ) -> Result<Option<PersonLabels>, ParsingError> {
+        let Some(pose) = self.accepted_pose(image, region, model_path, options)? else {
+            return Ok(None);
+        };
+        let (w, h) = (image.width as usize, image.height as usize);
+        Ok(label_person(&pose, &options.rule, w, h).map(|mut person| {
+            person.depth_m =
+                (region.depth_m.is_finite() && region.depth_m > 0.0).then_some(region.depth_m);
+            person
+        }))
+    }
+
+    /// The pose of `region`'s person, `None` when the region is unusable or its pose flag
+    /// is below [`BlazePoseOptions::min_pose_flag`].
+    fn accepted_pose(
+        &mut self,
+        image: &RgbImage,
+        region: &PersonRegion,
+        model_path: &Path,
+        options: &BlazePoseOptions,
+    ) -> Result<Option<DecodedPose>, ParsingError> {
         let b = &region.bounds;
         let usable =
             [b.x0, b.y0, b.x1, b.y1].iter().all(|v| v.is_finite()) && b.x1 >= b.x0 && b.y1 >= b.y0;
@@ -337,15 +394,7 @@ impl Worker {
             return Ok(None);
         }
         let pose = self.pose_in(image, b, model_path, options)?;
-        if pose.flag < options.min_pose_flag {
-            return Ok(None);
-        }
-        let (w, h) = (image.width as usize, image.height as usize);
-        Ok(label_person(&pose, &options.rule, w, h).map(|mut person| {
-            person.depth_m =
-                (region.depth_m.is_finite() && region.depth_m > 0.0).then_some(region.depth_m);
-            person
-        }))
+        Ok((pose.flag >= options.min_pose_flag).then_some(pose))
     }
 
     /// One run of the landmark model on `roi` of `image`.
