@@ -4,7 +4,7 @@
     target/release/examples/real_parsing /tmp/pred/full blazepose:full poses=1
     .venv/bin/python scripts/real_parsing_overlay.py /tmp/pred/full --out /tmp/overlay [--name pp_2008_000652]
 
-One PNG per image: photograph | ground truth | prediction | errors, side by side, each panel
+One PNG per image: photograph | ground truth / prediction | errors (2 x 2), each panel
 with the person boxes; the prediction panel also with the pose's landmarks and bones when
 `<name>.poses.json` is there (the example's `poses=1`): a landmark drawn filled when its
 presence is >= 0.5, hollow otherwise; its colour goes from red (visibility 0) to green (1).
@@ -125,24 +125,24 @@ def main():
         panels = [img, blend(img, colourise(gt, coarse)), blend(img, colourise(pred, False)),
                   errors(gt, pred, coarse)]
         h, w = img.shape[:2]
-        canvas = Image.new("RGB", (w * 4 + 12, h + 14), (255, 255, 255))
-        for k, p in enumerate(panels):
-            canvas.paste(Image.fromarray(p), (k * (w + 4), 14))
-        d = ImageDraw.Draw(canvas)
-        for k in range(4):
-            for b in item["person_boxes"]:
-                x0, y0, x1, y1 = b
-                d.rectangle([x0 + k * (w + 4), y0 + 14, x1 + k * (w + 4), y1 + 14],
-                            outline=(255, 255, 255))
         poses_path = pred_dir / f"{name}.poses.json"
         if poses_path.exists():
-            sub = Image.new("RGB", (w, h))
-            sub.paste(Image.fromarray(panels[2]))
+            sub = Image.fromarray(panels[2])
             sd = ImageDraw.Draw(sub)
             for k, pose in enumerate(json.loads(poses_path.read_text())):
                 if pose is not None:
                     draw_pose(sd, pose, k)
-            canvas.paste(sub, (2 * (w + 4), 14))
+            panels[2] = np.asarray(sub)
+        # 2 x 2 panels, small photographs enlarged to ~700 px wide panels
+        zoom = max(1, int(700 // max(w, 1)))
+        canvas = Image.new("RGB", (2 * w * zoom + 4, 2 * h * zoom + 18), (255, 255, 255))
+        d = ImageDraw.Draw(canvas)
+        for k, p in enumerate(panels):
+            ox, oy = (k % 2) * (w * zoom + 4), 14 + (k // 2) * (h * zoom + 4)
+            canvas.paste(Image.fromarray(p).resize((w * zoom, h * zoom), Image.NEAREST), (ox, oy))
+            for b in item["person_boxes"]:
+                x0, y0, x1, y1 = (v * zoom for v in b)
+                d.rectangle([x0 + ox, y0 + oy, x1 + ox, y1 + oy], outline=(255, 255, 255))
         miou, person = scores(gt, pred, coarse)
         title = f"{name}  mIoU {miou:.3f}  person {person:.3f}"
         d.text((2, 1), title, fill=(0, 0, 0))

@@ -30,7 +30,7 @@ pub mod landmark;
 mod model;
 mod roi;
 
-pub use bone::{Bone, BoneShape, RuleConfig, bones, polygon_distance, segment_distance};
+pub use bone::{Bone, BoneShape, BoneStart, RuleConfig, bones, polygon_distance, segment_distance};
 pub use decode::{DecodedPose, decode, refine_from_heatmap};
 pub use label::{PersonLabels, SIDE_BY_SIDE_M, label_person, merge_people};
 pub use model::{HEATMAP, INPUT, NUM_LANDMARKS};

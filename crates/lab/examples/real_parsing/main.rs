@@ -87,11 +87,13 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
                 "threads" => options.threads = value.parse().map_err(|e| bad(&e))?,
                 "min_pose_flag" => options.min_pose_flag = value.parse().map_err(|e| bad(&e))?,
                 "poses" => write_poses = value == "1",
+                "flat_shoulders" => options.rule.flat_shoulders = value == "1",
+                "thighs_past_frame" => options.rule.thighs_past_frame = value == "1",
                 _ => match rule_field(&mut options.rule, key) {
                     Some(field) => *field = value.parse().map_err(|e| bad(&e))?,
                     None => bail!(
                         "{key}: unknown setting (roi_scale, refine_passes, threads, \
-                         min_pose_flag, poses, or a RuleConfig field)"
+                         min_pose_flag, poses, or a RuleConfig field; booleans 0/1)"
                     ),
                 },
             }

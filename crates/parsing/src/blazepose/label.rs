@@ -117,7 +117,7 @@ pub fn label_person(
         return None;
     }
     let (u0, u1, v0, v1) = roi_window(&pose.roi, width, height)?;
-    let bl = bones(pose, cfg);
+    let bl = bones(pose, cfg, width, height);
     if bl.is_empty() {
         return None;
     }

@@ -118,7 +118,13 @@ fn matches_the_python_reference() {
             pose.mask[j * INPUT + i] = m.clamp(0.0, 1.0) as f32;
         }
     }
-    let p = label_person(&pose, &RuleConfig::default(), 100, 160).expect("in the image");
+    // The reference has round shoulders and no thighs past the frame (both added later).
+    let cfg = RuleConfig {
+        flat_shoulders: false,
+        thighs_past_frame: false,
+        ..RuleConfig::default()
+    };
+    let p = label_person(&pose, &cfg, 100, 160).expect("in the image");
     let field = |k: &str| golden[k].as_u64().expect("window bound") as usize;
     assert_eq!(
         (p.u0, p.u1, p.v0, p.v1),
@@ -162,12 +168,80 @@ fn legs_out_of_frame_are_not_invented() {
     for i in [LEFT_KNEE, RIGHT_KNEE, LEFT_ANKLE, RIGHT_ANKLE] {
         pose.presence[i] = 0.1;
     }
-    let classes: Vec<u8> = bones(&pose, &RuleConfig::default())
+    let classes: Vec<u8> = bones(&pose, &RuleConfig::default(), 100, 160)
         .iter()
         .map(|b| b.class)
         .collect();
     assert!(!classes.contains(&5) && !classes.contains(&6));
     assert!(classes.contains(&2) && classes.contains(&4));
+}
+
+/// The class `label_person` gives pixel (u, v) of the upright figure (mask 1) in a
+/// `width`×`height` image under `cfg`.
+fn class_at(
+    pose: &DecodedPose,
+    cfg: &RuleConfig,
+    (width, height): (usize, usize),
+    u: usize,
+    v: usize,
+) -> u8 {
+    let p = label_person(pose, cfg, width, height).expect("in the image");
+    p.class[(v - p.v0) * (p.u1 - p.u0) + (u - p.u0)]
+}
+
+/// Just above the left shoulder (60, 40) and toward the neck the torso wins with flat
+/// shoulders, the upper arm with round ones; beside the shoulder, outward, the arm keeps it.
+#[test]
+fn the_top_of_the_shoulder_is_torso_beside_it_arm() {
+    let pose = figure();
+    let flat = RuleConfig::default();
+    let round = RuleConfig {
+        flat_shoulders: false,
+        ..flat
+    };
+    assert!(flat.flat_shoulders, "the default");
+    assert_eq!(class_at(&pose, &round, (100, 160), 58, 37), 3);
+    assert_eq!(class_at(&pose, &flat, (100, 160), 58, 37), 2);
+    assert_eq!(class_at(&pose, &flat, (100, 160), 63, 38), 3);
+    // the right shoulder (40, 40), mirrored
+    assert_eq!(class_at(&pose, &flat, (100, 160), 42, 37), 2);
+    assert_eq!(class_at(&pose, &flat, (100, 160), 37, 38), 3);
+    // along the arm, below the shoulder, nothing changes
+    assert_eq!(class_at(&pose, &flat, (100, 160), 65, 50), 3);
+}
+
+/// A seated person seen to the waist: the knees (y 110) lie below an image 100 px high,
+/// with a low presence. The thighs are labelled from the hips (y 80) toward them, with no
+/// lower legs; not when the hips are within a thigh radius of the edge (the person cut at
+/// the hips), nor when the knees are inside the image (occluded, not out of frame).
+#[test]
+fn thighs_run_from_the_hips_to_knees_below_the_frame() {
+    use landmark::*;
+    let mut pose = figure();
+    for i in [LEFT_KNEE, RIGHT_KNEE, LEFT_ANKLE, RIGHT_ANKLE] {
+        pose.presence[i] = 0.1;
+    }
+    let cfg = RuleConfig::default();
+    let classes = |cfg: &RuleConfig, height: usize| -> Vec<u8> {
+        bones(&pose, cfg, 100, height)
+            .iter()
+            .map(|b| b.class)
+            .collect()
+    };
+    let seated = classes(&cfg, 100);
+    assert_eq!(seated.iter().filter(|&&c| c == 5).count(), 2, "{seated:?}");
+    assert!(!seated.contains(&6));
+    assert_eq!(class_at(&pose, &cfg, (100, 100), 58, 95), 5);
+    let off = RuleConfig {
+        thighs_past_frame: false,
+        ..cfg
+    };
+    assert!(!classes(&off, 100).contains(&5));
+    assert_ne!(class_at(&pose, &off, (100, 100), 58, 95), 5);
+    // body scale 40 px, thigh radius 0.2 × 40 = 8 px: hips at y 80 are 4.5 px inside an
+    // image 85 px high
+    assert!(!classes(&cfg, 85).contains(&5), "cut at the hips");
+    assert!(!classes(&cfg, 160).contains(&5), "knees in the frame");
 }
 
 /// A person of two pixels, columns `u0` and `u0 + 1` of row 0, depth unknown.
@@ -245,7 +319,7 @@ fn block_culling_equals_scoring_every_bone() {
             }
         }
         let got = label_person(&pose, &cfg, 100, 160).expect("in the image");
-        let bl = bones(&pose, &cfg);
+        let bl = bones(&pose, &cfg, 100, 160);
         let axes = pose.roi.axes();
         let ww = got.u1 - got.u0;
         let mut labelled = 0;
