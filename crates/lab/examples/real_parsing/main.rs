@@ -54,6 +54,7 @@ fn rule_field<'a>(rule: &'a mut RuleConfig, key: &str) -> Option<&'a mut f64> {
         "r_lower_leg" => &mut rule.r_lower_leg,
         "hand_extend" => &mut rule.hand_extend,
         "torso_bias" => &mut rule.torso_bias,
+        "behind_torso_depth" => &mut rule.behind_torso_depth,
         "max_score" => &mut rule.max_score,
         "margin_scale" => &mut rule.margin_scale,
         _ => return None,
@@ -176,7 +177,7 @@ fn main() -> anyhow::Result<()> {
 }
 
 /// One image's poses (region order; `null` where a region has none): flag, ROI, and per
-/// landmark x, y (image px), visibility, presence.
+/// landmark x, y, depth (image px), visibility, presence.
 fn poses_json(poses: &[Option<DecodedPose>]) -> serde_json::Value {
     serde_json::Value::Array(
         poses
@@ -193,6 +194,7 @@ fn poses_json(poses: &[Option<DecodedPose>]) -> serde_json::Value {
                     "xy": p.xy,
                     "visibility": p.visibility,
                     "presence": p.presence,
+                    "depth_px": p.depth_px,
                 }),
             })
             .collect(),

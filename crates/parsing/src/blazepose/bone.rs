@@ -37,6 +37,14 @@ pub struct RuleConfig {
     pub hand_extend: f64,
     /// Added to the torso's score, in body scales: a limb in front of the torso wins.
     pub torso_bias: f64,
+    /// An arm bone whose mean landmark depth lies more than this many body scales behind
+    /// the torso's (the mean of the shoulders' and hips' depths) is behind the torso: it
+    /// gets `torso_bias` too, so the precedence of a limb in front of the torso is not given
+    /// to it and the nearer surface decides (the far arm of a person seen from the side, an
+    /// arm behind the back). 0.2: about half a torso's depth front to back (chest depth ≈
+    /// 0.2–0.25 m, shoulder to hip ≈ 0.5 m). +∞: off. Legs keep their precedence (tried:
+    /// lower on the tune split).
+    pub behind_torso_depth: f64,
     /// A mask pixel whose best score exceeds this is not the person's.
     pub max_score: f64,
     /// Bone-margin confidence: 1 − 0.5 exp(−(e2 − e1) / margin_scale).
@@ -76,6 +84,7 @@ impl Default for RuleConfig {
             r_lower_leg: 0.22,
             hand_extend: 0.0,
             torso_bias: 0.2,
+            behind_torso_depth: 0.2,
             max_score: 3.0,
             margin_scale: 0.5,
             flat_shoulders: true,
@@ -119,6 +128,9 @@ pub struct Bone {
     pub radius_px: f64,
     /// The pose's body scale, image px (the unit of scores).
     pub scale_px: f64,
+    /// Added to the score, body scales: `torso_bias` for the torso and for an arm behind the
+    /// torso, else 0.
+    pub bias: f64,
     /// How a polyline bone ends at its first point.
     pub start: BoneStart,
 }
@@ -186,6 +198,7 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig, width: usize, height: usize) 
             shape: BoneShape::Quad(quad),
             radius_px: cfg.r_torso * body,
             scale_px: body,
+            bias: cfg.torso_bias,
             start: BoneStart::Round,
         });
     }
@@ -209,9 +222,25 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig, width: usize, height: usize) 
             ]),
             radius_px: cfg.r_head * width,
             scale_px: body,
+            bias: 0.0,
             start: BoneStart::Round,
         });
     }
+    // Depth of the torso and the bias of a limb bone between landmarks `idx` (see
+    // `behind_torso_depth`).
+    let depth = &pose.depth_px;
+    let mean_depth = |idx: &[usize]| idx.iter().map(|&i| depth[i]).sum::<f64>() / idx.len() as f64;
+    let behind_bias = |idx: &[usize]| {
+        if depth.len() < NUM_LANDMARKS {
+            return 0.0;
+        }
+        let torso = mean_depth(&[LEFT_SHOULDER, RIGHT_SHOULDER, LEFT_HIP, RIGHT_HIP]);
+        if mean_depth(idx) - torso > cfg.behind_torso_depth * body {
+            cfg.torso_bias
+        } else {
+            0.0
+        }
+    };
     let limbs = [
         (
             LEFT_SHOULDER,
@@ -265,6 +294,11 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig, width: usize, height: usize) 
             shape: BoneShape::Polyline(vec![p[root], p[joint]]),
             radius_px: r_up * body,
             scale_px: body,
+            bias: if upper == 3 {
+                behind_bias(&[root, joint])
+            } else {
+                0.0
+            },
             start: match outward(p[root], p[other]) {
                 Some(outward) if cfg.flat_shoulders && upper == 3 => {
                     BoneStart::FlatMedial { outward }
@@ -288,6 +322,11 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig, width: usize, height: usize) 
             shape: BoneShape::Polyline(pts),
             radius_px: r_low * body,
             scale_px: body,
+            bias: if upper == 3 {
+                behind_bias(&[joint, end])
+            } else {
+                0.0
+            },
             start: BoneStart::Round,
         });
     }
@@ -332,14 +371,14 @@ pub fn polygon_distance(q: P2, poly: &[P2]) -> f64 {
 }
 
 impl Bone {
-    /// The bone's score at `q`: (distance to its surface) / body scale + 1, plus
-    /// `torso_bias` for the torso (§4 of the note). With [`BoneStart::FlatMedial`] the
+    /// The bone's score at `q`: (distance to its surface) / body scale + 1 + its
+    /// [`Bone::bias`] (`torso_bias` for the torso, §4 of the note). With [`BoneStart::FlatMedial`] the
     /// distance is max(distance − radius, min(distance behind the start plane, distance
     /// medial of the first point)): still 1-Lipschitz in `q`,
     /// so a score moves by at most (distance moved) / body scale, which the block culling
     /// of `label_person` relies on.
-    pub fn score(&self, q: P2, torso_bias: f64) -> f64 {
-        let (d, bias) = match &self.shape {
+    pub fn score(&self, q: P2) -> f64 {
+        let d = match &self.shape {
             BoneShape::Polyline(pts) => {
                 let d = pts
                     .windows(2)
@@ -354,10 +393,10 @@ impl Bone {
                     }
                     _ => f64::NEG_INFINITY,
                 };
-                (d.max(behind), 0.0)
+                d.max(behind)
             }
-            BoneShape::Quad(quad) => (polygon_distance(q, quad) - self.radius_px, torso_bias),
+            BoneShape::Quad(quad) => polygon_distance(q, quad) - self.radius_px,
         };
-        d / self.scale_px + 1.0 + bias
+        d / self.scale_px + 1.0 + self.bias
     }
 }

@@ -118,10 +118,12 @@ fn matches_the_python_reference() {
             pose.mask[j * INPUT + i] = m.clamp(0.0, 1.0) as f32;
         }
     }
-    // The reference has round shoulders and no thighs past the frame (both added later).
+    // The reference has round shoulders, no thighs past the frame and no depth order (all
+    // added later).
     let cfg = RuleConfig {
         flat_shoulders: false,
         thighs_past_frame: false,
+        behind_torso_depth: f64::INFINITY,
         ..RuleConfig::default()
     };
     let p = label_person(&pose, &cfg, 100, 160).expect("in the image");
@@ -244,6 +246,32 @@ fn thighs_run_from_the_hips_to_knees_below_the_frame() {
     assert!(!classes(&cfg, 160).contains(&5), "knees in the frame");
 }
 
+/// The left forearm crosses the torso, elbow (70, 60) to wrist (52, 70): in front of the
+/// torso (depth as the torso's) it is labelled over it; half a body scale (20 px) behind the
+/// torso, the torso is; with `behind_torso_depth` off, the arm again.
+#[test]
+fn an_arm_behind_the_torso_gives_way_to_it() {
+    use landmark::*;
+    let mut pose = figure();
+    pose.xy[LEFT_WRIST] = [52.0, 70.0];
+    for &i in &LEFT_HAND {
+        pose.xy[i] = [50.0, 71.0];
+    }
+    let cfg = RuleConfig::default();
+    assert_eq!(class_at(&pose, &cfg, (100, 160), 55, 68), 4, "in front");
+    for i in [LEFT_SHOULDER, LEFT_ELBOW, LEFT_WRIST] {
+        pose.depth_px[i] = 20.0;
+    }
+    assert_eq!(class_at(&pose, &cfg, (100, 160), 55, 68), 2, "behind");
+    let off = RuleConfig {
+        behind_torso_depth: f64::INFINITY,
+        ..cfg
+    };
+    assert_eq!(class_at(&pose, &off, (100, 160), 55, 68), 4, "off");
+    // beside the torso, on the upper arm, the arm keeps its pixels
+    assert_eq!(class_at(&pose, &cfg, (100, 160), 66, 50), 3);
+}
+
 /// A person of two pixels, columns `u0` and `u0 + 1` of row 0, depth unknown.
 fn two_pixels(u0: usize, class: [u8; 2], prob: [f32; 2], score: [f32; 2]) -> PersonLabels {
     PersonLabels {
@@ -331,7 +359,7 @@ fn block_culling_equals_scoring_every_bone() {
                 let mut per_class = [f64::INFINITY; 7];
                 for b in &bl {
                     let c = usize::from(b.class);
-                    per_class[c] = per_class[c].min(b.score(q, cfg.torso_bias));
+                    per_class[c] = per_class[c].min(b.score(q));
                 }
                 let (c1, e1, e2) = best_two(&per_class);
                 if m < cfg.mask_threshold || e1 > cfg.max_score {
