@@ -61,9 +61,11 @@ pub struct RuleConfig {
     /// to where the model puts the knee, whatever the knee's presence: presence is the
     /// model's "inside the frame" probability, so a knee below the image's edge has a low
     /// one although the thigh is in view (a seated person, a close-up; issue 29's "legs from
-    /// the hips when the knees are missing"). The hip must lie inside the image by at least
-    /// the thigh's radius, so that the thigh is in view and not only the round end of its
-    /// capsule (a person cut at the hips). No lower leg: it would lie outside the frame.
+    /// the hips when the knees are missing"). The knee must still be visible ≥
+    /// `min_visibility` as any limb joint (a knee behind a table below the frame is not),
+    /// and the hip must lie inside the image by at least the thigh's radius, so that the
+    /// thigh is in view and not only the round end of its capsule (a person cut at the
+    /// hips). No lower leg: it would lie outside the frame.
     pub thighs_past_frame: bool,
 }
 
@@ -285,6 +287,7 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig, width: usize, height: usize) 
             && upper == 5
             && outside(p[joint])
             && !ok(joint)
+            && pose.visibility[joint] >= cfg.min_visibility
             && inside_by(p[root]) >= r_up * body;
         if !(seen(&[root, joint]) || seen(&[root]) && joint_past_frame) {
             continue;

@@ -215,7 +215,8 @@ fn the_top_of_the_shoulder_is_torso_beside_it_arm() {
 /// A seated person seen to the waist: the knees (y 110) lie below an image 100 px high,
 /// with a low presence. The thighs are labelled from the hips (y 80) toward them, with no
 /// lower legs; not when the hips are within a thigh radius of the edge (the person cut at
-/// the hips), nor when the knees are inside the image (occluded, not out of frame).
+/// the hips), nor when the knees are inside the image (occluded, not out of frame), nor when
+/// the knees' visibility is low (hidden).
 #[test]
 fn thighs_run_from_the_hips_to_knees_below_the_frame() {
     use landmark::*;
@@ -244,6 +245,14 @@ fn thighs_run_from_the_hips_to_knees_below_the_frame() {
     // image 85 px high
     assert!(!classes(&cfg, 85).contains(&5), "cut at the hips");
     assert!(!classes(&cfg, 160).contains(&5), "knees in the frame");
+    for i in [LEFT_KNEE, RIGHT_KNEE] {
+        pose.visibility[i] = 0.1;
+    }
+    let hidden: Vec<u8> = bones(&pose, &cfg, 100, 100)
+        .iter()
+        .map(|b| b.class)
+        .collect();
+    assert!(!hidden.contains(&5), "knees hidden (below a table)");
 }
 
 /// The left forearm crosses the torso, elbow (70, 60) to wrist (52, 70): in front of the
