@@ -88,6 +88,7 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
                 "threads" => options.threads = value.parse().map_err(|e| bad(&e))?,
                 "min_pose_flag" => options.min_pose_flag = value.parse().map_err(|e| bad(&e))?,
                 "poses" => write_poses = value == "1",
+                "blank_retry" => options.blank_retry = value == "1",
                 "flat_shoulders" => options.rule.flat_shoulders = value == "1",
                 "thighs_past_frame" => options.rule.thighs_past_frame = value == "1",
                 _ => match rule_field(&mut options.rule, key) {

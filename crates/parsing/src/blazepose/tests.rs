@@ -7,6 +7,7 @@ use super::label::*;
 use super::landmark;
 use super::model::*;
 use super::roi::*;
+use crate::segmenter::PixelBox;
 use bodyseg_core::RgbImage;
 
 // Tolerance for coordinate round trips: a few ulps of values ~ 1e2.
@@ -59,6 +60,40 @@ fn crop_of_a_uniform_image_is_uniform_and_replicates_the_border() {
     let t = crop(&img, &roi, 8);
     for px in t.chunks_exact(3) {
         assert!((px[0] - 10.0 / 255.0).abs() < 1e-6 && (px[2] - 30.0 / 255.0).abs() < 1e-6);
+    }
+}
+
+/// A crop blanked outside a box: the tensor pixels whose centres map outside it are the
+/// value given, the others keep the image's colour.
+#[test]
+fn a_blanked_crop_sees_only_the_box() {
+    let img = RgbImage::new(40, 40, [200u8, 100, 50].repeat(1600)).expect("40x40x3 bytes");
+    // ROI = the image, 8×8 crop: tensor pixel i covers image columns 5i..5i+5
+    let roi = Roi {
+        centre_px: [19.5, 19.5],
+        side_px: 40.0,
+        angle_rad: 0.0,
+    };
+    let mut t = crop(&img, &roi, 8);
+    let keep = PixelBox {
+        x0: 10.0,
+        y0: 0.0,
+        x1: 39.0,
+        y1: 19.0,
+    };
+    blank_outside(&mut t, &roi, 8, &keep, 0.0);
+    for j in 0..8 {
+        for i in 0..8 {
+            // pixel centre in the image: 5i + 2, 5j + 2
+            let (x, y) = (5 * i + 2, 5 * j + 2);
+            let inside = (10..=39).contains(&x) && (0..=19).contains(&y);
+            let r = t[(j * 8 + i) * 3];
+            if inside {
+                assert!((r - 200.0 / 255.0).abs() < 1e-6, "({i}, {j}) kept");
+            } else {
+                assert_eq!(r, 0.0, "({i}, {j}) blanked");
+            }
+        }
     }
 }
 
