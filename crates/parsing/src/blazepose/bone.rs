@@ -33,7 +33,11 @@ pub struct RuleConfig {
     pub r_upper_leg: f64,
     /// Lower leg capsule radius, × the body scale.
     pub r_lower_leg: f64,
-    /// The lower arm continues past the hand points by this × (hand − wrist).
+    /// The lower arm continues past the hand points by this × (hand − wrist). BlazePose's
+    /// hand points are knuckles (pinky and index MCP, thumb IP), so the fingers reach about
+    /// one more wrist-to-knuckle length beyond them when straight; 0.5 (the middle of the
+    /// fingers; the capsule's radius covers more) replaced the prototype's 0 on 2026-12-04
+    /// (tune split 0.463 → 0.465; 0.3 / 1.0: 0.464 / 0.466).
     pub hand_extend: f64,
     /// Added to the torso's score, in body scales: a limb in front of the torso wins.
     pub torso_bias: f64,
@@ -84,7 +88,7 @@ impl Default for RuleConfig {
             r_lower_arm: 0.14,
             r_upper_leg: 0.2,
             r_lower_leg: 0.22,
-            hand_extend: 0.0,
+            hand_extend: 0.5,
             torso_bias: 0.2,
             behind_torso_depth: 0.2,
             max_score: 3.0,

@@ -159,6 +159,7 @@ fn matches_the_python_reference() {
         flat_shoulders: false,
         thighs_past_frame: false,
         behind_torso_depth: f64::INFINITY,
+        hand_extend: 0.0,
         ..RuleConfig::default()
     };
     let p = label_person(&pose, &cfg, 100, 160).expect("in the image");
@@ -314,6 +315,39 @@ fn an_arm_behind_the_torso_gives_way_to_it() {
     assert_eq!(class_at(&pose, &off, (100, 160), 55, 68), 4, "off");
     // beside the torso, on the upper arm, the arm keeps its pixels
     assert_eq!(class_at(&pose, &cfg, (100, 160), 66, 50), 3);
+}
+
+/// The lower arm runs past the hand points (knuckles) by `hand_extend` × (hand − wrist):
+/// left wrist (72, 78), hand points (72, 84), so the polyline ends at (72, 87) with 0.5.
+#[test]
+fn the_lower_arm_reaches_past_the_knuckles() {
+    let pose = figure();
+    let end_of_left_forearm = |cfg: &RuleConfig| {
+        let bl = bones(&pose, cfg, 100, 160);
+        let forearm = bl
+            .iter()
+            .find(|b| {
+                b.class == 4
+                    && matches!(&b.shape, BoneShape::Polyline(pts) if pts[0] == [70.0, 60.0])
+            })
+            .expect("the left forearm");
+        match &forearm.shape {
+            BoneShape::Polyline(pts) => *pts.last().expect("points"),
+            BoneShape::Quad(_) => unreachable!("a forearm is a polyline"),
+        }
+    };
+    let cfg = RuleConfig::default();
+    assert_eq!(cfg.hand_extend, 0.5);
+    let end = end_of_left_forearm(&cfg);
+    assert!(
+        (end[0] - 72.0).abs() < EPS && (end[1] - 87.0).abs() < EPS,
+        "{end:?}"
+    );
+    let end = end_of_left_forearm(&RuleConfig {
+        hand_extend: 0.0,
+        ..cfg
+    });
+    assert!((end[1] - 84.0).abs() < EPS, "{end:?}");
 }
 
 /// A person of two pixels, columns `u0` and `u0 + 1` of row 0, depth unknown.
