@@ -1,8 +1,8 @@
 //! BlazePose (full, default options) on the exact-ground-truth real photographs of
 //! `scripts/real_parsing_data.py`, with the index's person boxes as regions: the pooled
 //! person-vs-background IoU and body-part mIoU must stay at their measured levels (0.804 and
-//! 0.462 on 2026-12-04, docs/notes/2026-12-03-blazepose.md). Skips (passes with a message) when .data/real_parsing
-//! is absent: the photographs are not in git.
+//! 0.462 on 2026-12-04, docs/notes/2026-12-03-blazepose.md). Skips (passes with a message)
+//! when .data/real_parsing is absent: the photographs are not in git.
 
 #[path = "../examples/real_parsing/data.rs"]
 mod data;
