@@ -30,11 +30,11 @@ pub mod landmark;
 mod model;
 mod roi;
 
-pub use bone::{Bone, BoneShape, RuleConfig, bones, polygon_distance, segment_distance};
+pub use bone::{Bone, BoneShape, BoneStart, RuleConfig, bones, polygon_distance, segment_distance};
 pub use decode::{DecodedPose, decode, refine_from_heatmap};
 pub use label::{PersonLabels, SIDE_BY_SIDE_M, label_person, merge_people};
 pub use model::{HEATMAP, INPUT, NUM_LANDMARKS};
-pub use roi::{Roi, crop, crop_into};
+pub use roi::{Roi, blank_outside, crop, crop_into};
 
 #[cfg(test)]
 mod tests;

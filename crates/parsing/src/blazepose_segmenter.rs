@@ -4,8 +4,8 @@
 
 use crate::ParsingError;
 use crate::blazepose::{
-    DecodedPose, INPUT, NUM_LANDMARKS, PersonLabels, Roi, RuleConfig, crop_into, decode,
-    label_person, landmark, merge_people,
+    DecodedPose, INPUT, NUM_LANDMARKS, PersonLabels, Roi, RuleConfig, blank_outside, crop_into,
+    decode, label_person, landmark, merge_people,
 };
 use crate::onnx::{float_dims, load_session};
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
@@ -60,6 +60,14 @@ pub struct BlazePoseOptions {
     pub refine_passes: u32,
     /// A region whose pose flag is below this gives no person. Default 0.1.
     pub min_pose_flag: f64,
+    /// The second try of a region (when the first pose's centre left it, see
+    /// [`RETRY_ROI_SCALE`]) sees only the region: the crop is blanked (black) outside the
+    /// region widened by [`REGION_SLACK`]. The first pose drifted to a neighbour; with the
+    /// neighbours out of sight the model finds the region's own person (on the real
+    /// photographs: a seated man beside two others, a woman among children). Only the retry:
+    /// blanking every run loses the context the model needs (the body beyond a tight box).
+    /// Default on.
+    pub blank_retry: bool,
     /// The landmarks + mask → classes rule.
     pub rule: RuleConfig,
 }
@@ -71,6 +79,7 @@ impl Default for BlazePoseOptions {
             roi_scale: 2.0,
             refine_passes: 1,
             min_pose_flag: 0.1,
+            blank_retry: true,
             rule: RuleConfig::default(),
         }
     }
@@ -119,12 +128,22 @@ fn centre_inside(pose: &DecodedPose, bounds: &PixelBox, width: usize, height: us
         x.clamp(0.0, width.saturating_sub(1) as f64),
         y.clamp(0.0, height.saturating_sub(1) as f64),
     ];
+    let wide = widened(bounds);
+    (wide.x0..=wide.x1).contains(&c[0]) && (wide.y0..=wide.y1).contains(&c[1])
+}
+
+/// `bounds` widened by [`REGION_SLACK`] of its width and height on each side.
+fn widened(bounds: &PixelBox) -> PixelBox {
     let (sx, sy) = (
         REGION_SLACK * (bounds.x1 - bounds.x0).max(1.0),
         REGION_SLACK * (bounds.y1 - bounds.y0).max(1.0),
     );
-    (bounds.x0 - sx..=bounds.x1 + sx).contains(&c[0])
-        && (bounds.y0 - sy..=bounds.y1 + sy).contains(&c[1])
+    PixelBox {
+        x0: bounds.x0 - sx,
+        y0: bounds.y0 - sy,
+        x1: bounds.x1 + sx,
+        y1: bounds.y1 + sy,
+    }
 }
 
 /// BlazePose (MediaPipe Pose's landmark model, converted to ONNX) as a [`Segmenter`]: for
@@ -277,6 +296,45 @@ impl BlazePoseSegmenter {
         regions: Option<&[PersonRegion]>,
     ) -> Result<LabelImage, ParsingError> {
         let (w, h) = (image.width as usize, image.height as usize);
+        let people: Vec<PersonLabels> = self
+            .per_region(image, regions, Worker::person)?
+            .into_iter()
+            .flatten()
+            .collect();
+        Ok(merge_people(w, h, &people))
+    }
+
+    /// The pose found for each region (in region order; the whole image as one region when
+    /// `regions` is `None`), as [`BlazePoseSegmenter::segment_image`] labels them: `None`
+    /// where the region is unusable or its pose flag is below
+    /// [`BlazePoseOptions::min_pose_flag`]. For figures and studies of the rule.
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`].
+    pub fn poses(
+        &mut self,
+        image: &RgbImage,
+        regions: Option<&[PersonRegion]>,
+    ) -> Result<Vec<Option<DecodedPose>>, ParsingError> {
+        self.per_region(image, regions, Worker::accepted_pose)
+    }
+
+    /// `f` on every region (the whole image when `regions` is `None`), results in region
+    /// order: one region on the wide session, several shared out over the single-threaded
+    /// ones and run at once.
+    fn per_region<T: Send>(
+        &mut self,
+        image: &RgbImage,
+        regions: Option<&[PersonRegion]>,
+        f: fn(
+            &mut Worker,
+            &RgbImage,
+            &PersonRegion,
+            &Path,
+            &BlazePoseOptions,
+        ) -> Result<T, ParsingError>,
+    ) -> Result<Vec<T>, ParsingError> {
+        let (w, h) = (image.width as usize, image.height as usize);
         let whole = [PersonRegion {
             bounds: PixelBox {
                 x0: 0.0,
@@ -289,34 +347,32 @@ impl BlazePoseSegmenter {
         let regions = regions.unwrap_or(&whole);
         let (model_path, options) = (&self.model_path, &self.options);
         if regions.len() < 2 || self.narrow.is_empty() {
-            let mut people = Vec::with_capacity(regions.len());
-            for region in regions {
-                people.extend(self.wide.person(image, region, model_path, options)?);
-            }
-            return Ok(merge_people(w, h, &people));
+            return regions
+                .iter()
+                .map(|region| f(&mut self.wide, image, region, model_path, options))
+                .collect();
         }
         let n = self.narrow.len();
-        let per_worker: Vec<Result<Vec<(usize, PersonLabels)>, ParsingError>> = self
+        let per_worker: Vec<Result<Vec<(usize, T)>, ParsingError>> = self
             .narrow
             .par_iter_mut()
             .enumerate()
             .map(|(k, worker)| {
-                let mut people = Vec::new();
-                for (i, region) in regions.iter().enumerate().skip(k).step_by(n) {
-                    if let Some(person) = worker.person(image, region, model_path, options)? {
-                        people.push((i, person));
-                    }
-                }
-                Ok(people)
+                regions
+                    .iter()
+                    .enumerate()
+                    .skip(k)
+                    .step_by(n)
+                    .map(|(i, region)| Ok((i, f(worker, image, region, model_path, options)?)))
+                    .collect()
             })
             .collect();
-        let mut people = Vec::with_capacity(regions.len());
+        let mut out = Vec::with_capacity(regions.len());
         for part in per_worker {
-            people.extend(part?);
+            out.extend(part?);
         }
-        people.sort_by_key(|&(i, _)| i);
-        let people: Vec<PersonLabels> = people.into_iter().map(|(_, p)| p).collect();
-        Ok(merge_people(w, h, &people))
+        out.sort_by_key(|&(i, _)| i);
+        Ok(out.into_iter().map(|(_, t)| t).collect())
     }
 }
 
@@ -330,6 +386,26 @@ impl Worker {
         model_path: &Path,
         options: &BlazePoseOptions,
     ) -> Result<Option<PersonLabels>, ParsingError> {
+        let Some(pose) = self.accepted_pose(image, region, model_path, options)? else {
+            return Ok(None);
+        };
+        let (w, h) = (image.width as usize, image.height as usize);
+        Ok(label_person(&pose, &options.rule, w, h).map(|mut person| {
+            person.depth_m =
+                (region.depth_m.is_finite() && region.depth_m > 0.0).then_some(region.depth_m);
+            person
+        }))
+    }
+
+    /// The pose of `region`'s person, `None` when the region is unusable or its pose flag
+    /// is below [`BlazePoseOptions::min_pose_flag`].
+    fn accepted_pose(
+        &mut self,
+        image: &RgbImage,
+        region: &PersonRegion,
+        model_path: &Path,
+        options: &BlazePoseOptions,
+    ) -> Result<Option<DecodedPose>, ParsingError> {
         let b = &region.bounds;
         let usable =
             [b.x0, b.y0, b.x1, b.y1].iter().all(|v| v.is_finite()) && b.x1 >= b.x0 && b.y1 >= b.y0;
@@ -337,15 +413,7 @@ impl Worker {
             return Ok(None);
         }
         let pose = self.pose_in(image, b, model_path, options)?;
-        if pose.flag < options.min_pose_flag {
-            return Ok(None);
-        }
-        let (w, h) = (image.width as usize, image.height as usize);
-        Ok(label_person(&pose, &options.rule, w, h).map(|mut person| {
-            person.depth_m =
-                (region.depth_m.is_finite() && region.depth_m > 0.0).then_some(region.depth_m);
-            person
-        }))
+        Ok((pose.flag >= options.min_pose_flag).then_some(pose))
     }
 
     /// One run of the landmark model on `roi` of `image`.
@@ -358,7 +426,24 @@ impl Worker {
         roi: &Roi,
         model_path: &Path,
     ) -> Result<DecodedPose, ParsingError> {
+        self.run_seeing(image, roi, None, model_path)
+    }
+
+    /// [`Worker::run`] on a crop blanked (black) outside `only` when given.
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`] naming the model file.
+    fn run_seeing(
+        &mut self,
+        image: &RgbImage,
+        roi: &Roi,
+        only: Option<&PixelBox>,
+        model_path: &Path,
+    ) -> Result<DecodedPose, ParsingError> {
         crop_into(image, roi, INPUT, &mut self.input);
+        if let Some(keep) = only {
+            blank_outside(&mut self.input, roi, INPUT, keep, 0.0);
+        }
         let path = model_path;
         let infer = |cause: String| ParsingError::Inference {
             cause,
@@ -403,8 +488,9 @@ impl Worker {
     /// [`REGION_SLACK`] of its size is not this person's. Then (and when the first pose's
     /// flag is below [`BlazePoseOptions::min_pose_flag`]) one run on the tighter ROI of
     /// [`RETRY_ROI_SCALE`] × the region is tried, and kept when its centre is in the region
-    /// (and its flag higher); when neither pose is in the region the result has flag 0 (no
-    /// person).
+    /// (and its flag higher); the retry's crop is blanked outside the widened region
+    /// ([`BlazePoseOptions::blank_retry`]). When neither pose is in the region the result
+    /// has flag 0 (no person).
     ///
     /// # Errors
     /// [`ParsingError::Inference`].
@@ -419,7 +505,14 @@ impl Worker {
         let mut pose = self.run(image, &Roi::from_box(bounds, options.roi_scale), model_path)?;
         let inside = centre_inside(&pose, bounds, w, h);
         if !inside || pose.flag < options.min_pose_flag {
-            let retry = self.run(image, &Roi::from_box(bounds, RETRY_ROI_SCALE), model_path)?;
+            let wide = widened(bounds);
+            let only = options.blank_retry.then_some(&wide);
+            let retry = self.run_seeing(
+                image,
+                &Roi::from_box(bounds, RETRY_ROI_SCALE),
+                only,
+                model_path,
+            )?;
             if centre_inside(&retry, bounds, w, h) && (!inside || retry.flag > pose.flag) {
                 return Ok(retry);
             }

@@ -8,14 +8,16 @@
 //! cargo run --release -p bodyseg-lab --example real_parsing -- OUT_DIR onnx:models/bodyseg_parser_small.onnx
 //! ```
 //!
-//! KEY=VALUE (BlazePose only): `roi_scale`, `refine_passes`, `threads`, and the rule's
-//! `min_presence`, `min_visibility`. Time it with
+//! KEY=VALUE (BlazePose only): `roi_scale`, `refine_passes`, `threads`, `min_pose_flag`,
+//! any numeric field of the rule's `RuleConfig` (`r_torso=0.3`, ...), and `poses=1` to
+//! write each image's poses as `<name>.poses.json` beside its PNG (for overlays). Time it with
 //! `perf stat -e task-clock,instructions:u` (the machine is shared: wall clock says little).
 
 mod data;
 
 use anyhow::{Context, bail};
 use bodyseg_core::Label;
+use bodyseg_parsing::blazepose::{DecodedPose, RuleConfig};
 use bodyseg_parsing::{
     BlazePoseOptions, BlazePoseSegmenter, ModelSpec, OnnxOptions, OnnxSegmenter, Segmenter,
     sidecar_path,
@@ -35,11 +37,46 @@ fn runtime_library() -> PathBuf {
         .unwrap_or_else(|| root().join(".deps/onnxruntime/libonnxruntime.so"))
 }
 
+/// The rule's settings the example takes as KEY=VALUE (numbers), with where they go.
+fn rule_field<'a>(rule: &'a mut RuleConfig, key: &str) -> Option<&'a mut f64> {
+    Some(match key {
+        "mask_threshold" => &mut rule.mask_threshold,
+        "min_presence" => &mut rule.min_presence,
+        "min_visibility" => &mut rule.min_visibility,
+        "r_head" => &mut rule.r_head,
+        "face_to_width" => &mut rule.face_to_width,
+        "head_down" => &mut rule.head_down,
+        "head_up" => &mut rule.head_up,
+        "r_torso" => &mut rule.r_torso,
+        "r_upper_arm" => &mut rule.r_upper_arm,
+        "r_lower_arm" => &mut rule.r_lower_arm,
+        "r_upper_leg" => &mut rule.r_upper_leg,
+        "r_lower_leg" => &mut rule.r_lower_leg,
+        "hand_extend" => &mut rule.hand_extend,
+        "torso_bias" => &mut rule.torso_bias,
+        "behind_torso_depth" => &mut rule.behind_torso_depth,
+        "max_score" => &mut rule.max_score,
+        "margin_scale" => &mut rule.margin_scale,
+        _ => return None,
+    })
+}
+
+/// What runs: BlazePose (whose poses can be written out) or any other segmenter.
+enum Opened {
+    BlazePose {
+        segmenter: Box<BlazePoseSegmenter>,
+        /// Write `<name>.poses.json` beside each label PNG (setting `poses=1`).
+        write_poses: bool,
+    },
+    Other(Box<dyn Segmenter>),
+}
+
 /// The segmenter `which` names, with BlazePose's `settings` applied.
-fn open(which: &str, settings: &[String]) -> anyhow::Result<Box<dyn Segmenter>> {
+fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
     let library = runtime_library();
     if let Some(variant) = which.strip_prefix("blazepose:") {
         let mut options = BlazePoseOptions::default();
+        let mut write_poses = false;
         for s in settings {
             let (key, value) = s
                 .split_once('=')
@@ -49,21 +86,26 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Box<dyn Segmenter>> 
                 "roi_scale" => options.roi_scale = value.parse().map_err(|e| bad(&e))?,
                 "refine_passes" => options.refine_passes = value.parse().map_err(|e| bad(&e))?,
                 "threads" => options.threads = value.parse().map_err(|e| bad(&e))?,
-                "min_presence" => options.rule.min_presence = value.parse().map_err(|e| bad(&e))?,
-                "min_visibility" => {
-                    options.rule.min_visibility = value.parse().map_err(|e| bad(&e))?;
-                }
-                _ => bail!(
-                    "{key}: unknown setting (roi_scale, refine_passes, threads, min_presence, \
-                     min_visibility)"
-                ),
+                "min_pose_flag" => options.min_pose_flag = value.parse().map_err(|e| bad(&e))?,
+                "poses" => write_poses = value == "1",
+                "blank_retry" => options.blank_retry = value == "1",
+                "flat_shoulders" => options.rule.flat_shoulders = value == "1",
+                "thighs_past_frame" => options.rule.thighs_past_frame = value == "1",
+                _ => match rule_field(&mut options.rule, key) {
+                    Some(field) => *field = value.parse().map_err(|e| bad(&e))?,
+                    None => bail!(
+                        "{key}: unknown setting (roi_scale, refine_passes, threads, \
+                         min_pose_flag, poses, or a RuleConfig field; booleans 0/1)"
+                    ),
+                },
             }
         }
         let model = root().join(format!("models/blazepose_{variant}.onnx"));
         let bytes = std::fs::read(&model).with_context(|| model.display().to_string())?;
-        return Ok(Box::new(BlazePoseSegmenter::new(
-            &library, &bytes, &model, &options,
-        )?));
+        return Ok(Opened::BlazePose {
+            segmenter: Box::new(BlazePoseSegmenter::new(&library, &bytes, &model, &options)?),
+            write_poses,
+        });
     }
     if let Some(model) = which.strip_prefix("onnx:") {
         let model = PathBuf::from(model);
@@ -72,13 +114,13 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Box<dyn Segmenter>> 
             std::fs::read_to_string(&sidecar).with_context(|| sidecar.display().to_string())?;
         let spec = ModelSpec::from_json(&text, &sidecar)?;
         let bytes = std::fs::read(&model).with_context(|| model.display().to_string())?;
-        return Ok(Box::new(OnnxSegmenter::new(
+        return Ok(Opened::Other(Box::new(OnnxSegmenter::new(
             &library,
             &bytes,
             &model,
             spec,
             &OnnxOptions::default(),
-        )?));
+        )?)));
     }
     bail!("{which}: {USAGE}")
 }
@@ -91,13 +133,29 @@ fn main() -> anyhow::Result<()> {
     let dir = data::default_dir();
     let items = data::read_index(&dir)
         .context("run .venv/bin/python scripts/real_parsing_data.py first")?;
-    let mut segmenter = open(which, settings)?;
+    let mut opened = open(which, settings)?;
     let out = PathBuf::from(out);
     std::fs::create_dir_all(&out).with_context(|| out.display().to_string())?;
     for item in &items {
         let path = dir.join("images").join(format!("{}.jpg", item.name));
         let image = bodyseg_io::read_rgb_image(&path)?;
         let views = [item.view(&image)];
+        if let Opened::BlazePose {
+            segmenter,
+            write_poses: true,
+        } = &mut opened
+        {
+            let poses = segmenter
+                .poses(&image, Some(&item.regions))
+                .with_context(|| path.display().to_string())?;
+            let file = out.join(format!("{}.poses.json", item.name));
+            std::fs::write(&file, poses_json(&poses).to_string())
+                .with_context(|| file.display().to_string())?;
+        }
+        let segmenter: &mut dyn Segmenter = match &mut opened {
+            Opened::BlazePose { segmenter, .. } => segmenter.as_mut(),
+            Opened::Other(segmenter) => segmenter.as_mut(),
+        };
         let mut parsed = segmenter
             .segment(&views)
             .with_context(|| path.display().to_string())?;
@@ -117,4 +175,29 @@ fn main() -> anyhow::Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// One image's poses (region order; `null` where a region has none): flag, ROI, and per
+/// landmark x, y, depth (image px), visibility, presence.
+fn poses_json(poses: &[Option<DecodedPose>]) -> serde_json::Value {
+    serde_json::Value::Array(
+        poses
+            .iter()
+            .map(|pose| match pose {
+                None => serde_json::Value::Null,
+                Some(p) => serde_json::json!({
+                    "flag": p.flag,
+                    "roi": {
+                        "centre_px": p.roi.centre_px,
+                        "side_px": p.roi.side_px,
+                        "angle_rad": p.roi.angle_rad,
+                    },
+                    "xy": p.xy,
+                    "visibility": p.visibility,
+                    "presence": p.presence,
+                    "depth_px": p.depth_px,
+                }),
+            })
+            .collect(),
+    )
 }

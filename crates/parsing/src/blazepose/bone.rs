@@ -33,14 +33,44 @@ pub struct RuleConfig {
     pub r_upper_leg: f64,
     /// Lower leg capsule radius, × the body scale.
     pub r_lower_leg: f64,
-    /// The lower arm continues past the hand points by this × (hand − wrist).
+    /// The lower arm continues past the hand points by this × (hand − wrist). BlazePose's
+    /// hand points are knuckles (pinky and index MCP, thumb IP), so the fingers reach about
+    /// one more wrist-to-knuckle length beyond them when straight; 0.5 (the middle of the
+    /// fingers; the capsule's radius covers more) replaced the prototype's 0 on 2026-12-04
+    /// (tune split 0.463 → 0.465; 0.3 / 1.0: 0.464 / 0.466).
     pub hand_extend: f64,
     /// Added to the torso's score, in body scales: a limb in front of the torso wins.
     pub torso_bias: f64,
+    /// An arm bone whose mean landmark depth lies more than this many body scales behind
+    /// the torso's (the mean of the shoulders' and hips' depths) is behind the torso: it
+    /// gets `torso_bias` too, so the precedence of a limb in front of the torso is not given
+    /// to it and the nearer surface decides (the far arm of a person seen from the side, an
+    /// arm behind the back). 0.2: about half a torso's depth front to back (chest depth ≈
+    /// 0.2–0.25 m, shoulder to hip ≈ 0.5 m). +∞: off. Legs keep their precedence (tried:
+    /// lower on the tune split).
+    pub behind_torso_depth: f64,
     /// A mask pixel whose best score exceeds this is not the person's.
     pub max_score: f64,
     /// Bone-margin confidence: 1 − 0.5 exp(−(e2 − e1) / margin_scale).
     pub margin_scale: f64,
+    /// Upper arms end flat on the medial side of the shoulder (the plane through the
+    /// shoulder point across the upper arm, on the side of the other shoulder), round on its
+    /// lateral side: the top of the shoulder and the chest beside the joint are the torso's,
+    /// the deltoid outside it the arm's. A round end lets the upper arm take a disc around
+    /// the shoulder point that Pascal-Person-Part labels torso
+    /// (docs/notes/2026-12-03-blazepose.md, 2026-12-04). Legs keep round ends (tried flat:
+    /// a seated person's thighs begin above the model's hip points).
+    pub flat_shoulders: bool,
+    /// A thigh whose knee lies outside the image gets its upper-leg bone from a counting hip
+    /// to where the model puts the knee, whatever the knee's presence: presence is the
+    /// model's "inside the frame" probability, so a knee below the image's edge has a low
+    /// one although the thigh is in view (a seated person, a close-up; issue 29's "legs from
+    /// the hips when the knees are missing"). The knee must still be visible ≥
+    /// `min_visibility` as any limb joint (a knee behind a table below the frame is not),
+    /// and the hip must lie inside the image by at least the thigh's radius, so that the
+    /// thigh is in view and not only the round end of its capsule (a person cut at the
+    /// hips). No lower leg: it would lie outside the frame.
+    pub thighs_past_frame: bool,
 }
 
 impl Default for RuleConfig {
@@ -58,12 +88,30 @@ impl Default for RuleConfig {
             r_lower_arm: 0.14,
             r_upper_leg: 0.2,
             r_lower_leg: 0.22,
-            hand_extend: 0.0,
+            hand_extend: 0.5,
             torso_bias: 0.2,
+            behind_torso_depth: 0.2,
             max_score: 3.0,
             margin_scale: 0.5,
+            flat_shoulders: true,
+            thighs_past_frame: true,
         }
     }
+}
+
+/// How a polyline bone ends at its first point (a limb's root).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BoneStart {
+    /// A round end (the capsule).
+    Round,
+    /// Flat on the medial side: `outward` is the unit vector pointing away from the body at
+    /// the first point (from the other shoulder); a pixel both behind the plane through the
+    /// first point, across the first segment, and medial of the first point is outside the
+    /// bone by at least the smaller of those two distances; laterally the end stays round.
+    FlatMedial {
+        /// Unit vector, image px.
+        outward: P2,
+    },
 }
 
 /// A bone's shape in image px.
@@ -86,10 +134,15 @@ pub struct Bone {
     pub radius_px: f64,
     /// The pose's body scale, image px (the unit of scores).
     pub scale_px: f64,
+    /// Added to the score, body scales: `torso_bias` for the torso and for an arm behind the
+    /// torso, else 0.
+    pub bias: f64,
+    /// How a polyline bone ends at its first point.
+    pub start: BoneStart,
 }
 
-/// The bones a pose supports (§3 of the note).
-pub fn bones(pose: &DecodedPose, cfg: &RuleConfig) -> Vec<Bone> {
+/// The bones a pose supports (§3 of the note) in an image of `width`×`height` px.
+pub fn bones(pose: &DecodedPose, cfg: &RuleConfig, width: usize, height: usize) -> Vec<Bone> {
     use landmark::*;
     let p = &pose.xy;
     if p.len() < NUM_LANDMARKS || pose.presence.len() < NUM_LANDMARKS {
@@ -115,6 +168,18 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig) -> Vec<Bone> {
         .max(norm(sub(p[LEFT_HIP], p[RIGHT_HIP])))
         .max(1.0);
     let (_, down) = pose.roi.axes();
+    // Outside the image's pixel centres by more than half a pixel.
+    // How far inside the image's pixel centres, px (negative outside).
+    let inside_by = |q: P2| {
+        (q[0] + 0.5)
+            .min(width as f64 - 0.5 - q[0])
+            .min(q[1] + 0.5)
+            .min(height as f64 - 0.5 - q[1])
+    };
+    let outside = |q: P2| {
+        !(-0.5..=width as f64 - 0.5).contains(&q[0])
+            || !(-0.5..=height as f64 - 0.5).contains(&q[1])
+    };
     let mut out = Vec::new();
     let shoulders = ok(LEFT_SHOULDER) && ok(RIGHT_SHOULDER);
     if shoulders {
@@ -139,6 +204,8 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig) -> Vec<Bone> {
             shape: BoneShape::Quad(quad),
             radius_px: cfg.r_torso * body,
             scale_px: body,
+            bias: cfg.torso_bias,
+            start: BoneStart::Round,
         });
     }
     if let Some(hc) = mean_of(&mut FACE.filter(|&i| ok(i))) {
@@ -161,36 +228,92 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig) -> Vec<Bone> {
             ]),
             radius_px: cfg.r_head * width,
             scale_px: body,
+            bias: 0.0,
+            start: BoneStart::Round,
         });
     }
+    // Depth of the torso and the bias of a limb bone between landmarks `idx` (see
+    // `behind_torso_depth`).
+    let depth = &pose.depth_px;
+    let mean_depth = |idx: &[usize]| idx.iter().map(|&i| depth[i]).sum::<f64>() / idx.len() as f64;
+    let behind_bias = |idx: &[usize]| {
+        if depth.len() < NUM_LANDMARKS {
+            return 0.0;
+        }
+        let torso = mean_depth(&[LEFT_SHOULDER, RIGHT_SHOULDER, LEFT_HIP, RIGHT_HIP]);
+        if mean_depth(idx) - torso > cfg.behind_torso_depth * body {
+            cfg.torso_bias
+        } else {
+            0.0
+        }
+    };
     let limbs = [
-        (LEFT_SHOULDER, LEFT_ELBOW, LEFT_WRIST, &LEFT_HAND[..], 3u8),
+        (
+            LEFT_SHOULDER,
+            RIGHT_SHOULDER,
+            LEFT_ELBOW,
+            LEFT_WRIST,
+            &LEFT_HAND[..],
+            3u8,
+        ),
         (
             RIGHT_SHOULDER,
+            LEFT_SHOULDER,
             RIGHT_ELBOW,
             RIGHT_WRIST,
             &RIGHT_HAND[..],
             3u8,
         ),
-        (LEFT_HIP, LEFT_KNEE, LEFT_ANKLE, &LEFT_FOOT[..], 5u8),
-        (RIGHT_HIP, RIGHT_KNEE, RIGHT_ANKLE, &RIGHT_FOOT[..], 5u8),
+        (
+            LEFT_HIP,
+            RIGHT_HIP,
+            LEFT_KNEE,
+            LEFT_ANKLE,
+            &LEFT_FOOT[..],
+            5u8,
+        ),
+        (
+            RIGHT_HIP,
+            LEFT_HIP,
+            RIGHT_KNEE,
+            RIGHT_ANKLE,
+            &RIGHT_FOOT[..],
+            5u8,
+        ),
     ];
-    for (root, joint, end, tips, upper) in limbs {
-        if !seen(&[root, joint]) {
-            continue;
-        }
+    for (root, other, joint, end, tips, upper) in limbs {
         let (r_up, r_low) = if upper == 3 {
             (cfg.r_upper_arm, cfg.r_lower_arm)
         } else {
             (cfg.r_upper_leg, cfg.r_lower_leg)
         };
+        let joint_past_frame = cfg.thighs_past_frame
+            && upper == 5
+            && outside(p[joint])
+            && !ok(joint)
+            && pose.visibility[joint] >= cfg.min_visibility
+            && inside_by(p[root]) >= r_up * body;
+        if !(seen(&[root, joint]) || seen(&[root]) && joint_past_frame) {
+            continue;
+        }
         out.push(Bone {
             class: upper,
             shape: BoneShape::Polyline(vec![p[root], p[joint]]),
             radius_px: r_up * body,
             scale_px: body,
+            bias: if upper == 3 {
+                behind_bias(&[root, joint])
+            } else {
+                0.0
+            },
+            start: match outward(p[root], p[other]) {
+                Some(outward) if cfg.flat_shoulders && upper == 3 => {
+                    BoneStart::FlatMedial { outward }
+                }
+                _ => BoneStart::Round,
+            },
         });
-        if !seen(&[end]) {
+        if joint_past_frame || !seen(&[end]) {
             continue;
         }
         let mut pts = vec![p[joint], p[end]];
@@ -206,9 +329,23 @@ pub fn bones(pose: &DecodedPose, cfg: &RuleConfig) -> Vec<Bone> {
             shape: BoneShape::Polyline(pts),
             radius_px: r_low * body,
             scale_px: body,
+            bias: if upper == 3 {
+                behind_bias(&[joint, end])
+            } else {
+                0.0
+            },
+            start: BoneStart::Round,
         });
     }
     out
+}
+
+/// The unit vector from `other` to `root` (outward from the body at a shoulder),
+/// `None` when they coincide.
+fn outward(root: P2, other: P2) -> Option<P2> {
+    let v = sub(root, other);
+    let n = norm(v);
+    (n > 1e-6).then(|| scale(v, 1.0 / n))
 }
 
 /// Distance of `q` to the segment a–b.
@@ -241,18 +378,32 @@ pub fn polygon_distance(q: P2, poly: &[P2]) -> f64 {
 }
 
 impl Bone {
-    /// The bone's score at `q`: (distance to its surface) / body scale + 1, plus
-    /// `torso_bias` for the torso (§4 of the note).
-    pub fn score(&self, q: P2, torso_bias: f64) -> f64 {
-        let (d, bias) = match &self.shape {
-            BoneShape::Polyline(pts) => (
-                pts.windows(2)
+    /// The bone's score at `q`: (distance to its surface) / body scale + 1 + its
+    /// [`Bone::bias`] (`torso_bias` for the torso, §4 of the note). With [`BoneStart::FlatMedial`] the
+    /// distance is max(distance − radius, min(distance behind the start plane, distance
+    /// medial of the first point)): still 1-Lipschitz in `q`,
+    /// so a score moves by at most (distance moved) / body scale, which the block culling
+    /// of `label_person` relies on.
+    pub fn score(&self, q: P2) -> f64 {
+        let d = match &self.shape {
+            BoneShape::Polyline(pts) => {
+                let d = pts
+                    .windows(2)
                     .map(|w| segment_distance(q, w[0], w[1]))
-                    .fold(f64::INFINITY, f64::min),
-                0.0,
-            ),
-            BoneShape::Quad(quad) => (polygon_distance(q, quad), torso_bias),
+                    .fold(f64::INFINITY, f64::min)
+                    - self.radius_px;
+                let behind = match (pts.as_slice(), self.start) {
+                    ([a, b, ..], BoneStart::FlatMedial { outward }) if norm(sub(*b, *a)) > 1e-9 => {
+                        let axis = sub(*b, *a);
+                        let behind = -dot(sub(q, *a), axis) / norm(axis);
+                        behind.min(-dot(sub(q, *a), outward))
+                    }
+                    _ => f64::NEG_INFINITY,
+                };
+                d.max(behind)
+            }
+            BoneShape::Quad(quad) => polygon_distance(q, quad) - self.radius_px,
         };
-        (d - self.radius_px) / self.scale_px + 1.0 + bias
+        d / self.scale_px + 1.0 + self.bias
     }
 }

@@ -56,6 +56,9 @@ pub struct DecodedPose {
     pub flag: f64,
     /// Landmark positions, image px, [`NUM_LANDMARKS`] entries.
     pub xy: Vec<P2>,
+    /// Depth per landmark relative to the mid-hip point, image px (the model's z, which
+    /// has x's scale, mapped by the ROI's scale): smaller is nearer the camera.
+    pub depth_px: Vec<f64>,
     /// Visibility (sigmoid), per landmark.
     pub visibility: Vec<f64>,
     /// Presence (sigmoid), per landmark.
@@ -100,6 +103,10 @@ pub fn decode(
         xy: lm
             .iter()
             .map(|l| roi.tensor_to_image([l[0], l[1]]))
+            .collect(),
+        depth_px: lm
+            .iter()
+            .map(|l| l[2] * roi.side_px / INPUT as f64)
             .collect(),
         visibility: lm.iter().map(|l| sigmoid(l[3])).collect(),
         presence: lm.iter().map(|l| sigmoid(l[4])).collect(),

@@ -47,7 +47,7 @@ pub(crate) fn upright_figure_xy() -> Vec<[f64; 2]> {
 }
 
 /// A pose at landmarks `xy` that the model is sure of (flag, every visibility and presence
-/// 1), seen in an upright ROI of side `side_px` centred at `centre_px`.
+/// 1, every depth 0), seen in an upright ROI of side `side_px` centred at `centre_px`.
 pub(crate) fn sure_pose(
     xy: Vec<[f64; 2]>,
     centre_px: [f64; 2],
@@ -62,6 +62,7 @@ pub(crate) fn sure_pose(
         },
         flag: 1.0,
         xy,
+        depth_px: vec![0.0; NUM_LANDMARKS],
         visibility: vec![1.0; NUM_LANDMARKS],
         presence: vec![1.0; NUM_LANDMARKS],
         mask,

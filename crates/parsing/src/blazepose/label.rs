@@ -117,7 +117,7 @@ pub fn label_person(
         return None;
     }
     let (u0, u1, v0, v1) = roi_window(&pose.roi, width, height)?;
-    let bl = bones(pose, cfg);
+    let bl = bones(pose, cfg, width, height);
     if bl.is_empty() {
         return None;
     }
@@ -205,7 +205,7 @@ fn label_band(
         let mut upper = [f64::INFINITY; 7];
         lower_of.clear();
         for b in bl {
-            let s = b.score(centre, cfg.torso_bias);
+            let s = b.score(centre);
             let slack = half_diag / b.scale_px;
             let c = usize::from(b.class);
             upper[c] = upper[c].min(s + slack);
@@ -232,7 +232,7 @@ fn label_band(
                 let mut per_class = [f64::INFINITY; 7];
                 for &k in &keep {
                     let b = &bl[k];
-                    let s = b.score(q, cfg.torso_bias);
+                    let s = b.score(q);
                     let c = usize::from(b.class);
                     per_class[c] = per_class[c].min(s);
                 }

@@ -150,3 +150,21 @@ pub fn crop_into(image: &RgbImage, roi: &Roi, size: usize, out: &mut Vec<f32>) {
         }
     }
 }
+
+/// Sets the pixels of a crop `out` (made by [`crop_into`] of `roi` at `size`) whose centre
+/// falls outside `keep` (image px) to `value` in every channel.
+pub fn blank_outside(out: &mut [f32], roi: &Roi, size: usize, keep: &PixelBox, value: f32) {
+    let step = INPUT as f64 / size as f64;
+    for j in 0..size {
+        for i in 0..size {
+            let p = roi.tensor_to_image([(i as f64 + 0.5) * step, (j as f64 + 0.5) * step]);
+            let inside = (keep.x0..=keep.x1).contains(&p[0]) && (keep.y0..=keep.y1).contains(&p[1]);
+            if !inside {
+                let k = (j * size + i) * 3;
+                if let Some(px) = out.get_mut(k..k + 3) {
+                    px.fill(value);
+                }
+            }
+        }
+    }
+}

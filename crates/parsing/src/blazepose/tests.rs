@@ -7,6 +7,7 @@ use super::label::*;
 use super::landmark;
 use super::model::*;
 use super::roi::*;
+use crate::segmenter::PixelBox;
 use bodyseg_core::RgbImage;
 
 // Tolerance for coordinate round trips: a few ulps of values ~ 1e2.
@@ -59,6 +60,40 @@ fn crop_of_a_uniform_image_is_uniform_and_replicates_the_border() {
     let t = crop(&img, &roi, 8);
     for px in t.chunks_exact(3) {
         assert!((px[0] - 10.0 / 255.0).abs() < 1e-6 && (px[2] - 30.0 / 255.0).abs() < 1e-6);
+    }
+}
+
+/// A crop blanked outside a box: the tensor pixels whose centres map outside it are the
+/// value given, the others keep the image's colour.
+#[test]
+fn a_blanked_crop_sees_only_the_box() {
+    let img = RgbImage::new(40, 40, [200u8, 100, 50].repeat(1600)).expect("40x40x3 bytes");
+    // ROI = the image, 8×8 crop: tensor pixel i covers image columns 5i..5i+5
+    let roi = Roi {
+        centre_px: [19.5, 19.5],
+        side_px: 40.0,
+        angle_rad: 0.0,
+    };
+    let mut t = crop(&img, &roi, 8);
+    let keep = PixelBox {
+        x0: 10.0,
+        y0: 0.0,
+        x1: 39.0,
+        y1: 19.0,
+    };
+    blank_outside(&mut t, &roi, 8, &keep, 0.0);
+    for j in 0..8 {
+        for i in 0..8 {
+            // pixel centre in the image: 5i + 2, 5j + 2
+            let (x, y) = (5 * i + 2, 5 * j + 2);
+            let inside = (10..=39).contains(&x) && (0..=19).contains(&y);
+            let r = t[(j * 8 + i) * 3];
+            if inside {
+                assert!((r - 200.0 / 255.0).abs() < 1e-6, "({i}, {j}) kept");
+            } else {
+                assert_eq!(r, 0.0, "({i}, {j}) blanked");
+            }
+        }
     }
 }
 
@@ -118,7 +153,16 @@ fn matches_the_python_reference() {
             pose.mask[j * INPUT + i] = m.clamp(0.0, 1.0) as f32;
         }
     }
-    let p = label_person(&pose, &RuleConfig::default(), 100, 160).expect("in the image");
+    // The reference has round shoulders, no thighs past the frame and no depth order (all
+    // added later).
+    let cfg = RuleConfig {
+        flat_shoulders: false,
+        thighs_past_frame: false,
+        behind_torso_depth: f64::INFINITY,
+        hand_extend: 0.0,
+        ..RuleConfig::default()
+    };
+    let p = label_person(&pose, &cfg, 100, 160).expect("in the image");
     let field = |k: &str| golden[k].as_u64().expect("window bound") as usize;
     assert_eq!(
         (p.u0, p.u1, p.v0, p.v1),
@@ -162,12 +206,148 @@ fn legs_out_of_frame_are_not_invented() {
     for i in [LEFT_KNEE, RIGHT_KNEE, LEFT_ANKLE, RIGHT_ANKLE] {
         pose.presence[i] = 0.1;
     }
-    let classes: Vec<u8> = bones(&pose, &RuleConfig::default())
+    let classes: Vec<u8> = bones(&pose, &RuleConfig::default(), 100, 160)
         .iter()
         .map(|b| b.class)
         .collect();
     assert!(!classes.contains(&5) && !classes.contains(&6));
     assert!(classes.contains(&2) && classes.contains(&4));
+}
+
+/// The class `label_person` gives pixel (u, v) of the upright figure (mask 1) in a
+/// `width`×`height` image under `cfg`.
+fn class_at(
+    pose: &DecodedPose,
+    cfg: &RuleConfig,
+    (width, height): (usize, usize),
+    u: usize,
+    v: usize,
+) -> u8 {
+    let p = label_person(pose, cfg, width, height).expect("in the image");
+    p.class[(v - p.v0) * (p.u1 - p.u0) + (u - p.u0)]
+}
+
+/// Just above the left shoulder (60, 40) and toward the neck the torso wins with flat
+/// shoulders, the upper arm with round ones; beside the shoulder, outward, the arm keeps it.
+#[test]
+fn the_top_of_the_shoulder_is_torso_beside_it_arm() {
+    let pose = figure();
+    let flat = RuleConfig::default();
+    let round = RuleConfig {
+        flat_shoulders: false,
+        ..flat
+    };
+    assert!(flat.flat_shoulders, "the default");
+    assert_eq!(class_at(&pose, &round, (100, 160), 58, 37), 3);
+    assert_eq!(class_at(&pose, &flat, (100, 160), 58, 37), 2);
+    assert_eq!(class_at(&pose, &flat, (100, 160), 63, 38), 3);
+    // the right shoulder (40, 40), mirrored
+    assert_eq!(class_at(&pose, &flat, (100, 160), 42, 37), 2);
+    assert_eq!(class_at(&pose, &flat, (100, 160), 37, 38), 3);
+    // along the arm, below the shoulder, nothing changes
+    assert_eq!(class_at(&pose, &flat, (100, 160), 65, 50), 3);
+}
+
+/// A seated person seen to the waist: the knees (y 110) lie below an image 100 px high,
+/// with a low presence. The thighs are labelled from the hips (y 80) toward them, with no
+/// lower legs; not when the hips are within a thigh radius of the edge (the person cut at
+/// the hips), nor when the knees are inside the image (occluded, not out of frame), nor when
+/// the knees' visibility is low (hidden).
+#[test]
+fn thighs_run_from_the_hips_to_knees_below_the_frame() {
+    use landmark::*;
+    let mut pose = figure();
+    for i in [LEFT_KNEE, RIGHT_KNEE, LEFT_ANKLE, RIGHT_ANKLE] {
+        pose.presence[i] = 0.1;
+    }
+    let cfg = RuleConfig::default();
+    let classes = |cfg: &RuleConfig, height: usize| -> Vec<u8> {
+        bones(&pose, cfg, 100, height)
+            .iter()
+            .map(|b| b.class)
+            .collect()
+    };
+    let seated = classes(&cfg, 100);
+    assert_eq!(seated.iter().filter(|&&c| c == 5).count(), 2, "{seated:?}");
+    assert!(!seated.contains(&6));
+    assert_eq!(class_at(&pose, &cfg, (100, 100), 58, 95), 5);
+    let off = RuleConfig {
+        thighs_past_frame: false,
+        ..cfg
+    };
+    assert!(!classes(&off, 100).contains(&5));
+    assert_ne!(class_at(&pose, &off, (100, 100), 58, 95), 5);
+    // body scale 40 px, thigh radius 0.2 × 40 = 8 px: hips at y 80 are 4.5 px inside an
+    // image 85 px high
+    assert!(!classes(&cfg, 85).contains(&5), "cut at the hips");
+    assert!(!classes(&cfg, 160).contains(&5), "knees in the frame");
+    for i in [LEFT_KNEE, RIGHT_KNEE] {
+        pose.visibility[i] = 0.1;
+    }
+    let hidden: Vec<u8> = bones(&pose, &cfg, 100, 100)
+        .iter()
+        .map(|b| b.class)
+        .collect();
+    assert!(!hidden.contains(&5), "knees hidden (below a table)");
+}
+
+/// The left forearm crosses the torso, elbow (70, 60) to wrist (52, 70): in front of the
+/// torso (depth as the torso's) it is labelled over it; half a body scale (20 px) behind the
+/// torso, the torso is; with `behind_torso_depth` off, the arm again.
+#[test]
+fn an_arm_behind_the_torso_gives_way_to_it() {
+    use landmark::*;
+    let mut pose = figure();
+    pose.xy[LEFT_WRIST] = [52.0, 70.0];
+    for &i in &LEFT_HAND {
+        pose.xy[i] = [50.0, 71.0];
+    }
+    let cfg = RuleConfig::default();
+    assert_eq!(class_at(&pose, &cfg, (100, 160), 55, 68), 4, "in front");
+    for i in [LEFT_SHOULDER, LEFT_ELBOW, LEFT_WRIST] {
+        pose.depth_px[i] = 20.0;
+    }
+    assert_eq!(class_at(&pose, &cfg, (100, 160), 55, 68), 2, "behind");
+    let off = RuleConfig {
+        behind_torso_depth: f64::INFINITY,
+        ..cfg
+    };
+    assert_eq!(class_at(&pose, &off, (100, 160), 55, 68), 4, "off");
+    // beside the torso, on the upper arm, the arm keeps its pixels
+    assert_eq!(class_at(&pose, &cfg, (100, 160), 66, 50), 3);
+}
+
+/// The lower arm runs past the hand points (knuckles) by `hand_extend` × (hand − wrist):
+/// left wrist (72, 78), hand points (72, 84), so the polyline ends at (72, 87) with 0.5.
+#[test]
+fn the_lower_arm_reaches_past_the_knuckles() {
+    let pose = figure();
+    let end_of_left_forearm = |cfg: &RuleConfig| {
+        let bl = bones(&pose, cfg, 100, 160);
+        let forearm = bl
+            .iter()
+            .find(|b| {
+                b.class == 4
+                    && matches!(&b.shape, BoneShape::Polyline(pts) if pts[0] == [70.0, 60.0])
+            })
+            .expect("the left forearm");
+        match &forearm.shape {
+            BoneShape::Polyline(pts) => *pts.last().expect("points"),
+            BoneShape::Quad(_) => unreachable!("a forearm is a polyline"),
+        }
+    };
+    let cfg = RuleConfig::default();
+    assert_eq!(cfg.hand_extend, 0.5);
+    let end = end_of_left_forearm(&cfg);
+    assert!(
+        (end[0] - 72.0).abs() < EPS && (end[1] - 87.0).abs() < EPS,
+        "{end:?}"
+    );
+    let end = end_of_left_forearm(&RuleConfig {
+        hand_extend: 0.0,
+        ..cfg
+    });
+    assert!((end[1] - 84.0).abs() < EPS, "{end:?}");
 }
 
 /// A person of two pixels, columns `u0` and `u0 + 1` of row 0, depth unknown.
@@ -245,7 +425,7 @@ fn block_culling_equals_scoring_every_bone() {
             }
         }
         let got = label_person(&pose, &cfg, 100, 160).expect("in the image");
-        let bl = bones(&pose, &cfg);
+        let bl = bones(&pose, &cfg, 100, 160);
         let axes = pose.roi.axes();
         let ww = got.u1 - got.u0;
         let mut labelled = 0;
@@ -257,7 +437,7 @@ fn block_culling_equals_scoring_every_bone() {
                 let mut per_class = [f64::INFINITY; 7];
                 for b in &bl {
                     let c = usize::from(b.class);
-                    per_class[c] = per_class[c].min(b.score(q, cfg.torso_bias));
+                    per_class[c] = per_class[c].min(b.score(q));
                 }
                 let (c1, e1, e2) = best_two(&per_class);
                 if m < cfg.mask_threshold || e1 > cfg.max_score {
