@@ -71,9 +71,9 @@ pub use folder::{
     create_folder, discard_folder, image_files, publish_folder, require_folder, staging_folder,
 };
 pub use image::{
-    DepthImage, parse_depth_png, parse_label_png, parse_rgb_image, read_depth_png, read_label_png,
-    read_rgb_image, write_depth_png, write_gray8_png, write_label_png, write_label_png_with,
-    write_rgb_png,
+    ColorFile, ColorFileFormat, DepthImage, parse_color_file, parse_depth_png, parse_label_png,
+    parse_rgb_image, read_color_file, read_depth_png, read_label_png, read_rgb_image,
+    write_depth_png, write_gray8_png, write_label_png, write_label_png_with, write_rgb_png,
 };
 pub use limits::{
     MAX_DECLARED_BYTES, MAX_DECLARED_POINTS, MAX_IMAGE_DECODE_BYTES, MAX_IMAGE_SIDE_PX,

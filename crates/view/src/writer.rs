@@ -8,7 +8,7 @@
 //! long recording: docs/notes/2026-12-02-rerun.md).
 
 use crate::paths;
-use crate::{CameraView, CloudView, FrameSink, ViewError, ViewFrame};
+use crate::{CameraView, CloudView, FrameSink, ImageFileFormat, ViewError, ViewFrame};
 use bodyseg_calib::{Intrinsics, Pose, Rig};
 use bodyseg_core::{Class, Label, LabelImage, PersonBox};
 use re_sdk::blueprint::{
@@ -20,10 +20,10 @@ use re_sdk::external::arrow::buffer::ScalarBuffer;
 use re_sdk::external::arrow::datatypes::{DataType, Field};
 use re_sdk::{RecordingStream, RecordingStreamBuilder, SerializedComponentBatch};
 use re_sdk_types::archetypes::{
-    AnnotationContext, Boxes3D, DepthImage, Image, Pinhole, Points3D, Scalars, SegmentationImage,
-    Transform3D, ViewCoordinates,
+    AnnotationContext, Boxes3D, DepthImage, EncodedImage, Image, Pinhole, Points3D, Scalars,
+    SegmentationImage, Transform3D, ViewCoordinates,
 };
-use re_sdk_types::components::ImageFormat;
+use re_sdk_types::components::{ImageFormat, MediaType};
 use re_sdk_types::datatypes::{
     Angle, AnnotationInfo, ChannelDatatype, ClassDescription, Quaternion, Rgba32, RotationAxisAngle,
 };
@@ -325,7 +325,18 @@ impl ViewWriter {
                 height,
             }
         };
-        if let Some(c) = camera.color {
+        if let Some(f) = camera.color_file {
+            // The file as it is: no decode here, and a fraction of the pixels' bytes to
+            // encode and write (docs/notes/2026-12-02-rerun.md, 2026-12-04).
+            let media_type = match f.format {
+                ImageFileFormat::Png => MediaType::png(),
+                ImageFileFormat::Jpeg => MediaType::jpeg(),
+            };
+            self.log(
+                paths::color_image(name).as_str(),
+                &EncodedImage::new(f.bytes.to_vec()).with_media_type(media_type),
+            )?;
+        } else if let Some(c) = camera.color {
             if c.rgb.len() != c.width as usize * c.height as usize * 3 {
                 return Err(size_err("colour", c.rgb.len(), c.width, c.height, 3));
             }
@@ -432,7 +443,11 @@ impl FrameSink for ViewWriter {
 fn frame_bytes(frame: &ViewFrame<'_>, clusters: bool) -> u64 {
     let mut bytes = 0;
     for c in &frame.cameras {
-        bytes += c.color.map_or(0, |i| i.rgb.len());
+        bytes += match (c.color_file, c.color) {
+            (Some(f), _) => f.bytes.len(),
+            (None, Some(i)) => i.rgb.len(),
+            (None, None) => 0,
+        };
         bytes += c.depth.map_or(0, |d| d.raw.len() * 2);
         bytes += [c.parsed, c.refined]
             .iter()
