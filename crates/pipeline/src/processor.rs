@@ -431,7 +431,7 @@ impl FrameProcessor {
                 &boxes.boxes,
                 &cfg.refine,
                 &steps,
-                figure || self.sink.is_some(),
+                figure || self.sink.as_ref().is_some_and(|s| s.wants_clusters()),
             )
             .context("refinement")
         })?;

@@ -125,6 +125,12 @@ pub trait FrameSink: Send + Sync {
     /// # Errors
     /// The frame does not fit the sink (unknown stem, sizes), or writing fails.
     fn write_frame(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError>;
+
+    /// Whether the sink logs [`ViewFrame::clusters`]; when not, the caller need not list
+    /// them (12 bytes a point, built during the refinement).
+    fn wants_clusters(&self) -> bool {
+        true
+    }
 }
 
 /// Everything that can go wrong while writing a view.

@@ -436,6 +436,10 @@ impl FrameSink for ViewWriter {
     fn write_frame(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
         self.write(frame)
     }
+
+    fn wants_clusters(&self) -> bool {
+        self.clusters
+    }
 }
 
 /// About how many bytes of data a frame logs (pixels, positions and class ids; the few
