@@ -100,10 +100,14 @@ impl ViewWriter {
             message: e.to_string(),
             path: path.to_path_buf(),
         };
+        // The SDK's sink for a file, but written past the page cache (`sink` module).
         let rec = RecordingStreamBuilder::new(APPLICATION_ID)
             .recording_name(name)
-            .save(&partial)
+            .buffered()
             .map_err(|e| err(&e))?;
+        rec.set_sink(Box::new(
+            crate::sink::RrdFileSink::create(&partial).map_err(|e| err(&e))?,
+        ));
         let stamps: BTreeMap<&str, i64> = stamps.iter().map(|(s, t)| (s.as_str(), *t)).collect();
         let frames = frames
             .iter()
