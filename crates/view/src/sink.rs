@@ -11,8 +11,8 @@ use re_sdk::external::re_log_encoding::{Encoder, EncodingOptions};
 use re_sdk::log::LogMsg;
 use re_sdk::sink::{LogSink, SinkFlushError};
 use std::path::Path;
-use std::sync::Mutex;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
@@ -27,30 +27,45 @@ enum Command {
     Flush(SyncSender<Result<(), String>>),
 }
 
+/// How the closing of the file went: `None` until the sink is dropped (and its thread has
+/// written the end of the file), then `Some(Ok)` or the error. The SDK drops a sink it
+/// replaces without a way to answer, so the writer reads the outcome here.
+pub(crate) type Closed = Arc<Mutex<Option<Result<(), String>>>>;
+
 /// Writes the messages it is sent to a `.rrd` file (LZ4, as the SDK does) on its own thread.
-/// Dropping it closes the file (end-of-stream marker and footer) and joins the thread.
+/// Dropping it closes the file (end-of-stream marker, footer, last block) and joins the
+/// thread; the outcome goes to its [`Closed`].
 pub(crate) struct RrdFileSink {
     tx: Mutex<Option<SyncSender<Command>>>,
     thread: Mutex<Option<JoinHandle<()>>>,
 }
 
 impl RrdFileSink {
-    /// Creates `path` and writes the stream header.
-    pub(crate) fn create(path: &Path) -> Result<RrdFileSink, String> {
+    /// Creates `path` and writes the stream header; with the handle that will hold how
+    /// closing the file went.
+    pub(crate) fn create(path: &Path) -> Result<(RrdFileSink, Closed), String> {
         let file = DirectFile::create(path).map_err(|e| e.to_string())?;
         // As the SDK's `FileSink`: LZ4 (without it the file is ~40 % larger and no faster).
         let options = EncodingOptions::PROTOBUF_COMPRESSED;
         let encoder = Encoder::new_eager(re_sdk::build_info().version, options, file)
             .map_err(|e| e.to_string())?;
         let (tx, rx) = sync_channel(QUEUE_MESSAGES);
+        let closed: Closed = Arc::new(Mutex::new(None));
+        let outcome = closed.clone();
         let thread = std::thread::Builder::new()
             .name("rrd_writer".into())
-            .spawn(move || write_all(encoder, &rx))
+            .spawn(move || {
+                let result = write_all(encoder, &rx);
+                if let Ok(mut o) = outcome.lock() {
+                    *o = Some(result);
+                }
+            })
             .map_err(|e| e.to_string())?;
-        Ok(RrdFileSink {
+        let sink = RrdFileSink {
             tx: Mutex::new(Some(tx)),
             thread: Mutex::new(Some(thread)),
-        })
+        };
+        Ok((sink, closed))
     }
 
     fn sender(&self) -> Option<SyncSender<Command>> {
@@ -59,8 +74,9 @@ impl RrdFileSink {
 }
 
 /// The writer thread: encodes and writes each message; on a write error it drops the rest
-/// and answers every flush with the error.
-fn write_all(mut encoder: Encoder<DirectFile>, rx: &Receiver<Command>) {
+/// and answers every flush with the error. When the channel closes it ends the file; the
+/// first error of all, if any, is the result.
+fn write_all(mut encoder: Encoder<DirectFile>, rx: &Receiver<Command>) -> Result<(), String> {
     let mut failed: Option<String> = None;
     while let Ok(command) = rx.recv() {
         match command {
@@ -80,13 +96,20 @@ fn write_all(mut encoder: Encoder<DirectFile>, rx: &Receiver<Command>) {
             }
         }
     }
-    // The channel is closed: end-of-stream marker and footer, the last block, then the
-    // file is closed. Errors here have no one to go to (as in the SDK's `FileSink`).
-    if encoder.finish().is_ok()
-        && let Ok(file) = encoder.into_inner()
-    {
-        file.finish().ok();
+    if let Some(e) = failed {
+        // Unwrapped, the encoder does not try to end the file again (and warn) when dropped.
+        drop(encoder.into_inner());
+        return Err(e);
     }
+    // The channel is closed: end-of-stream marker and footer, the last block, then the
+    // file is closed.
+    encoder
+        .finish()
+        .map_err(|e| format!("ending the file: {e}"))?;
+    let file = encoder
+        .into_inner()
+        .map_err(|e| format!("ending the file: {e}"))?;
+    file.finish().map_err(|e| format!("ending the file: {e}"))
 }
 
 impl LogSink for RrdFileSink {

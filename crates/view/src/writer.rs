@@ -68,6 +68,8 @@ pub struct ViewWriter {
     clusters: bool,
     /// Bytes logged since the last wait for the file writer (see [`FLUSH_EVERY_BYTES`]).
     unflushed_bytes: AtomicU64,
+    /// How closing the file went, once the sink is dropped ([`ViewWriter::finish`]).
+    closed: crate::sink::Closed,
 }
 
 impl std::fmt::Debug for ViewWriter {
@@ -105,9 +107,8 @@ impl ViewWriter {
             .recording_name(name)
             .buffered()
             .map_err(|e| err(&e))?;
-        rec.set_sink(Box::new(
-            crate::sink::RrdFileSink::create(&partial).map_err(|e| err(&e))?,
-        ));
+        let (sink, closed) = crate::sink::RrdFileSink::create(&partial).map_err(|e| err(&e))?;
+        rec.set_sink(Box::new(sink));
         let stamps: BTreeMap<&str, i64> = stamps.iter().map(|(s, t)| (s.as_str(), *t)).collect();
         let frames = frames
             .iter()
@@ -123,6 +124,7 @@ impl ViewWriter {
             frames,
             clusters: false,
             unflushed_bytes: AtomicU64::new(0),
+            closed,
         };
         writer.log_static(rig).map_err(|e| err(&e))?;
         Ok(writer)
@@ -154,8 +156,13 @@ impl ViewWriter {
         };
         self.rec.flush_blocking().map_err(|e| err(&e))?;
         // Disconnecting drops the file sink, which joins its writer thread: the file is
-        // complete and closed after this.
+        // complete and closed after this, or its error is in `closed`.
         self.rec.disconnect();
+        match self.closed.lock().ok().and_then(|mut c| c.take()) {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(err(&e)),
+            None => return Err(err(&"the file writer did not close the file")),
+        }
         std::fs::rename(&self.partial, &self.path).map_err(|e| err(&e))?;
         Ok(self.path.clone())
     }
