@@ -1,7 +1,8 @@
 //! [`ViewWriter`]: a [`FrameSink`] that streams frames into a `.rrd` file with the Rerun
 //! SDK (`re_sdk`). The rig, the class palette and the blueprint are logged once (static);
-//! each frame on the `frame` timeline (and `time`), then dropped. The SDK queues chunks
-//! for its file-writer thread in a channel bounded by count (1024 chunks, not bytes): a
+//! each frame on the `frame` timeline (and `time`), then dropped. The file sink
+//! (`crate::sink`, the SDK's encoder writing past the page cache) queues chunks for its
+//! writer thread in a channel bounded by count (1024 chunks, not bytes): a
 //! run that logs faster than the writer encodes would queue nearly the whole file in
 //! memory, so [`ViewWriter`] waits for the writer after every [`FLUSH_EVERY_BYTES`]
 //! logged (back-pressure), which bounds what is queued (memory still grows slowly over a
