@@ -7,8 +7,9 @@
 #   scripts/bench_rerun.sh [FRAMES] [LONG_FRAMES] [SHORT_FRAMES]   (default 24, 500, 100)
 #
 # Needs a release binary built with the feature: cargo build --release --features rerun.
-# Time: the ratio of `run`'s wall-clock times (median of 3, recorded parser, no figure),
-# each after a warm-up; memory: 1 camera, colour 480 px wide, recorded parser.
+# Time: the ratio of `run`'s wall-clock times and of its CPU times (user + sys, from
+# /usr/bin/time; the figure to compare on a loaded machine), each the median of 3 (recorded
+# parser, no figure), after a warm-up; memory: 1 camera, colour 480 px wide, recorded parser.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 frames="${1:-24}"
@@ -27,27 +28,28 @@ synth() { # synth NAME ARGS...: the recording $recs/NAME, made once
 }
 synth "handover$frames" --preset handover --frames "$frames" --seed 1
 
-run() { # run OUT [extra args]: wall-clock seconds of one full run
+run() { # run OUT [extra args]: "wall cpu" seconds of one full run (cpu = user + sys)
     local out="$1"; shift
-    local t0 t1
-    t0=$(date +%s.%N)
-    "$bin" --quiet run --recording "$recs/handover$frames" --out "$out" --parser recorded --figure none --force "$@" >/dev/null
-    t1=$(date +%s.%N)
-    echo "$t1 - $t0" | bc -l
+    /usr/bin/time -f "%e %U %S" -o "$tmp/time" \
+        "$bin" --quiet run --recording "$recs/handover$frames" --out "$out" --parser recorded --figure none --force "$@" >/dev/null
+    awk '{printf "%s %.2f\n", $1, $2 + $3}' "$tmp/time"
 }
 median() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
 
 run "$tmp/warm" >/dev/null
-plain=(); with=()
+plain=(); with=(); plain_cpu=(); with_cpu=()
 for _ in 1 2 3; do
-    plain+=("$(run "$tmp/plain")")
-    with+=("$(run "$tmp/with" --rerun "$tmp/with/run.rrd")")
+    read -r wall cpu < <(run "$tmp/plain"); plain+=("$wall"); plain_cpu+=("$cpu")
+    read -r wall cpu < <(run "$tmp/with" --rerun "$tmp/with/run.rrd"); with+=("$wall"); with_cpu+=("$cpu")
 done
 p=$(median "${plain[@]}"); w=$(median "${with[@]}")
+pc=$(median "${plain_cpu[@]}"); wc=$(median "${with_cpu[@]}")
 size=$(stat -c %s "$tmp/with/run.rrd")
 printf 'run, %d frames, 3 cameras: %.3f s/frame without --rerun, %.3f s/frame with (ratio %.3f), .rrd %.1f MB\n' \
     "$frames" "$(echo "$p / $frames" | bc -l)" "$(echo "$w / $frames" | bc -l)" "$(echo "$w / $p" | bc -l)" \
     "$(echo "$size / 1000000" | bc -l)"
+printf 'run, %d frames, 3 cameras: CPU (user + sys) %.2f s without --rerun, %.2f s with (ratio %.3f)\n' \
+    "$frames" "$pc" "$wc" "$(echo "$wc / $pc" | bc -l)"
 
 # Memory over a long recording: small images, one camera.
 small=(--set rig.cameras=1 --set rig.color_width=480 --set people.count=1)

@@ -10,8 +10,9 @@
   on every crate; no crate depends on lab;
 - testkit is never a normal dependency, and synth is one only of pipeline and the binary:
   lower crates may use them as dev-dependencies (tests, benches) only;
-- view (the Rerun writer) depends only on core and calib, and it is the only crate that
-  names the Rerun SDK (re_sdk, rerun, re_*), optionally (feature `rerun`).
+- view (the Rerun writer) depends only on core and calib, and io for its `.rrd` file
+  (`bodyseg_io::DirectFile`), and it is the only crate that names the Rerun SDK (re_sdk,
+  rerun, re_*), optionally (feature `rerun`).
 
 Prints every violation and exits 1 if there is any; exits 0 and prints a one-line summary
 otherwise. Standard library only; run from anywhere.
@@ -41,8 +42,8 @@ ALLOWED = {
     "ros2": {"core", "calib"},
     "io": {"core"},
     "testkit": {"core"},
-    # The Rerun writer: stage types in, `.rrd` out.
-    "view": {"core", "calib"},
+    # The Rerun writer: stage types in, `.rrd` out (written through io's DirectFile).
+    "view": {"core", "calib", "io"},
     "pipeline": None,
     # Studies (reports, sweeps, timing tools): may use everything, nothing uses them.
     "lab": None,

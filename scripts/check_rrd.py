@@ -2,7 +2,7 @@
 """Checks a bodyseg `.rrd` file with the Rerun Python SDK (a real client, not our reader).
 
     check_rrd.py FILE.rrd --run OUT [--cameras cam0,cam1,cam2] [--expect-scores]
-                 [--clusters yes|no]
+                 [--clusters yes|no] [--recording REC]
 
 Reads FILE.rrd with `rerun-sdk` (the version of the Rust SDK that wrote it, see
 Cargo.toml's `re_sdk`) through its dataframe API (`rr.experimental.RrdReader(...)
@@ -14,8 +14,9 @@ the run's files in OUT (a run of the whole recording):
 - per frame, the points of world/refined + world/refined_unknown and of world/projected +
   world/projected_unknown equal the vertex count of OUT/clouds/<stem>.ply;
 - per frame, the boxes of world/boxes equal those of OUT/boxes/<stem>.json;
-- every camera's colour and depth image, 2D labels and refined labels are there for every
-  frame, and its Pinhole and Transform3D (static) at world/cameras/<name>/color and /depth;
+- every camera's colour image (an EncodedImage with its media type: the recording's file),
+  depth image, 2D labels and refined labels are there for every frame (with --recording
+  REC, each colour image's bytes equal to REC/<camera>/color/<stem>.png|.jpg), and its Pinhole and Transform3D (static) at world/cameras/<name>/color and /depth;
 - the AnnotationContext at world; with --expect-scores, scores/<configuration>/biou;
 - with --clusters yes, per frame world/clusters has as many points as the PLY (`run
   --rerun-clusters`); with --clusters no, world/clusters is not in the file (the default).
@@ -70,6 +71,8 @@ def main() -> int:
     ap.add_argument("--cameras", default="", help="camera names, comma-separated")
     ap.add_argument("--expect-scores", action="store_true")
     ap.add_argument("--clusters", choices=("yes", "no"), help="whether world/clusters is there")
+    ap.add_argument("--recording", type=Path,
+                    help="the recording: each colour image's bytes must equal its file's")
     args = ap.parse_args()
 
     try:
@@ -154,13 +157,25 @@ def main() -> int:
         for c in cameras:
             base = f"world/cameras/{c}"
             for entity, archetype, component in (
-                (f"{base}/color/image", "Image", "buffer"),
+                (f"{base}/color/image", "EncodedImage", "blob"),
+                (f"{base}/color/image", "EncodedImage", "media_type"),
                 (f"{base}/depth/image", "DepthImage", "buffer"),
                 (f"{base}/color/labels", "SegmentationImage", "buffer"),
                 (f"{base}/color/refined_labels", "SegmentationImage", "buffer"),
             ):
                 if not present(rows, entity, archetype, component):
                     failures.append(f"frame {stem}: no {entity} ({archetype})")
+            if args.recording is not None:
+                files = [f for f in (args.recording / c / "color").glob(f"{stem}.*")
+                         if f.suffix.lower() in (".png", ".jpg", ".jpeg")]
+                name = column(df, f"{base}/color/image", "EncodedImage", "blob")
+                blobs = [v for v in rows[name] if v is not None] if name else []
+                got = bytes(blobs[0][0].tobytes()) if blobs and len(blobs[0]) else None
+                if len(files) != 1 or got != files[0].read_bytes():
+                    failures.append(
+                        f"frame {stem}: {base}/color/image is not the bytes of "
+                        f"{args.recording / c / 'color'}/{stem}.png|.jpg"
+                    )
         if args.expect_scores:
             if not any(":Scalars:scalars" in n and "/scores/" in n and "biou" in n
                        for n in df.columns if rows[n].notna().any()):

@@ -1,6 +1,7 @@
 //! `bodyseg run --rerun` and `bodyseg view` on the shared 3-camera synthetic recording, the
 //! `.rrd` read back by the Rerun Python SDK of the same version (`scripts/check_rrd.py`,
-//! its dataframe API): every entity for every frame, point counts equal to the PLY files',
+//! its dataframe API): every entity for every frame, colour images equal to the
+//! recording's files byte for byte, point counts equal to the PLY files',
 //! box counts equal to the boxes JSON, the timeline's length. Built with the `rerun`
 //! feature (without it: the flag's error); the SDK check is skipped (saying why) when the
 //! Python SDK is not installed.
@@ -34,7 +35,7 @@ fn sdk_installed() -> bool {
 #[cfg(feature = "rerun")]
 /// Runs scripts/check_rrd.py on `rrd` against the run `out`; panics with its output on
 /// failure.
-fn check(rrd: &Path, out: &Path, extra: &[&str]) -> String {
+fn check(rrd: &Path, out: &Path, rec: &Path, extra: &[&str]) -> String {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/check_rrd.py");
     let o = Command::new(python())
         .arg(script)
@@ -42,6 +43,8 @@ fn check(rrd: &Path, out: &Path, extra: &[&str]) -> String {
         .arg("--run")
         .arg(out)
         .args(["--cameras", CAMERAS])
+        .arg("--recording")
+        .arg(rec)
         .args(extra)
         .output()
         .expect("run python");
@@ -109,11 +112,13 @@ fn run_rerun_writes_a_file_the_rerun_sdk_reads_with_every_entity() {
         );
         return;
     }
-    let text = check(&rrd, &out, &["--expect-scores", "--clusters", "yes"]);
+    // The colour images are the recording's files, byte for byte (`--recording`).
+    let text = check(&rrd, &out, rec, &["--expect-scores", "--clusters", "yes"]);
     assert!(text.contains(&format!("{FRAMES} frames")), "{text}");
     let text = check(
         &dir.path().join("view.rrd"),
         &out,
+        rec,
         &["--expect-scores", "--clusters", "no"],
     );
     assert!(text.contains(&format!("{FRAMES} frames")), "{text}");

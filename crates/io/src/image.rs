@@ -199,6 +199,92 @@ pub fn parse_rgb_image(bytes: &[u8], path_for_errors: &Path) -> Result<RgbImage,
     RgbImage::new(width, height, rgb.into_raw()).map_err(|e| decode_err(e.to_string()))
 }
 
+/// The format of a colour image file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColorFileFormat {
+    /// PNG.
+    Png,
+    /// JPEG.
+    Jpeg,
+}
+
+/// A colour image file as stored (PNG or JPEG), not decoded: its bytes, and its format and
+/// size as its header says. What a viewer that decodes images itself (the Rerun file of
+/// `--rerun`) takes, without the cost of decoding here.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ColorFile {
+    /// The file's bytes.
+    pub bytes: Vec<u8>,
+    /// PNG or JPEG, from the content (not the extension).
+    pub format: ColorFileFormat,
+    /// Width, pixels (from the header).
+    pub width: u32,
+    /// Height, pixels (from the header).
+    pub height: u32,
+}
+
+impl ColorFile {
+    /// Decodes the image as [`parse_rgb_image`] does; `path_for_errors` only names the file
+    /// in error messages.
+    ///
+    /// # Errors
+    /// As [`parse_rgb_image`].
+    pub fn decode(&self, path_for_errors: &Path) -> Result<RgbImage, IoError> {
+        parse_rgb_image(&self.bytes, path_for_errors)
+    }
+}
+
+/// Reads a colour image file (PNG or JPEG) without decoding its pixels: the bytes, and the
+/// format and size from the header.
+///
+/// # Errors
+/// [`IoError::Read`] when the file cannot be read; [`IoError::Decode`] when it is neither
+/// a PNG nor a JPEG, its header does not parse, or it is larger than
+/// [`MAX_IMAGE_SIDE_PX`](crate::MAX_IMAGE_SIDE_PX) on a side. A file whose pixel data is
+/// corrupt is not detected (nothing is decoded).
+pub fn read_color_file(path: &Path) -> Result<ColorFile, IoError> {
+    parse_color_file(read_file(path)?, path)
+}
+
+/// [`read_color_file`] on the bytes of a file; `path_for_errors` only names the file in
+/// error messages.
+///
+/// # Errors
+/// As [`read_color_file`], without the read.
+pub fn parse_color_file(bytes: Vec<u8>, path_for_errors: &Path) -> Result<ColorFile, IoError> {
+    let decode_err = |cause: String| IoError::Decode {
+        cause,
+        path: path_for_errors.to_path_buf(),
+    };
+    let format = match image::guess_format(&bytes).map_err(|e| decode_err(e.to_string()))? {
+        ImageFormat::Png => ColorFileFormat::Png,
+        ImageFormat::Jpeg => ColorFileFormat::Jpeg,
+        other => {
+            return Err(decode_err(format!(
+                "{other:?} images are not supported (PNG or JPEG)"
+            )));
+        }
+    };
+    let image_format = match format {
+        ColorFileFormat::Png => ImageFormat::Png,
+        ColorFileFormat::Jpeg => ImageFormat::Jpeg,
+    };
+    let (width, height) = ImageReader::with_format(Cursor::new(&bytes), image_format)
+        .into_dimensions()
+        .map_err(|e| decode_err(e.to_string()))?;
+    if width > MAX_IMAGE_SIDE_PX || height > MAX_IMAGE_SIDE_PX {
+        return Err(decode_err(format!(
+            "{width}x{height} pixels, more than {MAX_IMAGE_SIDE_PX} on a side"
+        )));
+    }
+    Ok(ColorFile {
+        bytes,
+        format,
+        width,
+        height,
+    })
+}
+
 /// Encodes `bytes` (native-endian samples) as a grayscale PNG and writes it atomically.
 fn write_png(
     path: &Path,
@@ -379,6 +465,37 @@ mod tests {
             e.starts_with(&format!("{}: cannot decode colour image: ", junk.display())),
             "{e}"
         );
+    }
+
+    #[test]
+    fn color_file_keeps_the_bytes_and_reads_the_size_from_the_header() {
+        let dir = tempdir();
+        let path = dir.path().join("c.png");
+        let rgb: Vec<u8> = (0..18u8).map(|i| i.wrapping_mul(37)).collect();
+        write_rgb_png(&path, 3, 2, &rgb).expect("write");
+        let file = read_color_file(&path).expect("read");
+        assert_eq!(file.bytes, std::fs::read(&path).expect("bytes"));
+        assert_eq!(
+            (file.format, file.width, file.height),
+            (ColorFileFormat::Png, 3, 2)
+        );
+        assert_eq!(
+            file.decode(&path).expect("decode"),
+            read_rgb_image(&path).expect("decode")
+        );
+
+        let junk = dir.path().join("junk.png");
+        std::fs::write(&junk, b"not an image at all").expect("write junk");
+        let e = read_color_file(&junk).expect_err("junk").to_string();
+        assert!(
+            e.starts_with(&format!("{}: cannot decode colour image: ", junk.display())),
+            "{e}"
+        );
+        // A PNG signature with a truncated header.
+        let truncated = dir.path().join("t.png");
+        let bytes = std::fs::read(&path).expect("bytes");
+        std::fs::write(&truncated, &bytes[..12]).expect("write truncated");
+        assert!(read_color_file(&truncated).is_err());
     }
 
     #[test]

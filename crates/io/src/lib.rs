@@ -11,7 +11,9 @@
 //! A recording's images: depth PNGs ⇄ [`DepthImage`] ([`read_depth_png`],
 //! [`write_depth_png`]) and label PNGs ⇄ [`LabelImage`](bodyseg_core::LabelImage)
 //! ([`read_label_png`], [`write_label_png`]); colour PNG/JPEG → [`RgbImage`](bodyseg_core::RgbImage)
-//! ([`read_rgb_image`]). ONNX models are read as bytes ([`read_bytes`]). 2-D numeric
+//! ([`read_rgb_image`]), or kept as the file's bytes ([`read_color_file`]). A large file
+//! streamed once (the `.rrd` of `--rerun`) can be written past the page cache
+//! ([`DirectFile`]). ONNX models are read as bytes ([`read_bytes`]). 2-D numeric
 //! matrices of MATLAB MAT v5 files (plain or compressed; datasets' depth maps) read as
 //! [`MatMatrix`] ([`read_mat_matrix`], [`read_mat_variable_names`]). Each reader has a
 //! `parse_*` twin that takes the file's bytes (as fuzzing does).
@@ -48,6 +50,7 @@
 mod atomic;
 mod boxes;
 mod cloud_file;
+mod direct;
 mod error;
 mod folder;
 mod image;
@@ -66,14 +69,15 @@ pub use atomic::{
 };
 pub use boxes::{parse_boxes, read_boxes, write_boxes, write_boxes_with};
 pub use cloud_file::{CloudFile, CloudGrid, FileLabels};
+pub use direct::DirectFile;
 pub use error::IoError;
 pub use folder::{
     create_folder, discard_folder, image_files, publish_folder, require_folder, staging_folder,
 };
 pub use image::{
-    DepthImage, parse_depth_png, parse_label_png, parse_rgb_image, read_depth_png, read_label_png,
-    read_rgb_image, write_depth_png, write_gray8_png, write_label_png, write_label_png_with,
-    write_rgb_png,
+    ColorFile, ColorFileFormat, DepthImage, parse_color_file, parse_depth_png, parse_label_png,
+    parse_rgb_image, read_color_file, read_depth_png, read_label_png, read_rgb_image,
+    write_depth_png, write_gray8_png, write_label_png, write_label_png_with, write_rgb_png,
 };
 pub use limits::{
     MAX_DECLARED_BYTES, MAX_DECLARED_POINTS, MAX_IMAGE_DECODE_BYTES, MAX_IMAGE_SIDE_PX,

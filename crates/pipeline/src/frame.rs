@@ -19,7 +19,7 @@ use crate::stage::{Stage, plural, timed};
 use anyhow::{Context, Result, bail};
 use bodyseg_calib::Rig;
 use bodyseg_core::{LabelImage, LabeledCloud, PersonBoxes, RgbImage};
-use bodyseg_io::DepthImage;
+use bodyseg_io::{ColorFile, DepthImage};
 use bodyseg_parsing::{RecordedSegmenter, Segmenter, ViewInput};
 use bodyseg_project::{CameraImages, FrameProjector, ProjectMode};
 use std::path::Path;
@@ -32,6 +32,10 @@ pub struct FrameNeeds {
     /// The colour images (`color/`): for a segmenter that looks at them, or for the
     /// points' colours.
     pub color: bool,
+    /// The colour image files as stored (`color/`, PNG or JPEG bytes): for the Rerun
+    /// view, which logs them as they are. Without [`FrameNeeds::color`] they are not
+    /// decoded; with it each file is read once and decoded from the bytes kept.
+    pub color_files: bool,
     /// The recorded predictions (`parsing/`): for [`bodyseg_parsing::RecordedSegmenter`].
     pub parsing: bool,
     /// The ground truth of every depth pixel (`depth_labels/`), for scoring.
@@ -63,6 +67,8 @@ pub struct Frame {
     pub depth: Vec<DepthImage>,
     /// Colour per camera, the colour sensor's size, when read ([`FrameNeeds::color`]).
     pub color: Option<Vec<RgbImage>>,
+    /// Colour image files per camera, as stored, when read ([`FrameNeeds::color_files`]).
+    pub color_files: Option<Vec<ColorFile>>,
     /// Recorded predictions per camera (`parsing/`), when read ([`FrameNeeds::parsing`]).
     pub parsing: Option<Vec<LabelImage>>,
     /// Ground truth per depth pixel per camera (`depth_labels/`), when read
@@ -85,6 +91,7 @@ impl Frame {
         let mut note = |path: &std::path::Path| inputs.extend(InputFile::of(path));
         let mut depth = Vec::new();
         let mut color = Vec::new();
+        let mut color_files = Vec::new();
         let mut parsing = Vec::new();
         let mut truth = Vec::new();
         for index in 0..rec.rig().cameras.len() {
@@ -93,7 +100,18 @@ impl Frame {
                 note(&path);
                 depth.push(image);
             }
-            if needs.color {
+            if needs.color_files {
+                let (file, path) = rec.read_color_file(index, stem)?;
+                note(&path);
+                if needs.color {
+                    let camera = &rec.rig().cameras[index].name;
+                    color.push(
+                        file.decode(&path)
+                            .with_context(|| format!("camera {camera}"))?,
+                    );
+                }
+                color_files.push(file);
+            } else if needs.color {
                 let (image, path) = rec.read_color(index, stem)?;
                 note(&path);
                 color.push(image);
@@ -113,6 +131,7 @@ impl Frame {
             stem: stem.to_string(),
             depth,
             color: needs.color.then_some(color),
+            color_files: needs.color_files.then_some(color_files),
             parsing: needs.parsing.then_some(parsing),
             truth: needs.truth.then_some(truth),
             inputs,
@@ -356,6 +375,7 @@ mod tests {
             stem: "000001".into(),
             depth: Vec::new(),
             color: None,
+            color_files: None,
             parsing,
             truth: None,
             inputs: Vec::new(),

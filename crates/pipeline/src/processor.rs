@@ -174,7 +174,7 @@ impl FrameProcessor {
     }
 
     /// Also hands each processed frame's stages to `sink` (the `.rrd` writer of `--rerun`);
-    /// the colour images are then read and kept.
+    /// the colour image files are then read and kept as stored (PNG or JPEG bytes).
     pub fn with_sink(mut self, sink: Option<Arc<dyn bodyseg_view::FrameSink>>) -> FrameProcessor {
         self.sink = sink;
         self
@@ -212,7 +212,9 @@ impl FrameProcessor {
     pub fn needs(&self) -> FrameNeeds {
         FrameNeeds {
             depth: true,
-            color: self.segmenter_needs.color || self.needs_colors() || self.sink.is_some(),
+            color: self.segmenter_needs.color || self.needs_colors(),
+            // The view logs the files as they are (no decode for it).
+            color_files: self.sink.is_some(),
             parsing: self.segmenter_needs.parsing,
             truth: self.has_truth,
         }
@@ -247,7 +249,7 @@ impl FrameProcessor {
                 .map_err(|_| anyhow::anyhow!("the parser failed on an earlier frame"))?;
             parse_frame(frame, self.rig(), segmenter.as_mut(), &self.config)
         })?;
-        if !self.needs_colors() && self.sink.is_none() {
+        if !self.needs_colors() {
             parsed.frame.color = None;
         }
         let source = if self.uses_model { "model" } else { "recorded" };
@@ -429,7 +431,7 @@ impl FrameProcessor {
                 &boxes.boxes,
                 &cfg.refine,
                 &steps,
-                figure || self.sink.is_some(),
+                figure || self.sink.as_ref().is_some_and(|s| s.wants_clusters()),
             )
             .context("refinement")
         })?;

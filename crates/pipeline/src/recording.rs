@@ -444,6 +444,27 @@ impl Recording {
         })
     }
 
+    /// The colour image file of camera `index` for frame `stem` as stored (PNG or JPEG
+    /// bytes, not decoded; its size from the header, checked against the colour sensor's),
+    /// with its path.
+    ///
+    /// # Errors
+    /// As [`Recording::read_depth`]; corrupt pixel data is not detected (nothing is
+    /// decoded).
+    pub fn read_color_file(
+        &self,
+        index: usize,
+        stem: &str,
+    ) -> Result<(bodyseg_io::ColorFile, PathBuf)> {
+        self.read_image(
+            index,
+            Layer::Color,
+            stem,
+            bodyseg_io::read_color_file,
+            |i| (i.width, i.height),
+        )
+    }
+
     /// A label image (8-bit class ids, 255 = none) of camera `index` for frame `stem`:
     /// `layer` is [`Layer::Parsing`], [`Layer::Labels`] (colour sensor size) or
     /// [`Layer::DepthLabels`] (depth sensor size); with its path.

@@ -77,7 +77,9 @@ pub fn view_run(opts: &ViewOptions) -> Result<ViewSummary> {
     )];
     let needs = FrameNeeds {
         depth: true,
-        color: recording.has_layer(Layer::Color),
+        color: false,
+        // Logged as stored (PNG or JPEG bytes), not decoded.
+        color_files: recording.has_layer(Layer::Color),
         parsing: recording.has_layer(Layer::Parsing),
         truth: false,
     };

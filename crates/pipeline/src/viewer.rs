@@ -10,7 +10,10 @@ use crate::stage::{Stage, timed};
 use anyhow::Result;
 use bodyseg_core::{Label, LabelImage, LabeledCloud, PersonBoxes};
 use bodyseg_eval::Report;
-use bodyseg_view::{CameraView, CloudView, DepthView, FrameSink, ViewFrame};
+use bodyseg_io::ColorFileFormat;
+use bodyseg_view::{
+    CameraView, CloudView, ColorFileView, DepthView, FrameSink, ImageFileFormat, ViewFrame,
+};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -189,6 +192,17 @@ pub(crate) fn camera_views<'a>(
     (0..frame.depth.len())
         .map(|i| CameraView {
             color: frame.color.as_ref().and_then(|c| c.get(i)),
+            color_file: frame
+                .color_files
+                .as_ref()
+                .and_then(|c| c.get(i))
+                .map(|f| ColorFileView {
+                    bytes: &f.bytes,
+                    format: match f.format {
+                        ColorFileFormat::Png => ImageFileFormat::Png,
+                        ColorFileFormat::Jpeg => ImageFileFormat::Jpeg,
+                    },
+                }),
             depth: frame.depth.get(i).map(|d| DepthView {
                 width: d.width,
                 height: d.height,

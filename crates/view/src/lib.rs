@@ -7,7 +7,7 @@
 //!
 //! ```text
 //! Rig (once)                        → cameras: Pinhole + Transform3D, static
-//! ViewFrame (colour, depth, 2D labels, projected / refined clouds, clusters, boxes, scores)
+//! ViewFrame (colour files, depth, 2D labels, projected / refined clouds, clusters, boxes, scores)
 //!                                   → images, Points3D, Boxes3D, Scalars on the `frame` timeline
 //! ```
 //!
@@ -20,6 +20,8 @@
 //!   default (`RDF`).
 //! - Rerun's pinhole has no lens distortion: the images are shown as recorded (distorted)
 //!   on an ideal pinhole of the same focal length and principal point.
+//! - Colour: the recording's PNG or JPEG files as they are (`EncodedImage`, decoded by
+//!   the viewer) when the frame carries them, else the decoded pixels (`Image`).
 //! - Depth: the raw `u16` values with Rerun's `meter` = the camera's `depth_scale` (raw
 //!   units per metre); `depth_shift_mm` is not applied.
 //! - Class ids: our on-disk label ids (0..7, [`bodyseg_core::Class`]) with our names and
@@ -30,6 +32,8 @@
 
 pub mod paths;
 
+#[cfg(feature = "rerun")]
+mod sink;
 #[cfg(feature = "rerun")]
 mod writer;
 
@@ -43,14 +47,35 @@ use std::path::PathBuf;
 /// One camera's images of a frame, in the rig's camera order; any may be missing.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CameraView<'a> {
-    /// The colour image.
+    /// The colour image, decoded (logged when there is no [`CameraView::color_file`]).
     pub color: Option<&'a RgbImage>,
+    /// The colour image file as stored: logged as it is (an encoded image the viewer
+    /// decodes), in place of [`CameraView::color`].
+    pub color_file: Option<ColorFileView<'a>>,
     /// The raw depth image (depth sensor pixels; unit: the camera's `depth_scale`).
     pub depth: Option<DepthView<'a>>,
     /// The 2D parser's labels (colour sensor pixels).
     pub parsed: Option<&'a LabelImage>,
     /// The refined labels drawn back into the colour image (`labels/`).
     pub refined: Option<&'a LabelImage>,
+}
+
+/// A colour image file as stored (PNG or JPEG bytes), borrowed.
+#[derive(Clone, Copy, Debug)]
+pub struct ColorFileView<'a> {
+    /// The file's bytes.
+    pub bytes: &'a [u8],
+    /// Its format.
+    pub format: ImageFileFormat,
+}
+
+/// The format of an image file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFileFormat {
+    /// PNG (`image/png`).
+    Png,
+    /// JPEG (`image/jpeg`).
+    Jpeg,
 }
 
 /// A raw depth image, borrowed.
@@ -102,6 +127,12 @@ pub trait FrameSink: Send + Sync {
     /// # Errors
     /// The frame does not fit the sink (unknown stem, sizes), or writing fails.
     fn write_frame(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError>;
+
+    /// Whether the sink logs [`ViewFrame::clusters`]; when not, the caller need not list
+    /// them (12 bytes a point, built during the refinement).
+    fn wants_clusters(&self) -> bool {
+        true
+    }
 }
 
 /// Everything that can go wrong while writing a view.

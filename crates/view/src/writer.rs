@@ -1,14 +1,15 @@
 //! [`ViewWriter`]: a [`FrameSink`] that streams frames into a `.rrd` file with the Rerun
 //! SDK (`re_sdk`). The rig, the class palette and the blueprint are logged once (static);
-//! each frame on the `frame` timeline (and `time`), then dropped. The SDK queues chunks
-//! for its file-writer thread in a channel bounded by count (1024 chunks, not bytes): a
+//! each frame on the `frame` timeline (and `time`), then dropped. The file sink
+//! (`crate::sink`, the SDK's encoder writing past the page cache) queues chunks for its
+//! writer thread in a channel bounded by count (1024 chunks, not bytes): a
 //! run that logs faster than the writer encodes would queue nearly the whole file in
 //! memory, so [`ViewWriter`] waits for the writer after every [`FLUSH_EVERY_BYTES`]
 //! logged (back-pressure), which bounds what is queued (memory still grows slowly over a
 //! long recording: docs/notes/2026-12-02-rerun.md).
 
 use crate::paths;
-use crate::{CameraView, CloudView, FrameSink, ViewError, ViewFrame};
+use crate::{CameraView, CloudView, FrameSink, ImageFileFormat, ViewError, ViewFrame};
 use bodyseg_calib::{Intrinsics, Pose, Rig};
 use bodyseg_core::{Class, Label, LabelImage, PersonBox};
 use re_sdk::blueprint::{
@@ -20,10 +21,10 @@ use re_sdk::external::arrow::buffer::ScalarBuffer;
 use re_sdk::external::arrow::datatypes::{DataType, Field};
 use re_sdk::{RecordingStream, RecordingStreamBuilder, SerializedComponentBatch};
 use re_sdk_types::archetypes::{
-    AnnotationContext, Boxes3D, DepthImage, Image, Pinhole, Points3D, Scalars, SegmentationImage,
-    Transform3D, ViewCoordinates,
+    AnnotationContext, Boxes3D, DepthImage, EncodedImage, Image, Pinhole, Points3D, Scalars,
+    SegmentationImage, Transform3D, ViewCoordinates,
 };
-use re_sdk_types::components::ImageFormat;
+use re_sdk_types::components::{ImageFormat, MediaType};
 use re_sdk_types::datatypes::{
     Angle, AnnotationInfo, ChannelDatatype, ClassDescription, Quaternion, Rgba32, RotationAxisAngle,
 };
@@ -68,6 +69,8 @@ pub struct ViewWriter {
     clusters: bool,
     /// Bytes logged since the last wait for the file writer (see [`FLUSH_EVERY_BYTES`]).
     unflushed_bytes: AtomicU64,
+    /// How closing the file went, once the sink is dropped ([`ViewWriter::finish`]).
+    closed: crate::sink::Closed,
 }
 
 impl std::fmt::Debug for ViewWriter {
@@ -100,10 +103,13 @@ impl ViewWriter {
             message: e.to_string(),
             path: path.to_path_buf(),
         };
+        // The SDK's sink for a file, but written past the page cache (`sink` module).
         let rec = RecordingStreamBuilder::new(APPLICATION_ID)
             .recording_name(name)
-            .save(&partial)
+            .buffered()
             .map_err(|e| err(&e))?;
+        let (sink, closed) = crate::sink::RrdFileSink::create(&partial).map_err(|e| err(&e))?;
+        rec.set_sink(Box::new(sink));
         let stamps: BTreeMap<&str, i64> = stamps.iter().map(|(s, t)| (s.as_str(), *t)).collect();
         let frames = frames
             .iter()
@@ -119,6 +125,7 @@ impl ViewWriter {
             frames,
             clusters: false,
             unflushed_bytes: AtomicU64::new(0),
+            closed,
         };
         writer.log_static(rig).map_err(|e| err(&e))?;
         Ok(writer)
@@ -150,8 +157,13 @@ impl ViewWriter {
         };
         self.rec.flush_blocking().map_err(|e| err(&e))?;
         // Disconnecting drops the file sink, which joins its writer thread: the file is
-        // complete and closed after this.
+        // complete and closed after this, or its error is in `closed`.
         self.rec.disconnect();
+        match self.closed.lock().ok().and_then(|mut c| c.take()) {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(err(&e)),
+            None => return Err(err(&"the file writer did not close the file")),
+        }
         std::fs::rename(&self.partial, &self.path).map_err(|e| err(&e))?;
         Ok(self.path.clone())
     }
@@ -325,7 +337,18 @@ impl ViewWriter {
                 height,
             }
         };
-        if let Some(c) = camera.color {
+        if let Some(f) = camera.color_file {
+            // The file as it is: no decode here, and a fraction of the pixels' bytes to
+            // encode and write (docs/notes/2026-12-02-rerun.md, 2026-12-04).
+            let media_type = match f.format {
+                ImageFileFormat::Png => MediaType::png(),
+                ImageFileFormat::Jpeg => MediaType::jpeg(),
+            };
+            self.log(
+                paths::color_image(name).as_str(),
+                &EncodedImage::new(f.bytes.to_vec()).with_media_type(media_type),
+            )?;
+        } else if let Some(c) = camera.color {
             if c.rgb.len() != c.width as usize * c.height as usize * 3 {
                 return Err(size_err("colour", c.rgb.len(), c.width, c.height, 3));
             }
@@ -425,6 +448,10 @@ impl FrameSink for ViewWriter {
     fn write_frame(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
         self.write(frame)
     }
+
+    fn wants_clusters(&self) -> bool {
+        self.clusters
+    }
 }
 
 /// About how many bytes of data a frame logs (pixels, positions and class ids; the few
@@ -432,7 +459,11 @@ impl FrameSink for ViewWriter {
 fn frame_bytes(frame: &ViewFrame<'_>, clusters: bool) -> u64 {
     let mut bytes = 0;
     for c in &frame.cameras {
-        bytes += c.color.map_or(0, |i| i.rgb.len());
+        bytes += match (c.color_file, c.color) {
+            (Some(f), _) => f.bytes.len(),
+            (None, Some(i)) => i.rgb.len(),
+            (None, None) => 0,
+        };
         bytes += c.depth.map_or(0, |d| d.raw.len() * 2);
         bytes += [c.parsed, c.refined]
             .iter()
