@@ -188,15 +188,23 @@ impl NnIndex {
                 let cell = table[slot(merged(g.key(c)))] as usize;
                 let f = &mut fill[cell];
                 let first = *f;
-                for ((&id, &p), k) in g.ids()[r.clone()]
-                    .iter()
-                    .zip(&g.pts()[r.clone()])
-                    .zip(&keep[r])
-                {
-                    if k.is_some() {
-                        ids[*f as usize] = id;
-                        pts[*f as usize] = p;
-                        *f += 1;
+                if kept[k - 1] as usize == r.len() {
+                    // Every point kept (most cells): the run copied whole.
+                    let to = first as usize..first as usize + r.len();
+                    ids[to.clone()].copy_from_slice(&g.ids()[r.clone()]);
+                    pts[to].copy_from_slice(&g.pts()[r]);
+                    *f += kept[k - 1];
+                } else {
+                    for ((&id, &p), k) in g.ids()[r.clone()]
+                        .iter()
+                        .zip(&g.pts()[r.clone()])
+                        .zip(&keep[r])
+                    {
+                        if k.is_some() {
+                            ids[*f as usize] = id;
+                            pts[*f as usize] = p;
+                            *f += 1;
+                        }
                     }
                 }
                 // The part's box holds all of its cell's points, the kept ones among them:
