@@ -684,6 +684,29 @@ fn fuse_labels(
     with_clusters: bool,
 ) -> (Vec<Label>, Vec<Option<(u32, u32)>>) {
     let n = cloud.len();
+    if let [(idx, r)] = people
+        && idx.len() == n
+    {
+        // One person whose box holds every point (a cloud cropped to one person; `idx` is
+        // then `0..n`): its labels are the output, as the rules below give, without the
+        // pass over the original labels and the scatter.
+        let mut labels = r.point_labels.clone();
+        for l in &mut labels {
+            if l.is_unknown() {
+                *l = Label::BACKGROUND;
+            }
+        }
+        let clusters = if with_clusters {
+            r.clustering
+                .cluster_of
+                .iter()
+                .map(|c| c.map(|c| (0, c)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        return (labels, clusters);
+    }
     // Points outside every box first (most of a room's points), then each person's
     // points over them. Two bytes per point of working memory, no per-point `Option`s:
     // this runs once per configuration on every frame.
