@@ -182,8 +182,8 @@ struct GroupResult {
     /// reads the grid's, which are in this order, rather than a copy).
     ids: Vec<u32>,
     component: Vec<Option<u32>>,
-    /// Number of local components (they are `0..components`).
-    components: u32,
+    /// Per local component (they are `0..first.len()`), its smallest point index.
+    first: Vec<u32>,
     is_core: Vec<bool>,
     grid: Option<(CellGrid, Vec<Aabb>)>,
 }
@@ -205,17 +205,8 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
     // Per group, per local component: its global id (set below).
     let mut global: Vec<Vec<u32>> = Vec::with_capacity(results.len());
     for (g, res) in results.iter().enumerate() {
-        let idx = res.ids();
-        let ncomp = res.components;
-        let mut first = vec![u32::MAX; ncomp as usize];
-        for (&i, (&c, &core)) in idx.iter().zip(res.component.iter().zip(&res.is_core)) {
-            is_core[i as usize] = core;
-            if let Some(c) = c {
-                first[c as usize] = first[c as usize].min(i);
-            }
-        }
-        comps.extend(first.iter().enumerate().map(|(c, &f)| (f, g, c as u32)));
-        global.push(vec![u32::MAX; ncomp as usize]);
+        comps.extend(res.first.iter().enumerate().map(|(c, &f)| (f, g, c as u32)));
+        global.push(vec![u32::MAX; res.first.len()]);
     }
     comps.sort_unstable();
     for (id, &(_, g, c)) in comps.iter().enumerate() {
@@ -224,7 +215,9 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
     let mut cluster_of = vec![None; n];
     let cluster_labels = if one_label {
         for (g, res) in results.iter().enumerate() {
-            for (&i, &c) in res.ids().iter().zip(&res.component) {
+            for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core))
+            {
+                is_core[i as usize] = core;
                 if let Some(c) = c {
                     cluster_of[i as usize] = Some(global[g][c as usize]);
                 }
@@ -241,7 +234,9 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
     } else {
         let mut votes = vec![[0u32; NUM_CLASSES]; comps.len()];
         for (g, res) in results.iter().enumerate() {
-            for (&i, &c) in res.ids().iter().zip(&res.component) {
+            for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core))
+            {
+                is_core[i as usize] = core;
                 if let Some(c) = c {
                     let id = global[g][c as usize];
                     cluster_of[i as usize] = Some(id);
@@ -500,7 +495,7 @@ fn cluster_group(
         return GroupResult {
             ids: idx.to_vec(),
             component: vec![None; m],
-            components: 0,
+            first: Vec::new(),
             is_core: vec![false; m],
             grid: None,
         };
@@ -568,22 +563,27 @@ fn cluster_group(
             }
         }
     }
-    // Renumber roots densely (any order; global ids are assigned later). Roots are
+    // Renumber roots densely (any order; global ids are assigned later), noting each
+    // component's smallest point index (which orders the global ids). Roots are
     // union-find elements, so a table over them replaces a hash map.
     let mut dense = vec![u32::MAX; uf.0.len()];
-    let mut next = 0u32;
-    for c in component.iter_mut().flatten() {
+    let mut first: Vec<u32> = Vec::new();
+    for (c, &id) in component.iter_mut().zip(g.grid.ids()) {
+        let Some(c) = c else { continue };
         let d = &mut dense[*c as usize];
         if *d == u32::MAX {
-            *d = next;
-            next += 1;
+            *d = first.len() as u32;
+            first.push(id);
+        } else {
+            let f = &mut first[*d as usize];
+            *f = (*f).min(id);
         }
         *c = *d;
     }
     GroupResult {
         ids: Vec::new(),
         component,
-        components: next,
+        first,
         is_core: core,
         grid: Some((g.grid, g.bbox)),
     }
