@@ -118,12 +118,23 @@ pub(crate) fn dbscan_with_cells(
     // Each group's points with their tight box (the box of the group's grid).
     let groups: Vec<(Vec<u32>, Aabb)> = if separate_labels {
         let mut g: Vec<(Vec<u32>, Aabb)> = vec![(Vec::new(), Aabb::EMPTY); NUM_CLASSES];
-        for (i, l) in labels.iter().enumerate() {
+        // By runs of one label (points in image order: ~20 on sensor clouds), so that a
+        // run's indices go in one `extend` and its box grows in registers. Each group
+        // still takes its points in index order, so the lists and boxes are the same.
+        let mut i = 0;
+        while i < n {
+            let l = labels[i];
+            let end = labels[i..].iter().position(|&m| m != l).map_or(n, |k| i + k);
             if let Some(c) = l.class() {
                 let (ids, b) = &mut g[c.index()];
-                ids.push(i as u32);
-                b.grow(positions_m[i]);
+                ids.extend(i as u32..end as u32);
+                let mut run_box = *b;
+                for &p in &positions_m[i..end] {
+                    run_box.grow(p);
+                }
+                *b = run_box;
             }
+            i = end;
         }
         g.retain(|(v, _)| !v.is_empty());
         g
