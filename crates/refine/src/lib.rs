@@ -437,8 +437,7 @@ pub fn refine_variants_with(
     with_clusters: bool,
 ) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
-    cloud.validate()?;
-    cfg.validate_for_extent(extent_m(&cloud.positions_m))?;
+    cfg.validate_for_extent(validated_extent_m(cloud)?)?;
     let PointEvidence { voted, label_probs } = evidence;
     let colors = match &cloud.colors {
         _ if cfg.foreign_color_density == 0.0 => None,
@@ -639,17 +638,30 @@ pub fn refine_variants_with(
     Ok(out)
 }
 
-/// The largest extent of `positions` along an axis, metres (0 when empty).
-fn extent_m(positions: &[Vec3]) -> f32 {
+/// [`LabeledCloud::validate`], and the largest extent of the positions along an axis,
+/// metres (0 when empty), in one pass over the positions instead of two: the pass that
+/// takes the extent also sums `x · 0` over every coordinate, which stays ±0 unless some
+/// coordinate is infinite or NaN. Any doubt (a length that differs, a non-finite
+/// coordinate) asks `validate` itself, so the errors are its own.
+fn validated_extent_m(cloud: &LabeledCloud) -> Result<f32, RefineError> {
+    let n = cloud.len();
+    let lengths_agree = cloud.labels.len() == n
+        && cloud.origins.len() == n
+        && cloud.colors.as_ref().is_none_or(|c| c.len() == n);
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
-    for p in positions {
+    let mut probe = [0f32; 3];
+    for p in &cloud.positions_m {
         for a in 0..3 {
             lo[a] = if p[a] < lo[a] { p[a] } else { lo[a] };
             hi[a] = if p[a] > hi[a] { p[a] } else { hi[a] };
+            probe[a] += p[a] * 0.0;
         }
     }
-    (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max)
+    if !lengths_agree || probe.iter().any(|&z| z != 0.0) {
+        cloud.validate()?;
+    }
+    Ok((0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max))
 }
 
 /// Fuse (§5.7): a point inside exactly one box takes that person's label; inside several,
