@@ -527,11 +527,38 @@ fn cluster_group(
     let unit = |c: u32, i: usize| -> u32 { if all_whole { c } else { i as u32 } };
     let core_range = |c: u32| g.grid.range(c).start..core_end[c as usize] as usize;
 
-    // Components of core points, border points to their nearest core point.
+    // Components of core points, border points to their nearest core point's, numbered
+    // densely as they are met (any order: global ids are assigned later, by each
+    // component's smallest point index, noted on the way in `first`). Roots are
+    // union-find elements, so a table over them replaces a hash map.
+    let ids = g.grid.ids();
+    let mut dense = vec![u32::MAX; uf.0.len()];
+    let mut first: Vec<u32> = Vec::new();
+    let mut dense_of = |root: u32, id: u32| -> u32 {
+        let d = &mut dense[root as usize];
+        if *d == u32::MAX {
+            *d = first.len() as u32;
+            first.push(id);
+        } else {
+            let f = &mut first[*d as usize];
+            *f = (*f).min(id);
+        }
+        *d
+    };
     let mut component = vec![None; m];
     for c in 0..g.num_cells() as u32 {
-        for i in core_range(c) {
-            component[i] = Some(uf.find(unit(c, i)));
+        let cr = core_range(c);
+        if all_whole {
+            // One union-find unit per cell: its core points share its root.
+            let Some(&min_id) = ids[cr.clone()].iter().min() else {
+                continue;
+            };
+            let d = dense_of(uf.find(c), min_id);
+            component[cr].fill(Some(d));
+        } else {
+            for i in cr {
+                component[i] = Some(dense_of(uf.find(i as u32), ids[i]));
+            }
         }
     }
     let reach2 = th.same2.max(th.diff2);
@@ -570,26 +597,9 @@ fn cluster_group(
                 }
             }
             if let Some((_, _, u)) = best {
-                component[i] = Some(uf.find(u));
+                component[i] = Some(dense_of(uf.find(u), ids[i]));
             }
         }
-    }
-    // Renumber roots densely (any order; global ids are assigned later), noting each
-    // component's smallest point index (which orders the global ids). Roots are
-    // union-find elements, so a table over them replaces a hash map.
-    let mut dense = vec![u32::MAX; uf.0.len()];
-    let mut first: Vec<u32> = Vec::new();
-    for (c, &id) in component.iter_mut().zip(g.grid.ids()) {
-        let Some(c) = c else { continue };
-        let d = &mut dense[*c as usize];
-        if *d == u32::MAX {
-            *d = first.len() as u32;
-            first.push(id);
-        } else {
-            let f = &mut first[*d as usize];
-            *f = (*f).min(id);
-        }
-        *c = *d;
     }
     GroupResult {
         ids: Vec::new(),
