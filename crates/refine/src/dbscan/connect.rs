@@ -111,20 +111,48 @@ pub(super) fn connect(
     // component only, in both directions: a pair with a cell outside it is met from that
     // cell, and a pair inside it is joined already. On a body surface the largest
     // component holds almost every cell, so few cells look their far shell up.
+    // Per component of the near pass (by its root): its cells, and the box of its core
+    // points.
     let mut size = vec![0u32; ncells];
+    let mut comp_box = vec![Aabb::EMPTY; ncells];
+    let mut near_root = vec![u32::MAX; ncells];
     for c in 0..ncells as u32 {
         if has_core(c) {
-            size[uf.find(c) as usize] += 1;
+            let r = uf.find(c) as usize;
+            near_root[c as usize] = r as u32;
+            size[r] += 1;
+            comp_box[r].union(&core_box[c as usize]);
         }
     }
     // A cell of the largest component (its root may change as others join it).
     let Some(largest) = (0..ncells as u32).max_by_key(|&r| size[r as usize]) else {
         return (uf, all_whole);
     };
+    // The components whose box lies within reach of another's: only they can be joined
+    // by a far pair (its core points lie in both boxes). With many components the
+    // pairwise test costs more than it saves, and every component counts as near one.
+    let roots: Vec<u32> = (0..ncells as u32)
+        .filter(|&r| size[r as usize] > 0)
+        .collect();
+    let mut near_other = vec![roots.len() > MAX_COMPONENT_PAIRS_OF; ncells];
+    if roots.len() <= MAX_COMPONENT_PAIRS_OF {
+        for (i, &a) in roots.iter().enumerate() {
+            for &b in &roots[i + 1..] {
+                if comp_box[a as usize].gap2(&comp_box[b as usize]) <= reach2 {
+                    near_other[a as usize] = true;
+                    near_other[b as usize] = true;
+                }
+            }
+        }
+    }
     for c in 0..ncells as u32 {
         // Skipped: `c` is joined to the largest component, so is every cell skipped, and
-        // a pair of cells not both skipped is met from the other one.
+        // a pair of cells not both skipped is met from the other one. Also skipped: `c`'s
+        // component of the near pass has no other within reach (no far pair joins it).
         if !has_core(c) || uf.find(c) == uf.find(largest) {
+            continue;
+        }
+        if !near_other[near_root[c as usize] as usize] {
             continue;
         }
         let n = g
@@ -142,6 +170,10 @@ pub(super) fn connect(
     }
     (uf, all_whole)
 }
+
+/// The far pass tests the components' boxes pairwise (to skip those with no other within
+/// reach) when there are at most this many components.
+const MAX_COMPONENT_PAIRS_OF: usize = 128;
 
 /// Some pair of core points, one from each range, within eps (whole single-label cells).
 fn any_pair(
