@@ -718,41 +718,118 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>
         let mut far_listed = false;
         let own = if whole { r.len() } else { 0 };
         let mut all_core = true;
-        for i in r {
-            let p = pts[i];
-            let mut count = own;
-            let mut k = 0;
-            while count < min_pts {
-                if k == cells.len() {
-                    if far_listed {
-                        break;
+        // Cells of a few points or more: their points four at a time (cell-major), each
+        // neighbour cell's box tested against four points in one pass
+        // ([`Aabb::near_far2_x4`]). Each point still walks the cells in the same order and
+        // stops where it would alone (a lane is left once its count reaches `min_pts`),
+        // so every count is the same.
+        if r.len() < LANE_CELL_POINTS {
+            for i in r {
+                let p = pts[i];
+                let mut count = own;
+                let mut k = 0;
+                while count < min_pts {
+                    if k == cells.len() {
+                        if far_listed {
+                            break;
+                        }
+                        let near = nbrs.near().len();
+                        cells.extend(nbrs.all(g)[near..].iter().map(|&d| record(d)));
+                        far_listed = true;
+                        continue;
                     }
-                    let near = nbrs.near().len();
-                    cells.extend(nbrs.all(g)[near..].iter().map(|&d| record(d)));
-                    far_listed = true;
-                    continue;
+                    let n = cells[k];
+                    k += 1;
+                    let (near2, far2) = n.bbox.near_far2(p);
+                    if near2 > eps2 {
+                        continue;
+                    }
+                    let run = n.start as usize..n.end as usize;
+                    if far2 <= eps2 {
+                        count += run.len();
+                    } else {
+                        count = soa.count_within(p, run, eps2, count, min_pts);
+                    }
                 }
-                let n = cells[k];
-                k += 1;
-                let (near2, far2) = n.bbox.near_far2(p);
-                if near2 > eps2 {
-                    continue;
+                core[i] = count >= min_pts;
+                all_core &= core[i];
+            }
+        } else {
+            // Counts and lane masks in u32 (four to a vector): counts are at most the
+            // group's points (u32 ids), and `min_pts` is at most their number here.
+            let need = min_pts as u32;
+            for s in r.clone().step_by(4) {
+                let lanes = (r.end - s).min(4);
+                let (mut x, mut y, mut z) = ([0f32; 4], [0f32; 4], [0f32; 4]);
+                x[..lanes].copy_from_slice(&soa.x[s..s + lanes]);
+                y[..lanes].copy_from_slice(&soa.y[s..s + lanes]);
+                z[..lanes].copy_from_slice(&soa.z[s..s + lanes]);
+                let mut count = [own as u32; 4];
+                let mut active = [0u32; 4];
+                for (l, a) in active.iter_mut().enumerate() {
+                    *a = mask(l < lanes && own < min_pts);
                 }
-                let run = n.start as usize..n.end as usize;
-                if far2 <= eps2 {
-                    count += run.len();
-                } else {
-                    count = soa.count_within(p, run, eps2, count, min_pts);
+                let mut k = 0;
+                while active != [0; 4] {
+                    if k == cells.len() {
+                        if far_listed {
+                            break;
+                        }
+                        let near = nbrs.near().len();
+                        cells.extend(nbrs.all(g)[near..].iter().map(|&d| record(d)));
+                        far_listed = true;
+                        continue;
+                    }
+                    let n = cells[k];
+                    k += 1;
+                    let (near2, far2) = n.bbox.near_far2_x4(&x, &y, &z);
+                    let len = n.end - n.start;
+                    let mut partial = [0u32; 4];
+                    for l in 0..4 {
+                        let reach = active[l] & mask(near2[l] <= eps2);
+                        let all = reach & mask(far2[l] <= eps2);
+                        count[l] += all & len;
+                        partial[l] = reach & !all;
+                    }
+                    if partial != [0; 4] {
+                        let run = n.start as usize..n.end as usize;
+                        for l in 0..4 {
+                            if partial[l] != 0 {
+                                let p = [x[l], y[l], z[l]];
+                                count[l] = soa.count_within(
+                                    p,
+                                    run.clone(),
+                                    eps2,
+                                    count[l] as usize,
+                                    min_pts,
+                                ) as u32;
+                            }
+                        }
+                    }
+                    for l in 0..4 {
+                        active[l] &= mask(count[l] < need);
+                    }
+                }
+                for l in 0..lanes {
+                    core[s + l] = count[l] >= need;
+                    all_core &= core[s + l];
                 }
             }
-            core[i] = count >= min_pts;
-            all_core &= core[i];
         }
         if !all_core {
             border.push(c, nbrs.all(g));
         }
     }
     (core, border)
+}
+
+/// Cells of at least this many points count their points four at a time in core counting.
+const LANE_CELL_POINTS: usize = 3;
+
+/// All ones when `b`, else zero: a lane mask.
+#[inline(always)]
+fn mask(b: bool) -> u32 {
+    0u32.wrapping_sub(u32::from(b))
 }
 
 /// Point coordinates split by axis, m, in the grid's stored order.

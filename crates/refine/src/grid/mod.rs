@@ -128,6 +128,34 @@ impl Aabb {
         (g0 * g0 + g1 * g1 + g2 * g2, f0 * f0 + f1 * f1 + f2 * f2)
     }
 
+    /// [`Aabb::near_far2`] of four points given by axis (`x[l], y[l], z[l]`): each lane
+    /// runs the same operations in the same order, so the bounds are the same bits, four
+    /// at a time.
+    #[inline(always)]
+    pub(crate) fn near_far2_x4(
+        &self,
+        x: &[f32; 4],
+        y: &[f32; 4],
+        z: &[f32; 4],
+    ) -> ([f32; 4], [f32; 4]) {
+        let gf = |a: usize, q: &[f32; 4]| {
+            let (mut g, mut f) = ([0f32; 4], [0f32; 4]);
+            for l in 0..4 {
+                let (below, above) = (self.lo[a] - q[l], q[l] - self.hi[a]);
+                g[l] = max_finite(max_finite(below, above), 0.0);
+                f[l] = max_finite(below.abs(), above.abs());
+            }
+            (g, f)
+        };
+        let ((g0, f0), (g1, f1), (g2, f2)) = (gf(0, x), gf(1, y), gf(2, z));
+        let (mut near, mut far) = ([0f32; 4], [0f32; 4]);
+        for l in 0..4 {
+            near[l] = g0[l] * g0[l] + g1[l] * g1[l] + g2[l] * g2[l];
+            far[l] = f0[l] * f0[l] + f1[l] * f1[l] + f2[l] * f2[l];
+        }
+        (near, far)
+    }
+
     /// Squared distance from `q` to the box (0 inside): a lower bound of [`dist2`] to any
     /// point inside it, exact in f32 as [`Aabb::near_far2`]'s.
     #[inline]
