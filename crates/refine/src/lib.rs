@@ -259,7 +259,13 @@ fn apply_steps_with(
         .map(|(c, &l)| c.map_or(l, |c| labels_after_remove[c as usize]))
         .collect();
     if noise {
-        let is_noise: Vec<bool> = clustering.cluster_of.iter().map(Option::is_none).collect();
+        // The noise flags, for the searches and votes below; N's shared search (the
+        // paper's nearest rule with `nearest` given) does without.
+        let is_noise: Vec<bool> = if cfg.noise == NoiseMode::Nearest && nearest.is_some() {
+            Vec::new()
+        } else {
+            clustering.cluster_of.iter().map(Option::is_none).collect()
+        };
         // The labels the parser doubted: a wider vote (see `reassign_doubted_wide`), from
         // the clustered labels as they are before N.
         let wide = doubted
@@ -544,13 +550,12 @@ pub fn refine_variants_with(
                 let want_nearest = cfg.noise == NoiseMode::Nearest && runs.iter().any(Steps::noise);
                 let (structure, cells) = analyse_person_with(pos, cluster_lab, cfg, want_nearest);
                 let nearest = want_nearest.then(|| {
-                    let is_noise: Vec<bool> = structure
-                        .clustering
-                        .cluster_of
-                        .iter()
-                        .map(Option::is_none)
-                        .collect();
-                    NoiseNearest::with_index(pos, &is_noise, cfg.eps_m, cells)
+                    NoiseNearest::of_clustering(
+                        pos,
+                        &structure.clustering.cluster_of,
+                        cfg.eps_m,
+                        cells,
+                    )
                 });
                 let evidence = PersonEvidence {
                     label_probs: probs,
