@@ -858,7 +858,7 @@ impl Soa {
     /// [`LANES`] and stopping after the block that reaches `need` (a core test only needs
     /// to know that the count reached it). Each test computes [`dist2`]'s expression in
     /// its order (`p - q` per axis, `dx² + dy² + dz²`), so the answers are the same bits.
-    #[inline]
+    #[inline(always)]
     fn count_within(
         &self,
         p: Vec3,
