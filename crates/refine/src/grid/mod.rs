@@ -596,6 +596,33 @@ impl CellGrid {
         }
     }
 
+    /// Calls `f` with every cell holding points in the 3×3×3 block of keys around `k`,
+    /// `k`'s own cell left out, in key order, reading the dense table by rows; false
+    /// (nothing called) when the look-up is hashed or the block is not wholly inside the
+    /// table.
+    #[inline]
+    pub(crate) fn for_each_in_block3(&self, k: [i32; 3], mut f: impl FnMut(u32)) -> bool {
+        let CellLookup::Dense { lo, dims, table } = &self.lookup else {
+            return false;
+        };
+        let o = [0, 1, 2].map(|a| i64::from(k[a]) - i64::from(lo[a]));
+        if (0..3).any(|a| o[a] < 1 || o[a] + 1 >= dims[a]) {
+            return false;
+        }
+        let centre = (o[2] * dims[1] + o[1]) * dims[0] + o[0];
+        for dz in -1i64..=1 {
+            for dy in -1i64..=1 {
+                let mid = (centre + (dz * dims[1] + dy) * dims[0]) as usize;
+                for (dx, &c) in table[mid - 1..=mid + 1].iter().enumerate() {
+                    if c != EMPTY && (dz, dy, dx) != (0, 0, 1) {
+                        f(c);
+                    }
+                }
+            }
+        }
+        true
+    }
+
     /// Neighbourhood walker for `offsets` (each within the grid's padding on every axis):
     /// see [`CellGrid::near_cell`].
     pub(crate) fn offsets(&self, offsets: &[[i32; 3]]) -> Offsets {

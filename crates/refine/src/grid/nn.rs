@@ -356,17 +356,24 @@ impl NnIndex {
                 }
             }
             cells.clear();
-            for dz in -1..=1 {
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
-                        let n = [k[0] + dx, k[1] + dy, k[2] + dz];
-                        if (dx, dy, dz) == (0, 0, 0) {
-                            continue;
-                        }
-                        if let Some(c) = self.grid.cell(n) {
-                            let lb = self.cell_box[c as usize].dist2(q);
-                            if best.is_none_or(|(b2, _)| lb <= b2) {
-                                cells.push((lb, c));
+            let mut consider = |c: u32| {
+                let lb = self.cell_box[c as usize].dist2(q);
+                if best.is_none_or(|(b2, _)| lb <= b2) {
+                    cells.push((lb, c));
+                }
+            };
+            // The other cells of the 3×3×3 block: by rows of the table when the block lies
+            // inside it (one bounds check per row), else key by key.
+            if !self.grid.for_each_in_block3(k, &mut consider) {
+                for dz in -1..=1 {
+                    for dy in -1..=1 {
+                        for dx in -1..=1 {
+                            let n = [k[0] + dx, k[1] + dy, k[2] + dz];
+                            if (dx, dy, dz) == (0, 0, 0) {
+                                continue;
+                            }
+                            if let Some(c) = self.grid.cell(n) {
+                                consider(c);
                             }
                         }
                     }
