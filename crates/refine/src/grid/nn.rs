@@ -659,7 +659,7 @@ impl NnIndex {
 
     /// Makes `best` the nearest of itself and the points of cell `c` to `q` (ties: the
     /// smaller id), run by run when the cell has runs.
-    #[inline]
+    #[inline(always)]
     fn scan_cell(&self, q: Vec3, c: usize, best: &mut Option<(f32, u32)>) {
         if self.runs.is_empty() {
             self.scan_points(q, self.grid.range(c as u32), best);
@@ -680,7 +680,7 @@ impl NnIndex {
     /// farther than `best` (most of them once `best` is near) is passed over after four
     /// distances and one comparison; the others are updated one point at a time, with
     /// [`dist2`]'s values, so the answer is the same.
-    #[inline]
+    #[inline(always)]
     fn scan_points(&self, q: Vec3, r: std::ops::Range<usize>, best: &mut Option<(f32, u32)>) {
         let (ids, pts) = (&self.grid.ids()[r.clone()], &self.grid.pts()[r]);
         let update = |best: &mut Option<(f32, u32)>, d2: f32, j: u32| {
