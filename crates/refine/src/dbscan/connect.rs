@@ -16,7 +16,11 @@ pub(super) fn connect(
 ) -> (UnionFind, bool) {
     let ncells = g.num_cells();
     let core_range = |c: u32| g.grid.range(c).start..core_end[c as usize] as usize;
-    let has_core = |c: u32| core_end[c as usize] as usize > g.grid.range(c).start;
+    // Per cell: whether it holds a core point (read for every neighbour of every cell).
+    let core_cells: Vec<bool> = (0..ncells as u32)
+        .map(|c| core_end[c as usize] as usize > g.grid.range(c).start)
+        .collect();
+    let has_core = |c: u32| core_cells[c as usize];
     let reach2 = th.same2.max(th.diff2);
     let all_whole = g.whole.iter().all(|&w| w);
     let unit = |c: u32, i: usize| -> u32 { if all_whole { c } else { i as u32 } };
