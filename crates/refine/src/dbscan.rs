@@ -117,24 +117,35 @@ pub(crate) fn dbscan_with_cells(
     // so that their cells line up (N's index is then built by merging them).
     // Each group's points with their tight box (the box of the group's grid).
     let groups: Vec<(Vec<u32>, Aabb)> = if separate_labels {
-        let mut g: Vec<(Vec<u32>, Aabb)> = vec![(Vec::new(), Aabb::EMPTY); NUM_CLASSES];
         // By runs of one label (points in image order: ~20 on sensor clouds), so that a
-        // run's indices go in one `extend` and its box grows in registers. Each group
-        // still takes its points in index order, so the lists and boxes are the same.
+        // run's indices go in one `extend` and its box grows in registers; the runs are
+        // listed first, so that each group's list is allocated at its size (no growth
+        // by reallocation and copy). Each group still takes its points in index order,
+        // so the lists and boxes are the same.
+        let mut runs: Vec<(u32, u32, usize)> = Vec::new();
+        let mut sizes = [0usize; NUM_CLASSES];
         let mut i = 0;
         while i < n {
             let l = labels[i];
             let end = labels[i..].iter().position(|&m| m != l).map_or(n, |k| i + k);
             if let Some(c) = l.class() {
-                let (ids, b) = &mut g[c.index()];
-                ids.extend(i as u32..end as u32);
-                let mut run_box = *b;
-                for &p in &positions_m[i..end] {
-                    run_box.grow(p);
-                }
-                *b = run_box;
+                runs.push((i as u32, end as u32, c.index()));
+                sizes[c.index()] += end - i;
             }
             i = end;
+        }
+        let mut g: Vec<(Vec<u32>, Aabb)> = sizes
+            .iter()
+            .map(|&m| (Vec::with_capacity(m), Aabb::EMPTY))
+            .collect();
+        for &(start, end, c) in &runs {
+            let (ids, b) = &mut g[c];
+            ids.extend(start..end);
+            let mut run_box = *b;
+            for &p in &positions_m[start as usize..end as usize] {
+                run_box.grow(p);
+            }
+            *b = run_box;
         }
         g.retain(|(v, _)| !v.is_empty());
         g
