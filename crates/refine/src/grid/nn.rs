@@ -18,6 +18,15 @@ pub(crate) struct NnScratch {
     open: Vec<(f32, u32)>,
 }
 
+/// `x.floor() as i32` without a call to `floorf` (the default x86-64 target has no
+/// rounding instruction): the truncation, one less when it lies above `x`. Equal for every
+/// `x`: both saturate beyond i32 (`saturating_sub` keeps `i32::MIN`), NaN gives 0 in both.
+#[inline(always)]
+fn floor_i32(x: f32) -> i32 {
+    let t = x as i32;
+    t.saturating_sub(i32::from(t as f32 > x))
+}
+
 /// Fine cells per block edge in [`NnIndex`].
 const NN_BLOCK_CELLS: i32 = 4;
 
@@ -303,7 +312,7 @@ impl NnIndex {
     /// The key of `q`'s cell, unclamped (may lie outside `0..dims`).
     #[inline]
     fn key_of(&self, q: Vec3) -> [i32; 3] {
-        let k = |a: usize| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32;
+        let k = |a: usize| floor_i32((q[a] - self.lo[a]) * self.inv_side);
         [k(0), k(1), k(2)]
     }
 
@@ -626,7 +635,7 @@ impl NnIndex {
         for a in 0..3 {
             let r = b2.sqrt() * (1.0 + 1e-5) + 4.0 * f32::EPSILON * (q[a].abs() + self.lo[a].abs());
             let key = |x: f32| {
-                (((x - self.lo[a]) * self.inv_side).floor() as i32).clamp(0, self.dims[a] - 1)
+                floor_i32((x - self.lo[a]) * self.inv_side).clamp(0, self.dims[a] - 1)
                     / NN_BLOCK_CELLS
             };
             range[a] = (key(q[a] - r), key(q[a] + r));
@@ -707,6 +716,46 @@ impl NnIndex {
         }
         for (&p, &j) in blocks_p.remainder().iter().zip(blocks_i.remainder()) {
             update(best, dist2(q, p), j);
+        }
+    }
+}
+
+#[cfg(test)]
+mod floor_tests {
+    use super::floor_i32;
+
+    #[test]
+    fn floor_i32_equals_floor_as_i32_at_the_edges_and_between() {
+        let edges = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1.0 - f32::EPSILON,
+            -1.0 + f32::EPSILON / 2.0,
+            8_388_607.5,
+            -8_388_607.5,
+            2_147_483_520.0,
+            2_147_483_648.0,
+            -2_147_483_648.0,
+            -2_147_483_904.0,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+        ];
+        for x in edges {
+            assert_eq!(floor_i32(x), x.floor() as i32, "x = {x:e}");
+        }
+        // A sweep of bit patterns across the whole range (every 65 521st).
+        for bits in (0..=u32::MAX).step_by(65_521) {
+            let x = f32::from_bits(bits);
+            assert_eq!(floor_i32(x), x.floor() as i32, "x = {x:e} (bits {bits:#x})");
         }
     }
 }
