@@ -772,9 +772,15 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>
             for s in r.clone().step_by(4) {
                 let lanes = (r.end - s).min(4);
                 let (mut x, mut y, mut z) = ([0f32; 4], [0f32; 4], [0f32; 4]);
-                x[..lanes].copy_from_slice(&soa.x[s..s + lanes]);
-                y[..lanes].copy_from_slice(&soa.y[s..s + lanes]);
-                z[..lanes].copy_from_slice(&soa.z[s..s + lanes]);
+                if lanes == 4 {
+                    // Four whole lanes (most groups): fixed-size loads, no call to memcpy.
+                    let four = |v: &[f32]| <[f32; 4]>::try_from(&v[s..s + 4]).unwrap_or_default();
+                    (x, y, z) = (four(&soa.x), four(&soa.y), four(&soa.z));
+                } else {
+                    x[..lanes].copy_from_slice(&soa.x[s..s + lanes]);
+                    y[..lanes].copy_from_slice(&soa.y[s..s + lanes]);
+                    z[..lanes].copy_from_slice(&soa.z[s..s + lanes]);
+                }
                 let mut count = [own as u32; 4];
                 let mut active = [0u32; 4];
                 for (l, a) in active.iter_mut().enumerate() {
