@@ -129,7 +129,10 @@ pub(crate) fn dbscan_with_cells(
         let mut i = 0;
         while i < n {
             let l = labels[i];
-            let end = labels[i..].iter().position(|&m| m != l).map_or(n, |k| i + k);
+            let end = labels[i..]
+                .iter()
+                .position(|&m| m != l)
+                .map_or(n, |k| i + k);
             if let Some(c) = l.class() {
                 runs.push((i as u32, end as u32, c.index()));
                 sizes[c.index()] += end - i;
@@ -239,8 +242,7 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
     let mut cluster_of = vec![None; n];
     let cluster_labels = if one_label {
         for (g, res) in results.iter().enumerate() {
-            for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core))
-            {
+            for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core)) {
                 is_core[i as usize] = core;
                 if let Some(c) = c {
                     cluster_of[i as usize] = Some(global[g][c as usize]);
@@ -258,8 +260,7 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
     } else {
         let mut votes = vec![[0u32; NUM_CLASSES]; comps.len()];
         for (g, res) in results.iter().enumerate() {
-            for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core))
-            {
+            for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core)) {
                 is_core[i as usize] = core;
                 if let Some(c) = c {
                     let id = global[g][c as usize];
