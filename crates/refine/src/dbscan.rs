@@ -31,7 +31,7 @@
 //! then the shortcuts that need a cell's diagonal below eps are not taken (the result is
 //! the same, found by distance tests).
 
-use crate::grid::{Aabb, Anchor, CellGrid, GridFrame, Offsets};
+use crate::grid::{Aabb, Anchor, CellGrid, EMPTY, GridFrame, Offsets, compact_block3};
 use bodyseg_core::math::{Vec3, dist2};
 use bodyseg_core::{Label, NUM_CLASSES};
 use rayon::prelude::*;
@@ -456,6 +456,29 @@ impl Neighbours {
     }
 
     fn look(&mut self, g: &GroupGrid, until: usize) {
+        if self.looked == 0 && until == NEAR_OFFSETS {
+            let mut block = [EMPTY; 27];
+            if g.grid.block3(self.at, &mut block) {
+                // The 3×3×3 block by rows of the table, listed in the order of
+                // `neighbour_offsets` (nearest first; the indices checked by a test).
+                let out: &mut [u32; 27] = (&mut self.cells[..27])
+                    .try_into()
+                    .expect("a slice of 27 is an array of 27");
+                let mut n = 0;
+                compact_block3!(
+                    block,
+                    out,
+                    n,
+                    [
+                        13, 4, 10, 12, 14, 16, 22, 1, 3, 5, 7, 9, 11, 15, 17, 19, 21, 23, 25, 0, 2,
+                        6, 8, 18, 20, 24, 26
+                    ]
+                );
+                self.len = n;
+                self.looked = until;
+                return;
+            }
+        }
         let out = &mut self.cells[self.len..];
         self.len += if self.looked == NEAR_OFFSETS && until == 125 {
             // The far cells, by rows of the look-up table (in key order).
@@ -665,4 +688,52 @@ fn core_boxes(g: &GroupGrid, core_end: &[u32]) -> Vec<Aabb> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The near lists read by rows of the table (core counting's, connecting's forward
+    /// ones) are the lists looked up offset by offset, in the same order.
+    #[test]
+    fn near_lists_by_rows_equal_the_lookups_by_offset() {
+        // Points at the centres of a 7×7×7 block of cells, a third of the cells empty.
+        let eps = 0.05f32;
+        let side = cell_side_m(eps) as f32;
+        // (A point at the origin puts the frame's corner there: the centres are then half
+        // a cell from every cell boundary.)
+        let mut pos: Vec<Vec3> = vec![[0.0; 3]];
+        for z in 0..7 {
+            for y in 0..7 {
+                for x in 0..7 {
+                    if (x * 7 + y * 3 + z * 5) % 3 != 0 {
+                        pos.push([x, y, z].map(|k| (k as f32 + 0.5) * side));
+                    }
+                }
+            }
+        }
+        let labels = vec![Label::BACKGROUND; pos.len()];
+        let idx: Vec<u32> = (0..pos.len() as u32).collect();
+        let bounds = Aabb::of(&pos);
+        let frame = GridFrame::covering_box(bounds, cell_side_m(eps));
+        let g = GroupGrid::build(&pos, &labels, &idx, eps, &frame, &bounds, false);
+        assert!(g.num_cells() > 200, "{} cells", g.num_cells());
+        let (forward, near) = forward_offsets();
+        let forward_offs = g.grid.offsets(forward);
+        let mut nbrs = Neighbours::new();
+        let (mut by_offset, mut by_rows) = (vec![0u32; 125], vec![0u32; 125]);
+        for c in 0..g.num_cells() as u32 {
+            let at = g.grid.anchor(c);
+            let n = g
+                .grid
+                .near_cells(at, &g.offs, 0..NEAR_OFFSETS, &mut by_offset);
+            assert_eq!(nbrs.at(&g, c).near(), &by_offset[..n], "near, cell {c}");
+            let n = g
+                .grid
+                .near_cells(at, &forward_offs, 0..near, &mut by_offset);
+            let m = connect::forward_near_cells(&g, at, &forward_offs, near, &mut by_rows);
+            assert_eq!(&by_rows[..m], &by_offset[..n], "forward, cell {c}");
+        }
+    }
 }

@@ -688,6 +688,24 @@ impl CellGrid {
         n
     }
 
+    /// Writes to `block` the cells of the 3×3×3 block around `at` ([`EMPTY`] where no
+    /// point lies) in key order (index `(dz + 1)·9 + (dy + 1)·3 + dx + 1`), read by rows of
+    /// the dense table (one bounds check a row, where a look-up by offset checks every
+    /// slot); false (nothing written) for a hashed look-up. The grid must have been built
+    /// with a padding of at least 1.
+    #[inline(always)]
+    pub(crate) fn block3(&self, at: Anchor, block: &mut [u32; 27]) -> bool {
+        let CellLookup::Dense { table, dims, .. } = &self.lookup else {
+            return false;
+        };
+        for (row, out) in block.chunks_exact_mut(3).enumerate() {
+            let (dz, dy) = (row as i64 / 3 - 1, row as i64 % 3 - 1);
+            let mid = (at.slot + (dz * dims[1] + dy) * dims[0]) as usize;
+            out.copy_from_slice(&table[mid - 1..mid + 2]);
+        }
+        true
+    }
+
     /// Writes to `out` the cells holding points in the shell of the 5×5×5 block around
     /// `at` (keys within 2 of `at`'s on every axis, 2 away on at least one), in key order;
     /// returns how many. The grid must have been built with a padding of at least 2. A
@@ -743,6 +761,20 @@ impl CellGrid {
         }
     }
 }
+
+/// Writes the cells of `$block` (a [`CellGrid::block3`]) that hold points, taken at the
+/// key-order indices listed (literals, so the copy is unrolled and needs no bounds
+/// checks), to `$out` from index `$n` on, advancing `$n`.
+macro_rules! compact_block3 {
+    ($block:expr, $out:expr, $n:ident, [$($k:literal),* $(,)?]) => {
+        $(
+            let c = $block[$k];
+            $out[$n] = c;
+            $n += usize::from(c != $crate::grid::EMPTY);
+        )*
+    };
+}
+pub(crate) use compact_block3;
 
 /// A cell's place for neighbour look-ups ([`CellGrid::anchor`]).
 #[derive(Clone, Copy, Debug, Default)]
