@@ -167,9 +167,12 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>
                     z[..lanes].copy_from_slice(&soa.z[s..s + lanes]);
                 }
                 let mut count = [own as u32; 4];
-                let mut active = [0u32; 4];
-                for (l, a) in active.iter_mut().enumerate() {
-                    *a = mask(l < lanes && own < min_pts);
+                // The lanes holding a point (`lanes` of them), when the own cell does not
+                // make them core already.
+                let live = mask(own < min_pts);
+                let mut active = FIRST_LANES[lanes];
+                for a in &mut active {
+                    *a &= live;
                 }
                 let mut k = 0;
                 while active != [0; 4] {
@@ -227,6 +230,15 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>
 
 /// Cells of at least this many points count their points four at a time in core counting.
 const LANE_CELL_POINTS: usize = 3;
+
+/// Per number of points in a group of lanes (0 to 4): the masks of its first lanes.
+const FIRST_LANES: [[u32; 4]; 5] = [
+    [0, 0, 0, 0],
+    [u32::MAX, 0, 0, 0],
+    [u32::MAX, u32::MAX, 0, 0],
+    [u32::MAX, u32::MAX, u32::MAX, 0],
+    [u32::MAX; 4],
+];
 
 /// All ones when `b`, else zero: a lane mask.
 #[inline(always)]
