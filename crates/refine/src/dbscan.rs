@@ -241,11 +241,13 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
     }
     let mut cluster_of = vec![None; n];
     let cluster_labels = if one_label {
-        for (g, res) in results.iter().enumerate() {
+        // Each group's table of global ids borrowed once (not looked up again per point).
+        for (res, global) in results.iter().zip(&global) {
+            let global = global.as_slice();
             for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core)) {
                 is_core[i as usize] = core;
                 if let Some(c) = c {
-                    cluster_of[i as usize] = Some(global[g][c as usize]);
+                    cluster_of[i as usize] = Some(global[c as usize]);
                 }
             }
         }
@@ -259,11 +261,12 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
             .collect()
     } else {
         let mut votes = vec![[0u32; NUM_CLASSES]; comps.len()];
-        for (g, res) in results.iter().enumerate() {
+        for (res, global) in results.iter().zip(&global) {
+            let global = global.as_slice();
             for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core)) {
                 is_core[i as usize] = core;
                 if let Some(c) = c {
-                    let id = global[g][c as usize];
+                    let id = global[c as usize];
                     cluster_of[i as usize] = Some(id);
                     if let Some(class) = labels[i as usize].class() {
                         votes[id as usize][class.index()] += 1;
