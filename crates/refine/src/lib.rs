@@ -496,7 +496,17 @@ pub fn refine_variants_with(
                 // inside (a `filter().collect()` pushed with a capacity test per point).
                 let mut idx: Vec<u32> = vec![0; cloud.len()];
                 let mut inside = 0;
-                for (i, &p) in cloud.positions_m.iter().enumerate() {
+                // Four points a test (`contains4`), the rest one by one.
+                let mut quads = cloud.positions_m.chunks_exact(4);
+                for (q, four) in (&mut quads).enumerate() {
+                    let four: &[Vec3; 4] = four.try_into().expect("chunks of 4");
+                    for (l, ok) in test.contains4(four).into_iter().enumerate() {
+                        idx[inside] = (4 * q + l) as u32;
+                        inside += usize::from(ok);
+                    }
+                }
+                let done = cloud.len() - quads.remainder().len();
+                for (i, &p) in cloud.positions_m.iter().enumerate().skip(done) {
                     idx[inside] = i as u32;
                     inside += usize::from(test.contains(p));
                 }
