@@ -450,38 +450,37 @@ impl Neighbours {
     }
 
     /// Starts over at cell `c` (its 3×3×3 block looked up).
+    #[inline(always)]
     fn at(&mut self, g: &GroupGrid, c: u32) -> &mut Self {
         self.at = g.grid.anchor(c);
         self.len = 0;
         self.looked = 0;
-        self.look(g, NEAR_OFFSETS);
+        let mut block = [EMPTY; 27];
+        if g.grid.block3(self.at, &mut block) {
+            // The 3×3×3 block by rows of the table, listed in the order of
+            // `neighbour_offsets` (nearest first; the indices checked by a test).
+            let out: &mut [u32; 27] = (&mut self.cells[..27])
+                .try_into()
+                .expect("a slice of 27 is an array of 27");
+            let mut n = 0;
+            compact_block3!(
+                block,
+                out,
+                n,
+                [
+                    13, 4, 10, 12, 14, 16, 22, 1, 3, 5, 7, 9, 11, 15, 17, 19, 21, 23, 25, 0, 2, 6,
+                    8, 18, 20, 24, 26
+                ]
+            );
+            self.len = n;
+            self.looked = NEAR_OFFSETS;
+        } else {
+            self.look(g, NEAR_OFFSETS);
+        }
         self
     }
 
     fn look(&mut self, g: &GroupGrid, until: usize) {
-        if self.looked == 0 && until == NEAR_OFFSETS {
-            let mut block = [EMPTY; 27];
-            if g.grid.block3(self.at, &mut block) {
-                // The 3×3×3 block by rows of the table, listed in the order of
-                // `neighbour_offsets` (nearest first; the indices checked by a test).
-                let out: &mut [u32; 27] = (&mut self.cells[..27])
-                    .try_into()
-                    .expect("a slice of 27 is an array of 27");
-                let mut n = 0;
-                compact_block3!(
-                    block,
-                    out,
-                    n,
-                    [
-                        13, 4, 10, 12, 14, 16, 22, 1, 3, 5, 7, 9, 11, 15, 17, 19, 21, 23, 25, 0, 2,
-                        6, 8, 18, 20, 24, 26
-                    ]
-                );
-                self.len = n;
-                self.looked = until;
-                return;
-            }
-        }
         let out = &mut self.cells[self.len..];
         self.len += if self.looked == NEAR_OFFSETS && until == 125 {
             // The far cells, by rows of the look-up table (in key order).
