@@ -150,12 +150,15 @@ impl NnIndex {
         // Kept points per slot, then cells numbered in slot (= key) order. Per part
         // cell: its kept points (a run of the merged cell when any).
         let mut table = vec![0u32; volume as usize];
-        let mut kept: Vec<u32> = Vec::new();
+        // Per part cell: its kept points and its merged cell's slot (computed once).
+        let mut kept: Vec<(u32, u32)> =
+            Vec::with_capacity(parts.iter().map(|(g, _, _)| g.num_cells()).sum());
         for (g, _, keep) in parts {
             for c in 0..g.num_cells() as u32 {
                 let k = keep[g.range(c)].iter().filter(|k| k.is_some()).count() as u32;
-                table[slot(merged(g.key(c)))] += k;
-                kept.push(k);
+                let s = slot(merged(g.key(c)));
+                table[s] += k;
+                kept.push((k, s as u32));
             }
         }
         let (keys, start) =
@@ -163,13 +166,9 @@ impl NnIndex {
         let n = start[keys.len()];
         // Runs per merged cell (CSR), then the points and runs in place.
         let mut run_start = vec![0u32; keys.len() + 1];
-        let mut k = 0;
-        for (g, _, _) in parts {
-            for c in 0..g.num_cells() as u32 {
-                if kept[k] > 0 {
-                    run_start[table[slot(merged(g.key(c)))] as usize + 1] += 1;
-                }
-                k += 1;
+        for &(k, s) in &kept {
+            if k > 0 {
+                run_start[table[s as usize] as usize + 1] += 1;
             }
         }
         for c in 0..keys.len() {
@@ -186,23 +185,25 @@ impl NnIndex {
         let mut ids = vec![0u32; n as usize];
         let mut pts = vec![[0f32; 3]; n as usize];
         let mut cell_box = vec![Aabb::EMPTY; keys.len()];
-        let mut k = 0;
+        let mut kept = kept.iter();
         for (g, part_box, keep) in parts {
             for c in 0..g.num_cells() as u32 {
-                k += 1;
-                if kept[k - 1] == 0 {
+                let Some(&(n_kept, s)) = kept.next() else {
+                    break;
+                };
+                if n_kept == 0 {
                     continue;
                 }
                 let r = g.range(c);
-                let cell = table[slot(merged(g.key(c)))] as usize;
+                let cell = table[s as usize] as usize;
                 let f = &mut fill[cell];
                 let first = *f;
-                if kept[k - 1] as usize == r.len() {
+                if n_kept as usize == r.len() {
                     // Every point kept (most cells): the run copied whole.
                     let to = first as usize..first as usize + r.len();
                     ids[to.clone()].copy_from_slice(&g.ids()[r.clone()]);
                     pts[to].copy_from_slice(&g.pts()[r]);
-                    *f += kept[k - 1];
+                    *f += n_kept;
                 } else {
                     for ((&id, &p), k) in g.ids()[r.clone()]
                         .iter()
