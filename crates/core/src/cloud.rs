@@ -97,9 +97,12 @@ impl LabeledCloud {
     /// A copy of this cloud with other labels (same points, same order).
     pub fn with_labels(&self, labels: Vec<Label>) -> LabeledCloud {
         debug_assert_eq!(labels.len(), self.len());
+        // Field by field: `..self.clone()` would copy the old labels too, only to drop them.
         LabeledCloud {
+            positions_m: self.positions_m.clone(),
             labels,
-            ..self.clone()
+            colors: self.colors.clone(),
+            origins: self.origins.clone(),
         }
     }
 }

@@ -75,6 +75,28 @@ pub struct BoxTest {
 }
 
 impl BoxTest {
+    /// [`BoxTest::contains`] of four points at once (lane by lane the same operations in
+    /// the same order, so the same answers), written so that the compiler can test the
+    /// four in vector registers.
+    #[inline]
+    pub fn contains4(&self, p: &[Vec3; 4]) -> [bool; 4] {
+        let mut d = [[0f32; 4]; 3];
+        for (l, q) in p.iter().enumerate() {
+            for a in 0..3 {
+                d[a][l] = q[a] - self.center_m[a];
+            }
+        }
+        let mut inside = [false; 4];
+        for l in 0..4 {
+            let lx = self.cos * d[0][l] + self.sin * d[1][l];
+            let ly = -self.sin * d[0][l] + self.cos * d[1][l];
+            inside[l] = (lx.abs() <= self.half_extents_m[0])
+                & (ly.abs() <= self.half_extents_m[1])
+                & (d[2][l].abs() <= self.half_extents_m[2]);
+        }
+        inside
+    }
+
     /// True when `p_world` lies inside the box or on its faces.
     #[inline]
     pub fn contains(&self, p_world: Vec3) -> bool {
@@ -129,6 +151,45 @@ mod tests {
             ..b
         };
         assert!(bad.invalid_reason().is_some());
+    }
+
+    #[test]
+    fn four_at_a_time_equals_one_at_a_time_on_and_near_the_faces() {
+        let b = PersonBox {
+            id: 0,
+            center_m: [0.5389, 0.1351, 0.9395],
+            half_extents_m: [0.4478, 0.4140, 0.9395],
+            yaw_rad: 2.1459,
+        };
+        let t = b.test();
+        // A lattice over and past the box (some points on its faces up to rounding).
+        let mut pts = Vec::new();
+        for i in 0..41 {
+            for j in 0..41 {
+                for k in 0..9 {
+                    let f = |v: i32, c: f32, h: f32| c + (v as f32 / 20.0 - 1.0) * 1.3 * h;
+                    pts.push([
+                        f(i, 0.5389, 0.6),
+                        f(j, 0.1351, 0.6),
+                        f(k * 5, 0.9395, 0.9395),
+                    ]);
+                }
+            }
+        }
+        let mut inside = 0;
+        for four in pts.chunks_exact(4) {
+            let four: &[Vec3; 4] = four.try_into().expect("chunks of 4");
+            let got = t.contains4(four);
+            for (l, p) in four.iter().enumerate() {
+                assert_eq!(got[l], t.contains(*p), "{p:?}");
+                inside += usize::from(got[l]);
+            }
+        }
+        assert!(
+            inside > 1000 && inside < pts.len() - 1000,
+            "{inside} of {}",
+            pts.len()
+        );
     }
 
     #[test]

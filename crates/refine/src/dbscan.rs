@@ -31,15 +31,17 @@
 //! then the shortcuts that need a cell's diagonal below eps are not taken (the result is
 //! the same, found by distance tests).
 
-use crate::grid::{Aabb, Anchor, CellGrid, GridFrame, Offsets};
+use crate::grid::{Aabb, Anchor, CellGrid, EMPTY, GridFrame, Offsets, compact_block3};
 use bodyseg_core::math::{Vec3, dist2};
 use bodyseg_core::{Label, NUM_CLASSES};
 use rayon::prelude::*;
 
 mod brute_force;
 mod connect;
+mod counting;
 pub use brute_force::dbscan_brute_force;
 use connect::connect;
+use counting::core_points;
 
 /// DBSCAN parameters (a subset of `RefineConfig`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,13 +119,38 @@ pub(crate) fn dbscan_with_cells(
     // so that their cells line up (N's index is then built by merging them).
     // Each group's points with their tight box (the box of the group's grid).
     let groups: Vec<(Vec<u32>, Aabb)> = if separate_labels {
-        let mut g: Vec<(Vec<u32>, Aabb)> = vec![(Vec::new(), Aabb::EMPTY); NUM_CLASSES];
-        for (i, l) in labels.iter().enumerate() {
+        // By runs of one label (points in image order: ~20 on sensor clouds), so that a
+        // run's indices go in one `extend` and its box grows in registers; the runs are
+        // listed first, so that each group's list is allocated at its size (no growth
+        // by reallocation and copy). Each group still takes its points in index order,
+        // so the lists and boxes are the same.
+        let mut runs: Vec<(u32, u32, usize)> = Vec::new();
+        let mut sizes = [0usize; NUM_CLASSES];
+        let mut i = 0;
+        while i < n {
+            let l = labels[i];
+            let end = labels[i..]
+                .iter()
+                .position(|&m| m != l)
+                .map_or(n, |k| i + k);
             if let Some(c) = l.class() {
-                let (ids, b) = &mut g[c.index()];
-                ids.push(i as u32);
-                b.grow(positions_m[i]);
+                runs.push((i as u32, end as u32, c.index()));
+                sizes[c.index()] += end - i;
             }
+            i = end;
+        }
+        let mut g: Vec<(Vec<u32>, Aabb)> = sizes
+            .iter()
+            .map(|&m| (Vec::with_capacity(m), Aabb::EMPTY))
+            .collect();
+        for &(start, end, c) in &runs {
+            let (ids, b) = &mut g[c];
+            ids.extend(start..end);
+            let mut run_box = *b;
+            for &p in &positions_m[start as usize..end as usize] {
+                run_box.grow(p);
+            }
+            *b = run_box;
         }
         g.retain(|(v, _)| !v.is_empty());
         g
@@ -182,8 +209,8 @@ struct GroupResult {
     /// reads the grid's, which are in this order, rather than a copy).
     ids: Vec<u32>,
     component: Vec<Option<u32>>,
-    /// Number of local components (they are `0..components`).
-    components: u32,
+    /// Per local component (they are `0..first.len()`), its smallest point index.
+    first: Vec<u32>,
     is_core: Vec<bool>,
     grid: Option<(CellGrid, Vec<Aabb>)>,
 }
@@ -205,17 +232,8 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
     // Per group, per local component: its global id (set below).
     let mut global: Vec<Vec<u32>> = Vec::with_capacity(results.len());
     for (g, res) in results.iter().enumerate() {
-        let idx = res.ids();
-        let ncomp = res.components;
-        let mut first = vec![u32::MAX; ncomp as usize];
-        for (&i, (&c, &core)) in idx.iter().zip(res.component.iter().zip(&res.is_core)) {
-            is_core[i as usize] = core;
-            if let Some(c) = c {
-                first[c as usize] = first[c as usize].min(i);
-            }
-        }
-        comps.extend(first.iter().enumerate().map(|(c, &f)| (f, g, c as u32)));
-        global.push(vec![u32::MAX; ncomp as usize]);
+        comps.extend(res.first.iter().enumerate().map(|(c, &f)| (f, g, c as u32)));
+        global.push(vec![u32::MAX; res.first.len()]);
     }
     comps.sort_unstable();
     for (id, &(_, g, c)) in comps.iter().enumerate() {
@@ -223,10 +241,13 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
     }
     let mut cluster_of = vec![None; n];
     let cluster_labels = if one_label {
-        for (g, res) in results.iter().enumerate() {
-            for (&i, &c) in res.ids().iter().zip(&res.component) {
+        // Each group's table of global ids borrowed once (not looked up again per point).
+        for (res, global) in results.iter().zip(&global) {
+            let global = global.as_slice();
+            for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core)) {
+                is_core[i as usize] = core;
                 if let Some(c) = c {
-                    cluster_of[i as usize] = Some(global[g][c as usize]);
+                    cluster_of[i as usize] = Some(global[c as usize]);
                 }
             }
         }
@@ -240,10 +261,12 @@ fn assemble(n: usize, labels: &[Label], results: &[GroupResult], one_label: bool
             .collect()
     } else {
         let mut votes = vec![[0u32; NUM_CLASSES]; comps.len()];
-        for (g, res) in results.iter().enumerate() {
-            for (&i, &c) in res.ids().iter().zip(&res.component) {
+        for (res, global) in results.iter().zip(&global) {
+            let global = global.as_slice();
+            for (&i, (&c, &core)) in res.ids().iter().zip(res.component.iter().zip(&res.is_core)) {
+                is_core[i as usize] = core;
                 if let Some(c) = c {
-                    let id = global[g][c as usize];
+                    let id = global[c as usize];
                     cluster_of[i as usize] = Some(id);
                     if let Some(class) = labels[i as usize].class() {
                         votes[id as usize][class.index()] += 1;
@@ -427,11 +450,33 @@ impl Neighbours {
     }
 
     /// Starts over at cell `c` (its 3×3×3 block looked up).
+    #[inline(always)]
     fn at(&mut self, g: &GroupGrid, c: u32) -> &mut Self {
         self.at = g.grid.anchor(c);
         self.len = 0;
         self.looked = 0;
-        self.look(g, NEAR_OFFSETS);
+        let mut block = [EMPTY; 27];
+        if g.grid.block3(self.at, &mut block) {
+            // The 3×3×3 block by rows of the table, listed in the order of
+            // `neighbour_offsets` (nearest first; the indices checked by a test).
+            let out: &mut [u32; 27] = (&mut self.cells[..27])
+                .try_into()
+                .expect("a slice of 27 is an array of 27");
+            let mut n = 0;
+            compact_block3!(
+                block,
+                out,
+                n,
+                [
+                    13, 4, 10, 12, 14, 16, 22, 1, 3, 5, 7, 9, 11, 15, 17, 19, 21, 23, 25, 0, 2, 6,
+                    8, 18, 20, 24, 26
+                ]
+            );
+            self.len = n;
+            self.looked = NEAR_OFFSETS;
+        } else {
+            self.look(g, NEAR_OFFSETS);
+        }
         self
     }
 
@@ -500,7 +545,7 @@ fn cluster_group(
         return GroupResult {
             ids: idx.to_vec(),
             component: vec![None; m],
-            components: 0,
+            first: Vec::new(),
             is_core: vec![false; m],
             grid: None,
         };
@@ -521,11 +566,38 @@ fn cluster_group(
     let unit = |c: u32, i: usize| -> u32 { if all_whole { c } else { i as u32 } };
     let core_range = |c: u32| g.grid.range(c).start..core_end[c as usize] as usize;
 
-    // Components of core points, border points to their nearest core point.
+    // Components of core points, border points to their nearest core point's, numbered
+    // densely as they are met (any order: global ids are assigned later, by each
+    // component's smallest point index, noted on the way in `first`). Roots are
+    // union-find elements, so a table over them replaces a hash map.
+    let ids = g.grid.ids();
+    let mut dense = vec![u32::MAX; uf.0.len()];
+    let mut first: Vec<u32> = Vec::new();
+    let mut dense_of = |root: u32, id: u32| -> u32 {
+        let d = &mut dense[root as usize];
+        if *d == u32::MAX {
+            *d = first.len() as u32;
+            first.push(id);
+        } else {
+            let f = &mut first[*d as usize];
+            *f = (*f).min(id);
+        }
+        *d
+    };
     let mut component = vec![None; m];
     for c in 0..g.num_cells() as u32 {
-        for i in core_range(c) {
-            component[i] = Some(uf.find(unit(c, i)));
+        let cr = core_range(c);
+        if all_whole {
+            // One union-find unit per cell: its core points share its root.
+            let Some(&min_id) = ids[cr.clone()].iter().min() else {
+                continue;
+            };
+            let d = dense_of(uf.find(c), min_id);
+            component[cr].fill(Some(d));
+        } else {
+            for i in cr {
+                component[i] = Some(dense_of(uf.find(i as u32), ids[i]));
+            }
         }
     }
     let reach2 = th.same2.max(th.diff2);
@@ -564,303 +636,16 @@ fn cluster_group(
                 }
             }
             if let Some((_, _, u)) = best {
-                component[i] = Some(uf.find(u));
+                component[i] = Some(dense_of(uf.find(u), ids[i]));
             }
         }
-    }
-    // Renumber roots densely (any order; global ids are assigned later). Roots are
-    // union-find elements, so a table over them replaces a hash map.
-    let mut dense = vec![u32::MAX; uf.0.len()];
-    let mut next = 0u32;
-    for c in component.iter_mut().flatten() {
-        let d = &mut dense[*c as usize];
-        if *d == u32::MAX {
-            *d = next;
-            next += 1;
-        }
-        *c = *d;
     }
     GroupResult {
         ids: Vec::new(),
         component,
-        components: next,
+        first,
         is_core: core,
         grid: Some((g.grid, g.bbox)),
-    }
-}
-
-/// Per stored point: whether it is core. `MIXED = false` when the group holds one label.
-/// Also the neighbour lists of the cells left with a non-core point.
-fn core_points<const MIXED: bool>(
-    g: &GroupGrid,
-    min_pts: usize,
-    th: Thresholds,
-) -> (Vec<bool>, BorderCells) {
-    if !MIXED {
-        return core_points_one_label(g, min_pts, th.same2);
-    }
-    let mut core = vec![false; g.grid.pts().len()];
-    let mut border = BorderCells::default();
-    let mut nbrs = Neighbours::new();
-    for c in 0..g.num_cells() as u32 {
-        let r = g.grid.range(c);
-        if r.len() >= min_pts && g.whole[c as usize] {
-            core[r].fill(true);
-            continue;
-        }
-        let nbrs = nbrs.at(g, c);
-        let mut all_core = true;
-        for i in r {
-            core[i] = is_core_point::<MIXED>(g, c, i, min_pts, th, nbrs);
-            all_core &= core[i];
-        }
-        if !all_core {
-            border.push(c, nbrs.all(g));
-        }
-    }
-    (core, border)
-}
-
-/// The full neighbour lists (as [`Neighbours::all`] gives them) of the cells where core
-/// counting left a non-core point, in cell order: the cells the border pass visits. A
-/// point is found non-core only after its count walked every neighbour cell, so the list
-/// is at hand then, and the border pass does not look the 125 cells up again.
-#[derive(Default)]
-struct BorderCells {
-    cells: Vec<u32>,
-    start: Vec<u32>,
-    nbrs: Vec<u32>,
-}
-
-impl BorderCells {
-    fn push(&mut self, c: u32, nbrs: &[u32]) {
-        self.cells.push(c);
-        self.start.push(self.nbrs.len() as u32);
-        self.nbrs.extend_from_slice(nbrs);
-    }
-
-    /// The list of the `k`-th cell pushed.
-    fn list(&self, k: usize) -> &[u32] {
-        let end = self
-            .start
-            .get(k + 1)
-            .map_or(self.nbrs.len(), |&e| e as usize);
-        &self.nbrs[self.start[k] as usize..end]
-    }
-}
-
-/// A neighbour cell as the core test of one cell's points reads it: copied once per cell
-/// into a short list that stays in L1 while each of the cell's points walks it.
-#[derive(Clone, Copy)]
-struct NearCell {
-    bbox: Aabb,
-    start: u32,
-    end: u32,
-}
-
-/// [`core_points`] for a group of one label (every pair of points within eps are
-/// neighbours): the hot loop of the clustering.
-fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>, BorderCells) {
-    let pts = g.grid.pts();
-    let mut core = vec![false; pts.len()];
-    let mut border = BorderCells::default();
-    // The coordinates by axis (structure of arrays), so that the distance tests of a
-    // neighbour cell's run are counted [`LANES`] at a time (see `Soa::count_within`).
-    let soa = Soa::of(pts);
-    let mut nbrs = Neighbours::new();
-    let mut cells: Vec<NearCell> = Vec::with_capacity(125);
-    // Every cell's entry made once (a cell is the neighbour of ~13 others): listing a
-    // neighbour is then one copy.
-    let table: Vec<NearCell> = (0..g.num_cells() as u32)
-        .map(|d| {
-            let r = g.grid.range(d);
-            NearCell {
-                bbox: g.bbox[d as usize],
-                start: r.start as u32,
-                end: r.end as u32,
-            }
-        })
-        .collect();
-    let record = |d: u32| table[d as usize];
-    for c in 0..g.num_cells() as u32 {
-        let r = g.grid.range(c);
-        let whole = g.whole[c as usize];
-        if r.len() >= min_pts && whole {
-            core[r].fill(true);
-            continue;
-        }
-        // The own cell comes first among the neighbours; when whole it counts at once.
-        let nbrs = nbrs.at(g, c);
-        let skip = usize::from(whole);
-        cells.clear();
-        cells.extend(nbrs.near()[skip..].iter().map(|&d| record(d)));
-        let mut far_listed = false;
-        let own = if whole { r.len() } else { 0 };
-        let mut all_core = true;
-        for i in r {
-            let p = pts[i];
-            let mut count = own;
-            let mut k = 0;
-            while count < min_pts {
-                if k == cells.len() {
-                    if far_listed {
-                        break;
-                    }
-                    let near = nbrs.near().len();
-                    cells.extend(nbrs.all(g)[near..].iter().map(|&d| record(d)));
-                    far_listed = true;
-                    continue;
-                }
-                let n = cells[k];
-                k += 1;
-                let (near2, far2) = n.bbox.near_far2(p);
-                if near2 > eps2 {
-                    continue;
-                }
-                let run = n.start as usize..n.end as usize;
-                if far2 <= eps2 {
-                    count += run.len();
-                } else {
-                    count = soa.count_within(p, run, eps2, count, min_pts);
-                }
-            }
-            core[i] = count >= min_pts;
-            all_core &= core[i];
-        }
-        if !all_core {
-            border.push(c, nbrs.all(g));
-        }
-    }
-    (core, border)
-}
-
-/// Point coordinates split by axis, m, in the grid's stored order.
-struct Soa {
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
-}
-
-/// Lanes of one branch-free block of distance tests in [`Soa::count_within`]. Four, not
-/// eight: most runs are short (a median of 2–19 points per cell on sensor clouds), and a
-/// run's tail past the last block is tested one point at a time (callgrind, synth 100k:
-/// 170.83M instructions per refinement with 4, 171.45M with 8).
-const LANES: usize = 4;
-
-impl Soa {
-    fn of(pts: &[Vec3]) -> Soa {
-        Soa {
-            x: pts.iter().map(|p| p[0]).collect(),
-            y: pts.iter().map(|p| p[1]).collect(),
-            z: pts.iter().map(|p| p[2]).collect(),
-        }
-    }
-
-    /// `count` plus the stored points of `run` within `eps2` of `p`, counted in blocks of
-    /// [`LANES`] and stopping after the block that reaches `need` (a core test only needs
-    /// to know that the count reached it). Each test computes [`dist2`]'s expression in
-    /// its order (`p - q` per axis, `dx² + dy² + dz²`), so the answers are the same bits.
-    #[inline]
-    fn count_within(
-        &self,
-        p: Vec3,
-        run: std::ops::Range<usize>,
-        eps2: f32,
-        mut count: usize,
-        need: usize,
-    ) -> usize {
-        let (xs, ys, zs) = (&self.x[run.clone()], &self.y[run.clone()], &self.z[run]);
-        let within = |x: f32, y: f32, z: f32| usize::from(dist2(p, [x, y, z]) <= eps2);
-        let blocks = xs.len() / LANES;
-        for b in 0..blocks {
-            let s = b * LANES;
-            let (bx, by, bz) = (&xs[s..s + LANES], &ys[s..s + LANES], &zs[s..s + LANES]);
-            let mut hits = 0;
-            for l in 0..LANES {
-                hits += within(bx[l], by[l], bz[l]);
-            }
-            count += hits;
-            if count >= need {
-                return count;
-            }
-        }
-        for t in blocks * LANES..xs.len() {
-            count += within(xs[t], ys[t], zs[t]);
-        }
-        count
-    }
-}
-
-/// True when stored point `i` (in cell `c`, whose neighbours are `nbrs`) has at least
-/// `min_pts` neighbours within eps.
-#[inline]
-fn is_core_point<const MIXED: bool>(
-    g: &GroupGrid,
-    c: u32,
-    i: usize,
-    min_pts: usize,
-    th: Thresholds,
-    nbrs: &mut Neighbours,
-) -> bool {
-    let p = g.grid.pts()[i];
-    let li = g.lbl[i];
-    let mut count = 0usize;
-    // The point's own cell comes first among its neighbours; when its diameter is below
-    // eps and it holds one label, all of it counts and it is not visited again.
-    let mut skip = 0;
-    if g.whole[c as usize] {
-        count = g.grid.range(c).len();
-        if count >= min_pts {
-            return true;
-        }
-        skip = 1;
-    }
-    for &d in &nbrs.near()[skip..] {
-        count += neighbours_in::<MIXED>(g, p, li, d, th);
-        if count >= min_pts {
-            return true;
-        }
-    }
-    let near = nbrs.near().len();
-    for &d in &nbrs.all(g)[near..] {
-        count += neighbours_in::<MIXED>(g, p, li, d, th);
-        if count >= min_pts {
-            return true;
-        }
-    }
-    false
-}
-
-/// How many points of cell `d` are neighbours of `p` (label `li`): none when the cell's
-/// box lies beyond eps, all when it lies within (and holds `li` only), else counted.
-#[inline(always)]
-fn neighbours_in<const MIXED: bool>(
-    g: &GroupGrid,
-    p: Vec3,
-    li: Label,
-    d: u32,
-    th: Thresholds,
-) -> usize {
-    let d = d as usize;
-    let (near2, far2) = g.bbox[d].near_far2(p);
-    if near2 > th.reach2() {
-        return 0;
-    }
-    let r = g.grid.range(d as u32);
-    if far2 <= th.same2 && (!MIXED || (g.uniform[d] && g.lbl[r.start] == li)) {
-        r.len()
-    } else if MIXED {
-        g.grid.pts()[r.clone()]
-            .iter()
-            .zip(&g.lbl[r])
-            .filter(|&(&q, &l)| dist2(p, q) <= th.get(li, l))
-            .count()
-    } else {
-        let t = th.same2;
-        g.grid.pts()[r]
-            .iter()
-            .filter(|&&q| dist2(p, q) <= t)
-            .count()
     }
 }
 
@@ -905,4 +690,52 @@ fn core_boxes(g: &GroupGrid, core_end: &[u32]) -> Vec<Aabb> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The near lists read by rows of the table (core counting's, connecting's forward
+    /// ones) are the lists looked up offset by offset, in the same order.
+    #[test]
+    fn near_lists_by_rows_equal_the_lookups_by_offset() {
+        // Points at the centres of a 7×7×7 block of cells, a third of the cells empty.
+        let eps = 0.05f32;
+        let side = cell_side_m(eps) as f32;
+        // (A point at the origin puts the frame's corner there: the centres are then half
+        // a cell from every cell boundary.)
+        let mut pos: Vec<Vec3> = vec![[0.0; 3]];
+        for z in 0..7 {
+            for y in 0..7 {
+                for x in 0..7 {
+                    if (x * 7 + y * 3 + z * 5) % 3 != 0 {
+                        pos.push([x, y, z].map(|k| (k as f32 + 0.5) * side));
+                    }
+                }
+            }
+        }
+        let labels = vec![Label::BACKGROUND; pos.len()];
+        let idx: Vec<u32> = (0..pos.len() as u32).collect();
+        let bounds = Aabb::of(&pos);
+        let frame = GridFrame::covering_box(bounds, cell_side_m(eps));
+        let g = GroupGrid::build(&pos, &labels, &idx, eps, &frame, &bounds, false);
+        assert!(g.num_cells() > 200, "{} cells", g.num_cells());
+        let (forward, near) = forward_offsets();
+        let forward_offs = g.grid.offsets(forward);
+        let mut nbrs = Neighbours::new();
+        let (mut by_offset, mut by_rows) = (vec![0u32; 125], vec![0u32; 125]);
+        for c in 0..g.num_cells() as u32 {
+            let at = g.grid.anchor(c);
+            let n = g
+                .grid
+                .near_cells(at, &g.offs, 0..NEAR_OFFSETS, &mut by_offset);
+            assert_eq!(nbrs.at(&g, c).near(), &by_offset[..n], "near, cell {c}");
+            let n = g
+                .grid
+                .near_cells(at, &forward_offs, 0..near, &mut by_offset);
+            let m = connect::forward_near_cells(&g, at, &forward_offs, near, &mut by_rows);
+            assert_eq!(&by_rows[..m], &by_offset[..n], "forward, cell {c}");
+        }
+    }
 }

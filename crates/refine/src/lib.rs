@@ -259,7 +259,13 @@ fn apply_steps_with(
         .map(|(c, &l)| c.map_or(l, |c| labels_after_remove[c as usize]))
         .collect();
     if noise {
-        let is_noise: Vec<bool> = clustering.cluster_of.iter().map(Option::is_none).collect();
+        // The noise flags, for the searches and votes below; N's shared search (the
+        // paper's nearest rule with `nearest` given) does without.
+        let is_noise: Vec<bool> = if cfg.noise == NoiseMode::Nearest && nearest.is_some() {
+            Vec::new()
+        } else {
+            clustering.cluster_of.iter().map(Option::is_none).collect()
+        };
         // The labels the parser doubted: a wider vote (see `reassign_doubted_wide`), from
         // the clustered labels as they are before N.
         let wide = doubted
@@ -437,8 +443,7 @@ pub fn refine_variants_with(
     with_clusters: bool,
 ) -> Result<RefinedVariants, RefineError> {
     cfg.validate()?;
-    cloud.validate()?;
-    cfg.validate_for_extent(extent_m(&cloud.positions_m))?;
+    cfg.validate_for_extent(validated_extent_m(cloud)?)?;
     let PointEvidence { voted, label_probs } = evidence;
     let colors = match &cloud.colors {
         _ if cfg.foreign_color_density == 0.0 => None,
@@ -491,7 +496,17 @@ pub fn refine_variants_with(
                 // inside (a `filter().collect()` pushed with a capacity test per point).
                 let mut idx: Vec<u32> = vec![0; cloud.len()];
                 let mut inside = 0;
-                for (i, &p) in cloud.positions_m.iter().enumerate() {
+                // Four points a test (`contains4`), the rest one by one.
+                let mut quads = cloud.positions_m.chunks_exact(4);
+                for (q, four) in (&mut quads).enumerate() {
+                    let four: &[Vec3; 4] = four.try_into().expect("chunks of 4");
+                    for (l, ok) in test.contains4(four).into_iter().enumerate() {
+                        idx[inside] = (4 * q + l) as u32;
+                        inside += usize::from(ok);
+                    }
+                }
+                let done = cloud.len() - quads.remainder().len();
+                for (i, &p) in cloud.positions_m.iter().enumerate().skip(done) {
                     idx[inside] = i as u32;
                     inside += usize::from(test.contains(p));
                 }
@@ -545,13 +560,12 @@ pub fn refine_variants_with(
                 let want_nearest = cfg.noise == NoiseMode::Nearest && runs.iter().any(Steps::noise);
                 let (structure, cells) = analyse_person_with(pos, cluster_lab, cfg, want_nearest);
                 let nearest = want_nearest.then(|| {
-                    let is_noise: Vec<bool> = structure
-                        .clustering
-                        .cluster_of
-                        .iter()
-                        .map(Option::is_none)
-                        .collect();
-                    NoiseNearest::with_index(pos, &is_noise, cfg.eps_m, cells)
+                    NoiseNearest::of_clustering(
+                        pos,
+                        &structure.clustering.cluster_of,
+                        cfg.eps_m,
+                        cells,
+                    )
                 });
                 let evidence = PersonEvidence {
                     label_probs: probs,
@@ -639,17 +653,30 @@ pub fn refine_variants_with(
     Ok(out)
 }
 
-/// The largest extent of `positions` along an axis, metres (0 when empty).
-fn extent_m(positions: &[Vec3]) -> f32 {
+/// [`LabeledCloud::validate`], and the largest extent of the positions along an axis,
+/// metres (0 when empty), in one pass over the positions instead of two: the pass that
+/// takes the extent also sums `x · 0` over every coordinate, which stays ±0 unless some
+/// coordinate is infinite or NaN. Any doubt (a length that differs, a non-finite
+/// coordinate) asks `validate` itself, so the errors are its own.
+fn validated_extent_m(cloud: &LabeledCloud) -> Result<f32, RefineError> {
+    let n = cloud.len();
+    let lengths_agree = cloud.labels.len() == n
+        && cloud.origins.len() == n
+        && cloud.colors.as_ref().is_none_or(|c| c.len() == n);
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
-    for p in positions {
+    let mut probe = [0f32; 3];
+    for p in &cloud.positions_m {
         for a in 0..3 {
             lo[a] = if p[a] < lo[a] { p[a] } else { lo[a] };
             hi[a] = if p[a] > hi[a] { p[a] } else { hi[a] };
+            probe[a] += p[a] * 0.0;
         }
     }
-    (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max)
+    if !lengths_agree || probe.iter().any(|&z| z != 0.0) {
+        cloud.validate()?;
+    }
+    Ok((0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max))
 }
 
 /// Fuse (§5.7): a point inside exactly one box takes that person's label; inside several,
@@ -684,6 +711,29 @@ fn fuse_labels(
     with_clusters: bool,
 ) -> (Vec<Label>, Vec<Option<(u32, u32)>>) {
     let n = cloud.len();
+    if let [(idx, r)] = people
+        && idx.len() == n
+    {
+        // One person whose box holds every point (a cloud cropped to one person; `idx` is
+        // then `0..n`): its labels are the output, as the rules below give, without the
+        // pass over the original labels and the scatter.
+        let mut labels = r.point_labels.clone();
+        for l in &mut labels {
+            if l.is_unknown() {
+                *l = Label::BACKGROUND;
+            }
+        }
+        let clusters = if with_clusters {
+            r.clustering
+                .cluster_of
+                .iter()
+                .map(|c| c.map(|c| (0, c)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        return (labels, clusters);
+    }
     // Points outside every box first (most of a room's points), then each person's
     // points over them. Two bytes per point of working memory, no per-point `Option`s:
     // this runs once per configuration on every frame.

@@ -67,10 +67,17 @@ pub fn dbscan_brute_force(
             })
         })
         .collect();
+    // Each component's smallest point index: its first point (points in index order).
+    let mut first = vec![u32::MAX; dense.len()];
+    for (i, c) in component.iter().enumerate() {
+        if let Some(c) = c {
+            first[*c as usize] = first[*c as usize].min(i as u32);
+        }
+    }
     let res = GroupResult {
         ids: idx,
         component,
-        components: dense.len() as u32,
+        first,
         is_core,
         grid: None,
     };

@@ -128,6 +128,34 @@ impl Aabb {
         (g0 * g0 + g1 * g1 + g2 * g2, f0 * f0 + f1 * f1 + f2 * f2)
     }
 
+    /// [`Aabb::near_far2`] of four points given by axis (`x[l], y[l], z[l]`): each lane
+    /// runs the same operations in the same order, so the bounds are the same bits, four
+    /// at a time.
+    #[inline(always)]
+    pub(crate) fn near_far2_x4(
+        &self,
+        x: &[f32; 4],
+        y: &[f32; 4],
+        z: &[f32; 4],
+    ) -> ([f32; 4], [f32; 4]) {
+        let gf = |a: usize, q: &[f32; 4]| {
+            let (mut g, mut f) = ([0f32; 4], [0f32; 4]);
+            for l in 0..4 {
+                let (below, above) = (self.lo[a] - q[l], q[l] - self.hi[a]);
+                g[l] = max_finite(max_finite(below, above), 0.0);
+                f[l] = max_finite(below.abs(), above.abs());
+            }
+            (g, f)
+        };
+        let ((g0, f0), (g1, f1), (g2, f2)) = (gf(0, x), gf(1, y), gf(2, z));
+        let (mut near, mut far) = ([0f32; 4], [0f32; 4]);
+        for l in 0..4 {
+            near[l] = g0[l] * g0[l] + g1[l] * g1[l] + g2[l] * g2[l];
+            far[l] = f0[l] * f0[l] + f1[l] * f1[l] + f2[l] * f2[l];
+        }
+        (near, far)
+    }
+
     /// Squared distance from `q` to the box (0 inside): a lower bound of [`dist2`] to any
     /// point inside it, exact in f32 as [`Aabb::near_far2`]'s.
     #[inline]
@@ -568,6 +596,33 @@ impl CellGrid {
         }
     }
 
+    /// Calls `f` with every cell holding points in the 3×3×3 block of keys around `k`,
+    /// `k`'s own cell left out, in key order, reading the dense table by rows; false
+    /// (nothing called) when the look-up is hashed or the block is not wholly inside the
+    /// table.
+    #[inline]
+    pub(crate) fn for_each_in_block3(&self, k: [i32; 3], mut f: impl FnMut(u32)) -> bool {
+        let CellLookup::Dense { lo, dims, table } = &self.lookup else {
+            return false;
+        };
+        let o = [0, 1, 2].map(|a| i64::from(k[a]) - i64::from(lo[a]));
+        if (0..3).any(|a| o[a] < 1 || o[a] + 1 >= dims[a]) {
+            return false;
+        }
+        let centre = (o[2] * dims[1] + o[1]) * dims[0] + o[0];
+        for dz in -1i64..=1 {
+            for dy in -1i64..=1 {
+                let mid = (centre + (dz * dims[1] + dy) * dims[0]) as usize;
+                for (dx, &c) in table[mid - 1..=mid + 1].iter().enumerate() {
+                    if c != EMPTY && (dz, dy, dx) != (0, 0, 1) {
+                        f(c);
+                    }
+                }
+            }
+        }
+        true
+    }
+
     /// Neighbourhood walker for `offsets` (each within the grid's padding on every axis):
     /// see [`CellGrid::near_cell`].
     pub(crate) fn offsets(&self, offsets: &[[i32; 3]]) -> Offsets {
@@ -633,6 +688,24 @@ impl CellGrid {
         n
     }
 
+    /// Writes to `block` the cells of the 3×3×3 block around `at` ([`EMPTY`] where no
+    /// point lies) in key order (index `(dz + 1)·9 + (dy + 1)·3 + dx + 1`), read by rows of
+    /// the dense table (one bounds check a row, where a look-up by offset checks every
+    /// slot); false (nothing written) for a hashed look-up. The grid must have been built
+    /// with a padding of at least 1.
+    #[inline(always)]
+    pub(crate) fn block3(&self, at: Anchor, block: &mut [u32; 27]) -> bool {
+        let CellLookup::Dense { table, dims, .. } = &self.lookup else {
+            return false;
+        };
+        for (row, out) in block.chunks_exact_mut(3).enumerate() {
+            let (dz, dy) = (row as i64 / 3 - 1, row as i64 % 3 - 1);
+            let mid = (at.slot + (dz * dims[1] + dy) * dims[0]) as usize;
+            out.copy_from_slice(&table[mid - 1..mid + 2]);
+        }
+        true
+    }
+
     /// Writes to `out` the cells holding points in the shell of the 5×5×5 block around
     /// `at` (keys within 2 of `at`'s on every axis, 2 away on at least one), in key order;
     /// returns how many. The grid must have been built with a padding of at least 2. A
@@ -688,6 +761,20 @@ impl CellGrid {
         }
     }
 }
+
+/// Writes the cells of `$block` (a [`CellGrid::block3`]) that hold points, taken at the
+/// key-order indices listed (literals, so the copy is unrolled and needs no bounds
+/// checks), to `$out` from index `$n` on, advancing `$n`.
+macro_rules! compact_block3 {
+    ($block:expr, $out:expr, $n:ident, [$($k:literal),* $(,)?]) => {
+        $(
+            let c = $block[$k];
+            $out[$n] = c;
+            $n += usize::from(c != $crate::grid::EMPTY);
+        )*
+    };
+}
+pub(crate) use compact_block3;
 
 /// A cell's place for neighbour look-ups ([`CellGrid::anchor`]).
 #[derive(Clone, Copy, Debug, Default)]

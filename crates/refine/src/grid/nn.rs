@@ -18,6 +18,15 @@ pub(crate) struct NnScratch {
     open: Vec<(f32, u32)>,
 }
 
+/// `x.floor() as i32` without a call to `floorf` (the default x86-64 target has no
+/// rounding instruction): the truncation, one less when it lies above `x`. Equal for every
+/// `x`: both saturate beyond i32 (`saturating_sub` keeps `i32::MIN`), NaN gives 0 in both.
+#[inline(always)]
+fn floor_i32(x: f32) -> i32 {
+    let t = x as i32;
+    t.saturating_sub(i32::from(t as f32 > x))
+}
+
 /// Fine cells per block edge in [`NnIndex`].
 const NN_BLOCK_CELLS: i32 = 4;
 
@@ -141,12 +150,15 @@ impl NnIndex {
         // Kept points per slot, then cells numbered in slot (= key) order. Per part
         // cell: its kept points (a run of the merged cell when any).
         let mut table = vec![0u32; volume as usize];
-        let mut kept: Vec<u32> = Vec::new();
+        // Per part cell: its kept points and its merged cell's slot (computed once).
+        let mut kept: Vec<(u32, u32)> =
+            Vec::with_capacity(parts.iter().map(|(g, _, _)| g.num_cells()).sum());
         for (g, _, keep) in parts {
             for c in 0..g.num_cells() as u32 {
                 let k = keep[g.range(c)].iter().filter(|k| k.is_some()).count() as u32;
-                table[slot(merged(g.key(c)))] += k;
-                kept.push(k);
+                let s = slot(merged(g.key(c)));
+                table[s] += k;
+                kept.push((k, s as u32));
             }
         }
         let (keys, start) =
@@ -154,13 +166,9 @@ impl NnIndex {
         let n = start[keys.len()];
         // Runs per merged cell (CSR), then the points and runs in place.
         let mut run_start = vec![0u32; keys.len() + 1];
-        let mut k = 0;
-        for (g, _, _) in parts {
-            for c in 0..g.num_cells() as u32 {
-                if kept[k] > 0 {
-                    run_start[table[slot(merged(g.key(c)))] as usize + 1] += 1;
-                }
-                k += 1;
+        for &(k, s) in &kept {
+            if k > 0 {
+                run_start[table[s as usize] as usize + 1] += 1;
             }
         }
         for c in 0..keys.len() {
@@ -177,26 +185,36 @@ impl NnIndex {
         let mut ids = vec![0u32; n as usize];
         let mut pts = vec![[0f32; 3]; n as usize];
         let mut cell_box = vec![Aabb::EMPTY; keys.len()];
-        let mut k = 0;
+        let mut kept = kept.iter();
         for (g, part_box, keep) in parts {
             for c in 0..g.num_cells() as u32 {
-                k += 1;
-                if kept[k - 1] == 0 {
+                let Some(&(n_kept, s)) = kept.next() else {
+                    break;
+                };
+                if n_kept == 0 {
                     continue;
                 }
                 let r = g.range(c);
-                let cell = table[slot(merged(g.key(c)))] as usize;
+                let cell = table[s as usize] as usize;
                 let f = &mut fill[cell];
                 let first = *f;
-                for ((&id, &p), k) in g.ids()[r.clone()]
-                    .iter()
-                    .zip(&g.pts()[r.clone()])
-                    .zip(&keep[r])
-                {
-                    if k.is_some() {
-                        ids[*f as usize] = id;
-                        pts[*f as usize] = p;
-                        *f += 1;
+                if n_kept as usize == r.len() {
+                    // Every point kept (most cells): the run copied whole.
+                    let to = first as usize..first as usize + r.len();
+                    ids[to.clone()].copy_from_slice(&g.ids()[r.clone()]);
+                    pts[to].copy_from_slice(&g.pts()[r]);
+                    *f += n_kept;
+                } else {
+                    for ((&id, &p), k) in g.ids()[r.clone()]
+                        .iter()
+                        .zip(&g.pts()[r.clone()])
+                        .zip(&keep[r])
+                    {
+                        if k.is_some() {
+                            ids[*f as usize] = id;
+                            pts[*f as usize] = p;
+                            *f += 1;
+                        }
                     }
                 }
                 // The part's box holds all of its cell's points, the kept ones among them:
@@ -295,7 +313,7 @@ impl NnIndex {
     /// The key of `q`'s cell, unclamped (may lie outside `0..dims`).
     #[inline]
     fn key_of(&self, q: Vec3) -> [i32; 3] {
-        let k = |a: usize| ((q[a] - self.lo[a]) * self.inv_side).floor() as i32;
+        let k = |a: usize| floor_i32((q[a] - self.lo[a]) * self.inv_side);
         [k(0), k(1), k(2)]
     }
 
@@ -348,17 +366,24 @@ impl NnIndex {
                 }
             }
             cells.clear();
-            for dz in -1..=1 {
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
-                        let n = [k[0] + dx, k[1] + dy, k[2] + dz];
-                        if (dx, dy, dz) == (0, 0, 0) {
-                            continue;
-                        }
-                        if let Some(c) = self.grid.cell(n) {
-                            let lb = self.cell_box[c as usize].dist2(q);
-                            if best.is_none_or(|(b2, _)| lb <= b2) {
-                                cells.push((lb, c));
+            let mut consider = |c: u32| {
+                let lb = self.cell_box[c as usize].dist2(q);
+                if best.is_none_or(|(b2, _)| lb <= b2) {
+                    cells.push((lb, c));
+                }
+            };
+            // The other cells of the 3×3×3 block: by rows of the table when the block lies
+            // inside it (one bounds check per row), else key by key.
+            if !self.grid.for_each_in_block3(k, &mut consider) {
+                for dz in -1..=1 {
+                    for dy in -1..=1 {
+                        for dx in -1..=1 {
+                            let n = [k[0] + dx, k[1] + dy, k[2] + dz];
+                            if (dx, dy, dz) == (0, 0, 0) {
+                                continue;
+                            }
+                            if let Some(c) = self.grid.cell(n) {
+                                consider(c);
                             }
                         }
                     }
@@ -611,7 +636,7 @@ impl NnIndex {
         for a in 0..3 {
             let r = b2.sqrt() * (1.0 + 1e-5) + 4.0 * f32::EPSILON * (q[a].abs() + self.lo[a].abs());
             let key = |x: f32| {
-                (((x - self.lo[a]) * self.inv_side).floor() as i32).clamp(0, self.dims[a] - 1)
+                floor_i32((x - self.lo[a]) * self.inv_side).clamp(0, self.dims[a] - 1)
                     / NN_BLOCK_CELLS
             };
             range[a] = (key(q[a] - r), key(q[a] + r));
@@ -644,7 +669,7 @@ impl NnIndex {
 
     /// Makes `best` the nearest of itself and the points of cell `c` to `q` (ties: the
     /// smaller id), run by run when the cell has runs.
-    #[inline]
+    #[inline(always)]
     fn scan_cell(&self, q: Vec3, c: usize, best: &mut Option<(f32, u32)>) {
         if self.runs.is_empty() {
             self.scan_points(q, self.grid.range(c as u32), best);
@@ -665,7 +690,7 @@ impl NnIndex {
     /// farther than `best` (most of them once `best` is near) is passed over after four
     /// distances and one comparison; the others are updated one point at a time, with
     /// [`dist2`]'s values, so the answer is the same.
-    #[inline]
+    #[inline(always)]
     fn scan_points(&self, q: Vec3, r: std::ops::Range<usize>, best: &mut Option<(f32, u32)>) {
         let (ids, pts) = (&self.grid.ids()[r.clone()], &self.grid.pts()[r]);
         let update = |best: &mut Option<(f32, u32)>, d2: f32, j: u32| {
@@ -692,6 +717,46 @@ impl NnIndex {
         }
         for (&p, &j) in blocks_p.remainder().iter().zip(blocks_i.remainder()) {
             update(best, dist2(q, p), j);
+        }
+    }
+}
+
+#[cfg(test)]
+mod floor_tests {
+    use super::floor_i32;
+
+    #[test]
+    fn floor_i32_equals_floor_as_i32_at_the_edges_and_between() {
+        let edges = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1.0 - f32::EPSILON,
+            -1.0 + f32::EPSILON / 2.0,
+            8_388_607.5,
+            -8_388_607.5,
+            2_147_483_520.0,
+            2_147_483_648.0,
+            -2_147_483_648.0,
+            -2_147_483_904.0,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+        ];
+        for x in edges {
+            assert_eq!(floor_i32(x), x.floor() as i32, "x = {x:e}");
+        }
+        // A sweep of bit patterns across the whole range (every 65 521st).
+        for bits in (0..=u32::MAX).step_by(65_521) {
+            let x = f32::from_bits(bits);
+            assert_eq!(floor_i32(x), x.floor() as i32, "x = {x:e} (bits {bits:#x})");
         }
     }
 }

@@ -44,6 +44,22 @@ impl NoiseNearest {
         Self::with_index(positions_m, is_noise, eps_m, None)
     }
 
+    /// [`NoiseNearest::with_index`] with the noise read from a clustering's `cluster_of`
+    /// (noise: `None`), without a list of flags.
+    pub(crate) fn of_clustering(
+        positions_m: &[Vec3],
+        cluster_of: &[Option<u32>],
+        eps_m: f32,
+        index: Option<NnIndex>,
+    ) -> Self {
+        let noise: Vec<u32> = (0..positions_m.len() as u32)
+            .filter(|&i| cluster_of[i as usize].is_none())
+            .collect();
+        Self::with_noise(positions_m, noise, eps_m, index, |i| {
+            cluster_of[i as usize].is_some()
+        })
+    }
+
     /// [`NoiseNearest::new`] with the index of the clustered points when it was built
     /// already (DBSCAN's cells, [`crate::dbscan::dbscan_with_cells`]): it must hold
     /// exactly the points with `!is_noise`.
@@ -56,6 +72,18 @@ impl NoiseNearest {
         let noise: Vec<u32> = (0..positions_m.len() as u32)
             .filter(|&i| is_noise[i as usize])
             .collect();
+        Self::with_noise(positions_m, noise, eps_m, index, |i| !is_noise[i as usize])
+    }
+
+    /// [`NoiseNearest::with_index`] with the noise points listed (`noise`, in point order)
+    /// and `clustered(i)` telling the others.
+    fn with_noise(
+        positions_m: &[Vec3],
+        noise: Vec<u32>,
+        eps_m: f32,
+        index: Option<NnIndex>,
+        clustered: impl Fn(u32) -> bool,
+    ) -> Self {
         if noise.len() == positions_m.len() {
             return NoiseNearest {
                 pairs: Vec::new(),
@@ -64,7 +92,7 @@ impl NoiseNearest {
         }
         let index = index.unwrap_or_else(|| {
             let clustered: Vec<u32> = (0..positions_m.len() as u32)
-                .filter(|&i| !is_noise[i as usize])
+                .filter(|&i| clustered(i))
                 .collect();
             NnIndex::new(positions_m, &clustered, eps_m)
         });
