@@ -1,8 +1,8 @@
 //! The O(n²) reference DBSCAN: the oracle of the property tests (moved out of `dbscan.rs`
 //! to keep that file under the 1000-line limit).
 
-use super::{GroupResult, Thresholds, assemble};
-use crate::dbscan::{Clustering, DbscanParams};
+use super::group::{Clustering, DbscanParams};
+use super::group::{GroupResult, Thresholds, assemble};
 use bodyseg_core::Label;
 use bodyseg_core::math::{Vec3, dist2};
 use rustc_hash::FxHashMap;

@@ -1,7 +1,7 @@
 //! Connecting core points into clusters (moved out of `dbscan.rs` to keep that file under
 //! the 1000-line limit).
 
-use super::{GroupGrid, NEAR_OFFSETS, Thresholds, UnionFind, forward_offsets};
+use super::group::{GroupGrid, NEAR_OFFSETS, Thresholds, UnionFind, forward_offsets};
 use crate::grid::{Aabb, Anchor, EMPTY, Offsets, compact_block3};
 use bodyseg_core::math::dist2;
 

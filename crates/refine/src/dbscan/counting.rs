@@ -1,7 +1,7 @@
 //! Core counting: which points have at least `min_points` neighbours within eps (moved
 //! out of `dbscan.rs` to keep that file under the 1000-line limit).
 
-use super::{GroupGrid, Neighbours, Thresholds};
+use super::group::{GroupGrid, Neighbours, Thresholds};
 use crate::grid::Aabb;
 use bodyseg_core::Label;
 use bodyseg_core::math::{Vec3, dist2};
