@@ -381,20 +381,12 @@ impl CellGrid {
     /// looked up in a hash map.
     pub(crate) fn new(positions: &[Vec3], ids: &[u32], keys: &[[i32; 3]], pad: i32) -> Self {
         debug_assert_eq!(ids.len(), keys.len());
-        let m = ids.len();
         let pad = pad.clamp(0, 4);
         let (lo, hi) = key_bounds(keys);
-        let dims = [0, 1, 2]
-            .map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * i64::from(pad)).max(1) as u64);
-        let volume = dims.iter().try_fold(1u64, |v, &d| v.checked_mul(d));
-        let limit = (m as u64)
-            .saturating_mul(COUNTING_FACTOR)
-            .max(COUNTING_ALWAYS);
-        match volume {
-            Some(volume) if m > 0 && volume <= limit => {
-                let corner = [0, 1, 2].map(|a| i64::from(lo[a]) - i64::from(pad));
+        match counting_table(lo, hi, pad, ids.len()) {
+            Some((corner, dims, volume)) => {
                 let slots = keys.iter().map(|k| slot_of(*k, corner, dims)).collect();
-                Self::counted(positions, ids, slots, corner, dims, volume as usize)
+                Self::counted(positions, ids, slots, corner, dims, volume)
             }
             _ => Self::sorted(positions, ids, keys, pad),
         }
@@ -413,18 +405,10 @@ impl CellGrid {
         bounds: &Aabb,
         pad: i32,
     ) -> Self {
-        let m = ids.len();
         let pad = pad.clamp(0, 4);
         let (lo, hi) = (frame.key(bounds.lo), frame.key(bounds.hi));
-        let dims = [0, 1, 2]
-            .map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * i64::from(pad)).max(1) as u64);
-        let volume = dims.iter().try_fold(1u64, |v, &d| v.checked_mul(d));
-        let limit = (m as u64)
-            .saturating_mul(COUNTING_FACTOR)
-            .max(COUNTING_ALWAYS);
-        match volume {
-            Some(volume) if m > 0 && volume <= limit => {
-                let corner = [0, 1, 2].map(|a| i64::from(lo[a]) - i64::from(pad));
+        match counting_table(lo, hi, pad, ids.len()) {
+            Some((corner, dims, volume)) => {
                 let slots = ids
                     .iter()
                     .map(|&id| {
@@ -432,7 +416,7 @@ impl CellGrid {
                         slot_of(frame.key_above_corner(p), corner, dims)
                     })
                     .collect();
-                Self::counted(positions, ids, slots, corner, dims, volume as usize)
+                Self::counted(positions, ids, slots, corner, dims, volume)
             }
             _ => {
                 let keys: Vec<[i32; 3]> = ids
@@ -828,6 +812,28 @@ impl CellLookup {
             ),
         }
     }
+}
+
+/// The dense table of a grid of `m` points with keys in `lo..=hi` padded by `pad` cells on
+/// every side: its first slot's key (`corner`), its dimensions and its number of slots,
+/// or `None` when it would be too sparse for counting (more than `COUNTING_FACTOR` slots
+/// per point beyond `COUNTING_ALWAYS`) or there are no points: then the keys are sorted.
+fn counting_table(
+    lo: [i32; 3],
+    hi: [i32; 3],
+    pad: i32,
+    m: usize,
+) -> Option<([i64; 3], [u64; 3], usize)> {
+    let dims = [0, 1, 2]
+        .map(|a| (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * i64::from(pad)).max(1) as u64);
+    let volume = dims.iter().try_fold(1u64, |v, &d| v.checked_mul(d))?;
+    let limit = (m as u64)
+        .saturating_mul(COUNTING_FACTOR)
+        .max(COUNTING_ALWAYS);
+    (m > 0 && volume <= limit).then(|| {
+        let corner = [0, 1, 2].map(|a| i64::from(lo[a]) - i64::from(pad));
+        (corner, dims, volume as usize)
+    })
 }
 
 /// The smallest and largest key per axis (`i32::MAX` and `i32::MIN` when there is none).
