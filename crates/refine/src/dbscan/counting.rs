@@ -77,6 +77,26 @@ struct NearCell {
 
 /// [`core_points`] for a group of one label (every pair of points within eps are
 /// neighbours): the hot loop of the clustering.
+/// At the end of a walk's list: appends `nbrs`' far cells (beyond the 3×3×3 block) to
+/// `cells` the first time, returning true (walk on); false once they were listed (the walk
+/// is over). One function for the one-point and four-lane walks.
+#[inline(always)]
+fn list_far_cells(
+    cells: &mut Vec<NearCell>,
+    far_listed: &mut bool,
+    nbrs: &mut Neighbours,
+    g: &GroupGrid,
+    table: &[NearCell],
+) -> bool {
+    if *far_listed {
+        return false;
+    }
+    let near = nbrs.near().len();
+    cells.extend(nbrs.all(g)[near..].iter().map(|&d| table[d as usize]));
+    *far_listed = true;
+    true
+}
+
 fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>, BorderCells) {
     let pts = g.grid.pts();
     let mut core = vec![false; pts.len()];
@@ -98,7 +118,6 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>
             }
         })
         .collect();
-    let record = |d: u32| table[d as usize];
     for c in 0..g.num_cells() as u32 {
         let r = g.grid.range(c);
         let whole = g.whole[c as usize];
@@ -110,7 +129,7 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>
         let nbrs = nbrs.at(g, c);
         let skip = usize::from(whole);
         cells.clear();
-        cells.extend(nbrs.near()[skip..].iter().map(|&d| record(d)));
+        cells.extend(nbrs.near()[skip..].iter().map(|&d| table[d as usize]));
         let mut far_listed = false;
         let own = if whole { r.len() } else { 0 };
         let mut all_core = true;
@@ -126,12 +145,9 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>
                 let mut k = 0;
                 while count < min_pts {
                     if k == cells.len() {
-                        if far_listed {
+                        if !list_far_cells(&mut cells, &mut far_listed, nbrs, g, &table) {
                             break;
                         }
-                        let near = nbrs.near().len();
-                        cells.extend(nbrs.all(g)[near..].iter().map(|&d| record(d)));
-                        far_listed = true;
                         continue;
                     }
                     let n = cells[k];
@@ -177,12 +193,9 @@ fn core_points_one_label(g: &GroupGrid, min_pts: usize, eps2: f32) -> (Vec<bool>
                 let mut k = 0;
                 while active != [0; 4] {
                     if k == cells.len() {
-                        if far_listed {
+                        if !list_far_cells(&mut cells, &mut far_listed, nbrs, g, &table) {
                             break;
                         }
-                        let near = nbrs.near().len();
-                        cells.extend(nbrs.all(g)[near..].iter().map(|&d| record(d)));
-                        far_listed = true;
                         continue;
                     }
                     let n = cells[k];
