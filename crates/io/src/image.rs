@@ -182,17 +182,8 @@ pub fn read_rgb_image(path: &Path) -> Result<RgbImage, IoError> {
 /// # Errors
 /// As [`read_rgb_image`], without the read.
 pub fn parse_rgb_image(bytes: &[u8], path_for_errors: &Path) -> Result<RgbImage, IoError> {
-    let path = path_for_errors;
-    let decode_err = |cause: String| IoError::Decode {
-        cause,
-        path: path.to_path_buf(),
-    };
-    let format = image::guess_format(bytes).map_err(|e| decode_err(e.to_string()))?;
-    if !matches!(format, ImageFormat::Png | ImageFormat::Jpeg) {
-        return Err(decode_err(format!(
-            "{format:?} images are not supported (PNG or JPEG)"
-        )));
-    }
+    let decode_err = |cause: String| decode_error(path_for_errors, cause);
+    let format = color_file_format(bytes, path_for_errors)?.image_format();
     let decoded = decode(bytes, format).map_err(|e| decode_err(e.to_string()))?;
     let rgb = decoded.into_rgb8();
     let (width, height) = (rgb.width(), rgb.height());
@@ -221,6 +212,35 @@ pub struct ColorFile {
     pub width: u32,
     /// Height, pixels (from the header).
     pub height: u32,
+}
+
+impl ColorFileFormat {
+    fn image_format(self) -> ImageFormat {
+        match self {
+            ColorFileFormat::Png => ImageFormat::Png,
+            ColorFileFormat::Jpeg => ImageFormat::Jpeg,
+        }
+    }
+}
+
+/// The format of a colour image file from its content (not its extension): PNG or JPEG,
+/// anything else an [`IoError::Decode`] naming the file.
+fn color_file_format(bytes: &[u8], path_for_errors: &Path) -> Result<ColorFileFormat, IoError> {
+    match image::guess_format(bytes).map_err(|e| decode_error(path_for_errors, e.to_string()))? {
+        ImageFormat::Png => Ok(ColorFileFormat::Png),
+        ImageFormat::Jpeg => Ok(ColorFileFormat::Jpeg),
+        other => Err(decode_error(
+            path_for_errors,
+            format!("{other:?} images are not supported (PNG or JPEG)"),
+        )),
+    }
+}
+
+fn decode_error(path: &Path, cause: String) -> IoError {
+    IoError::Decode {
+        cause,
+        path: path.to_path_buf(),
+    }
 }
 
 impl ColorFile {
@@ -252,24 +272,9 @@ pub fn read_color_file(path: &Path) -> Result<ColorFile, IoError> {
 /// # Errors
 /// As [`read_color_file`], without the read.
 pub fn parse_color_file(bytes: Vec<u8>, path_for_errors: &Path) -> Result<ColorFile, IoError> {
-    let decode_err = |cause: String| IoError::Decode {
-        cause,
-        path: path_for_errors.to_path_buf(),
-    };
-    let format = match image::guess_format(&bytes).map_err(|e| decode_err(e.to_string()))? {
-        ImageFormat::Png => ColorFileFormat::Png,
-        ImageFormat::Jpeg => ColorFileFormat::Jpeg,
-        other => {
-            return Err(decode_err(format!(
-                "{other:?} images are not supported (PNG or JPEG)"
-            )));
-        }
-    };
-    let image_format = match format {
-        ColorFileFormat::Png => ImageFormat::Png,
-        ColorFileFormat::Jpeg => ImageFormat::Jpeg,
-    };
-    let (width, height) = ImageReader::with_format(Cursor::new(&bytes), image_format)
+    let decode_err = |cause: String| decode_error(path_for_errors, cause);
+    let format = color_file_format(&bytes, path_for_errors)?;
+    let (width, height) = ImageReader::with_format(Cursor::new(&bytes), format.image_format())
         .into_dimensions()
         .map_err(|e| decode_err(e.to_string()))?;
     if width > MAX_IMAGE_SIDE_PX || height > MAX_IMAGE_SIDE_PX {
