@@ -19,6 +19,9 @@ Output (.data/real_parsing/):
                              person objects (pascal_part) or from the connected parts of the
                              ground-truth person mask (the others, which have no instances).
                              They stand in for the boxes bodyseg finds from depth.
+                             "split": "holdout" for items the manifest marks so (images
+                             added after the rule was tuned, never looked at while tuning;
+                             scripts/score_parsing.py --split holdout), else absent.
 
 Schemes:
   "parts7"  exact Pascal-Person-Part classes (shared/ALGORITHM.md §0: 0 background, 1 head,
@@ -28,6 +31,10 @@ Schemes:
             (garments spanning several parts: dress, skirt, jumpsuit, scarf, belt, bag).
 
 Label sets and their mapping:
+  ppp_ids       Pascal-Person-Part PNG as released (pascal_person_part_gt, palette mode): the
+                pixel values are our class ids 0-6 directly (read off the four images of
+                light-weight-refinenet's examples: the shoulder-elbow segment is 3, the
+                forearm and hand 4, the thigh 5, the shin and foot 6); other values -> 255.
   ppp_palette   Pascal-Person-Part PNG in VOC palette colours (Graphonomy / Grapy-ML
                 layout, SegmentationPart/): each pixel -> the nearest of the 7 colours of
                 PPP_PALETTE (the limbs' colours are not in ALGORITHM.md §0's order; see there).
@@ -92,7 +99,8 @@ CIHP_TO_SUPER = {0: 0, 1: 1, 2: 1, 3: SUPER_ARMS, 4: 1, 5: 2, 6: IGNORE, 7: 2, 8
 ATR_TO_SUPER = {0: 0, 1: 1, 2: 1, 3: 1, 4: 2, 5: IGNORE, 6: SUPER_LEGS, 7: IGNORE, 8: IGNORE,
                 9: SUPER_LEGS, 10: SUPER_LEGS, 11: 1, 12: SUPER_LEGS, 13: SUPER_LEGS,
                 14: SUPER_ARMS, 15: SUPER_ARMS, 16: IGNORE, 17: IGNORE}
-SCHEME = {"ppp_palette": "parts7", "pascal_part": "parts7", "cihp": "super5", "lip": "super5",
+PPP_IDS = {k: k for k in range(7)}
+SCHEME = {"ppp_ids": "parts7", "ppp_palette": "parts7", "pascal_part": "parts7", "cihp": "super5", "lip": "super5",
           "atr": "super5"}
 
 
@@ -243,6 +251,8 @@ def convert_labels(label_set, data):
         return labels_pascal_part(data)
     if label_set == "ppp_palette":
         labels = labels_ppp_palette(data)
+    elif label_set == "ppp_ids":
+        labels = labels_table(data, PPP_IDS)
     elif label_set in ("cihp", "lip"):
         labels = labels_table(data, CIHP_TO_SUPER)
     elif label_set == "atr":
@@ -290,10 +300,14 @@ def main():
             buf = io.BytesIO()
             Image.fromarray(lab).save(buf, format="PNG")
             write_atomic(out / "labels" / f"{item['name']}.png", buf.getvalue())
-            index.append({"name": item["name"], "label_set": item["label_set"],
-                          "scheme": SCHEME[item["label_set"]], "repository": repo,
-                          "commit": src["commit"], "image": item["image"], "labels": item["labels"],
-                          "person_boxes": boxes})
+            entry = {"name": item["name"], "label_set": item["label_set"],
+                     "scheme": SCHEME[item["label_set"]], "repository": repo,
+                     "commit": src["commit"], "image": item["image"], "labels": item["labels"],
+                     "person_boxes": boxes}
+            split = item.get("split", src.get("split"))
+            if split is not None:
+                entry["split"] = split
+            index.append(entry)
     index.sort(key=lambda r: r["name"])
     write_atomic(out / "index.json", (json.dumps(index, indent=1) + "\n").encode())
     exact = sum(r["scheme"] == "parts7" for r in index)

@@ -17,8 +17,10 @@ Metrics (pixels pooled over the images of a set into one confusion matrix, as AL
   mean, and person-vs-background IoU.
 A class absent from both prediction and ground truth of a set is left out of the mean.
 
---split: "tune" = the even-indexed images of each set (sorted by name), "test" = the odd,
-"all" (default) = every image; the prototype's rule is tuned on "tune" only.
+--split: "tune" = the even-indexed images of each set (sorted by name) among those without a
+split in the index, "test" = the odd ones, "dev" = tune + test, "holdout" = the images the
+index marks "holdout" (added after the rule was tuned; never looked at while tuning),
+"all" (default) = every image. The rule is tuned on "tune" only.
 """
 
 import argparse
@@ -46,10 +48,18 @@ def load_index(data):
     return json.loads(path.read_text())
 
 
+SPLITS = ("all", "dev", "tune", "test", "holdout")
+
+
 def split_items(index, split):
     out = []
     for scheme in ("parts7", "super5"):
         items = sorted((r for r in index if r["scheme"] == scheme), key=lambda r: r["name"])
+        if split == "holdout":
+            out += [r for r in items if r.get("split") == "holdout"]
+            continue
+        if split != "all":
+            items = [r for r in items if r.get("split") != "holdout"]
         if split == "tune":
             items = items[0::2]
         elif split == "test":
@@ -158,7 +168,7 @@ def main(argv=None):
     ap.add_argument("--pred", action="append", required=True, metavar="NAME=DIR",
                     help="a segmenter's label PNGs (repeatable)")
     ap.add_argument("--data", default=str(DATA))
-    ap.add_argument("--split", choices=("all", "tune", "test"), default="all")
+    ap.add_argument("--split", choices=SPLITS, default="all")
     ap.add_argument("--json", help="also write the confusion matrices and metrics here")
     args = ap.parse_args(argv)
 

@@ -76,6 +76,16 @@ class Scoring(unittest.TestCase):
         self.assertFalse(tune & test)
         self.assertEqual(tune | test, {r["name"] for r in index})
 
+    def test_holdout_is_apart_from_tune_and_test(self):
+        index = [{"name": f"x{i}", "scheme": "parts7"} for i in range(6)]
+        index += [{"name": f"h{i}", "scheme": "parts7", "split": "holdout"} for i in range(3)]
+        names = {s: {r["name"] for r in sp.split_items(index, s)} for s in sp.SPLITS}
+        self.assertEqual(names["holdout"], {"h0", "h1", "h2"})
+        self.assertEqual(names["tune"], {"x0", "x2", "x4"})  # as before the hold-out existed
+        self.assertEqual(names["dev"], names["tune"] | names["test"])
+        self.assertFalse(names["dev"] & names["holdout"])
+        self.assertEqual(names["all"], names["dev"] | names["holdout"])
+
 
 class GroundTruth(unittest.TestCase):
     def test_palette_png_to_classes(self):
@@ -89,6 +99,17 @@ class GroundTruth(unittest.TestCase):
         Image.fromarray(rgb).save(buf, format="PNG")
         ids = rpd.labels_ppp_palette(buf.getvalue())
         self.assertEqual(ids.tolist(), [[0, 1, 2, 3, 4, 5, 6, 255]])
+
+    def test_ppp_ids_are_our_class_ids(self):
+        from PIL import Image
+
+        im = Image.new("P", (8, 1))  # palette-mode, as the released pascal_person_part_gt
+        im.putdata([0, 1, 2, 3, 4, 5, 6, 9])
+        im.putpalette([0, 0, 0, 128, 0, 0, 0, 128, 0] * 3)
+        buf = io.BytesIO()
+        im.save(buf, format="PNG")
+        self.assertEqual(rpd.labels_table(buf.getvalue(), rpd.PPP_IDS).tolist(),
+                         [[0, 1, 2, 3, 4, 5, 6, 255]])
 
     def test_cihp_and_atr_tables(self):
         from PIL import Image
