@@ -31,7 +31,9 @@ mod model;
 mod roi;
 
 pub use bone::{Bone, BoneShape, BoneStart, RuleConfig, bones, polygon_distance, segment_distance};
-pub use decode::{DecodedPose, decode, refine_from_heatmap};
+pub use decode::{
+    DecodedPose, average_masks, decode, mirror_crop, refine_from_heatmap, unmirror_outputs,
+};
 pub use label::{PersonLabels, SIDE_BY_SIDE_M, label_person, merge_people};
 pub use model::{HEATMAP, INPUT, NUM_LANDMARKS};
 pub use roi::{Roi, blank_outside, crop, crop_into};

@@ -4,8 +4,8 @@
 
 use crate::ParsingError;
 use crate::blazepose::{
-    DecodedPose, INPUT, NUM_LANDMARKS, PersonLabels, Roi, RuleConfig, blank_outside, crop_into,
-    decode, label_person, landmark, merge_people,
+    DecodedPose, INPUT, NUM_LANDMARKS, PersonLabels, Roi, RuleConfig, average_masks, blank_outside,
+    crop_into, decode, label_person, landmark, merge_people, mirror_crop, unmirror_outputs,
 };
 use crate::onnx::{float_dims, load_session};
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
@@ -68,6 +68,15 @@ pub struct BlazePoseOptions {
     /// blanking every run loses the context the model needs (the body beyond a tight box).
     /// Default on.
     pub blank_retry: bool,
+    /// The accepted pose's mask is averaged with the mask of a run on the mirrored crop of
+    /// the same ROI (test-time flip, [`crate::blazepose::average_masks`]); landmarks, flag
+    /// and every acceptance decision stay the first runs'. One more model run per person:
+    /// the two-person view takes a third longer (108.5 → 144.1 ms in one loaded bench run,
+    /// so ≈ 83 ms from the quiet 62.4 ms, past issue 29's 80 ms). Default off: on the real
+    /// photographs (docs/notes/2026-12-03-blazepose.md, 2026-12-04 session 41) it moved
+    /// the tune split by noise only (mIoU 0.465 → 0.467, person 0.825 → 0.827), test and
+    /// coarse up, the hold-out down (0.355 → 0.339, person 0.694 → 0.669).
+    pub mirror_average: bool,
     /// The landmarks + mask → classes rule.
     pub rule: RuleConfig,
 }
@@ -80,6 +89,7 @@ impl Default for BlazePoseOptions {
             refine_passes: 1,
             min_pose_flag: 0.1,
             blank_retry: true,
+            mirror_average: false,
             rule: RuleConfig::default(),
         }
     }
@@ -426,10 +436,11 @@ impl Worker {
         roi: &Roi,
         model_path: &Path,
     ) -> Result<DecodedPose, ParsingError> {
-        self.run_seeing(image, roi, None, model_path)
+        self.run_seeing(image, roi, None, false, model_path)
     }
 
-    /// [`Worker::run`] on a crop blanked (black) outside `only` when given.
+    /// [`Worker::run`] on a crop blanked (black) outside `only` when given, and mirrored
+    /// (left ↔ right, the outputs brought back to the unmirrored crop) when `mirror`.
     ///
     /// # Errors
     /// [`ParsingError::Inference`] naming the model file.
@@ -438,11 +449,15 @@ impl Worker {
         image: &RgbImage,
         roi: &Roi,
         only: Option<&PixelBox>,
+        mirror: bool,
         model_path: &Path,
     ) -> Result<DecodedPose, ParsingError> {
         crop_into(image, roi, INPUT, &mut self.input);
         if let Some(keep) = only {
             blank_outside(&mut self.input, roi, INPUT, keep, 0.0);
+        }
+        if mirror {
+            mirror_crop(&mut self.input, INPUT);
         }
         let path = model_path;
         let infer = |cause: String| ParsingError::Inference {
@@ -469,6 +484,14 @@ impl Worker {
         let mask = get(MASK.0)?;
         let heatmap = get(HEATMAP.0)?;
         self.runs += 1;
+        let unmirrored;
+        let (landmarks, mask, heatmap) = if mirror {
+            unmirrored = unmirror_outputs(landmarks, mask, heatmap);
+            let [l, m, h] = &unmirrored;
+            (&l[..], &m[..], &h[..])
+        } else {
+            (landmarks, mask, heatmap)
+        };
         decode(roi, landmarks, flag, mask, Some(heatmap)).ok_or_else(|| {
             infer(format!(
                 "outputs shorter than BlazePose's ({} landmark values, {} mask values)",
@@ -501,6 +524,26 @@ impl Worker {
         model_path: &Path,
         options: &BlazePoseOptions,
     ) -> Result<DecodedPose, ParsingError> {
+        let (pose, only) = self.first_pose_in(image, bounds, model_path, options)?;
+        if !options.mirror_average || pose.flag < options.min_pose_flag {
+            return Ok(pose);
+        }
+        let mirrored = self.run_seeing(image, &pose.roi, only.as_ref(), true, model_path)?;
+        Ok(average_masks(&pose, &mirrored))
+    }
+
+    /// [`Worker::pose_in`] before the mirrored run: the pose and the box its crop was
+    /// blanked outside (the blanked retry's), if any.
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`].
+    fn first_pose_in(
+        &mut self,
+        image: &RgbImage,
+        bounds: &PixelBox,
+        model_path: &Path,
+        options: &BlazePoseOptions,
+    ) -> Result<(DecodedPose, Option<PixelBox>), ParsingError> {
         let (w, h) = (image.width as usize, image.height as usize);
         let mut pose = self.run(image, &Roi::from_box(bounds, options.roi_scale), model_path)?;
         let inside = centre_inside(&pose, bounds, w, h);
@@ -511,15 +554,16 @@ impl Worker {
                 image,
                 &Roi::from_box(bounds, RETRY_ROI_SCALE),
                 only,
+                false,
                 model_path,
             )?;
             if centre_inside(&retry, bounds, w, h) && (!inside || retry.flag > pose.flag) {
-                return Ok(retry);
+                return Ok((retry, only.copied()));
             }
             if !inside {
                 pose.flag = 0.0;
             }
-            return Ok(pose);
+            return Ok((pose, None));
         }
         for _ in 0..options.refine_passes {
             if pose.flag < MIN_FLAG_TO_REFINE || pose.xy.len() < NUM_LANDMARKS {
@@ -543,7 +587,7 @@ impl Worker {
             }
             pose = next;
         }
-        Ok(pose)
+        Ok((pose, None))
     }
 }
 

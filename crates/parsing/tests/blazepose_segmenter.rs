@@ -164,3 +164,46 @@ fn regions_at_once_label_as_one_session_does() {
         );
     }
 }
+
+/// `mirror_average` runs the model once more per person found (on the mirrored crop) and
+/// changes the mask only: on the two-person view the labels stay nearly the same (the mean
+/// of two estimates of the same people), probabilities stay in [0, 1], and both people keep
+/// their parts.
+#[test]
+fn a_mirrored_run_per_person_only_smooths_the_mask() {
+    let (image, regions) = two_people::view();
+    let model = root().join("models/blazepose_full.onnx");
+    let bytes = std::fs::read(&model).expect("committed model");
+    let label = |mirror_average: bool| {
+        let options = BlazePoseOptions {
+            mirror_average,
+            ..BlazePoseOptions::default()
+        };
+        let mut seg = BlazePoseSegmenter::new(&runtime_library(), &bytes, &model, &options)
+            .expect("the committed full model loads");
+        let labels = seg.segment_image(&image, Some(&regions)).expect("segments");
+        (labels, seg.runs())
+    };
+    let (plain, runs_plain) = label(false);
+    let (mirrored, runs_mirrored) = label(true);
+    assert_eq!(runs_mirrored, runs_plain + 2, "one more run per person");
+    let probs = mirrored.probs.as_ref().expect("probabilities");
+    assert!(probs.iter().all(|p| (0.0..=1.0).contains(p)));
+    let body = |l: &[Label]| l.iter().filter(|l| **l != Label::BACKGROUND).count();
+    let (a, b) = (body(&plain.labels), body(&mirrored.labels));
+    // The same people: their body pixels agree within a tenth (a border a pixel or two
+    // wide moves), and most pixels keep their class.
+    assert!(a.abs_diff(b) * 10 <= a, "body pixels {a} → {b}");
+    let same = plain
+        .labels
+        .iter()
+        .zip(&mirrored.labels)
+        .filter(|(p, q)| p == q)
+        .count();
+    assert!(
+        same * 100 >= plain.labels.len() * 99,
+        "{same} of {} pixels kept their class",
+        plain.labels.len()
+    );
+    assert_ne!(plain.labels, mirrored.labels, "the mask changed somewhere");
+}

@@ -116,3 +116,81 @@ pub fn decode(
             .collect(),
     })
 }
+
+/// The landmark that each landmark becomes in the mirror image (left ↔ right of
+/// MediaPipe's pose topology: eyes, ears, mouth corners, arms, hands, legs, feet; the nose
+/// and the alignment and auxiliary points 33–38 stay).
+pub(crate) fn mirrored_landmark(i: usize) -> usize {
+    match i {
+        1..=3 => i + 3,
+        4..=6 => i - 3,
+        7..=32 if i % 2 == 1 => i + 1,
+        8..=32 => i - 1,
+        _ => i,
+    }
+}
+
+/// Mirrors a crop (NHWC, `size`×`size`×3) left ↔ right in place.
+pub fn mirror_crop(input: &mut [f32], size: usize) {
+    for row in input.chunks_exact_mut(size * 3) {
+        for i in 0..size / 2 {
+            for c in 0..3 {
+                row.swap(i * 3 + c, (size - 1 - i) * 3 + c);
+            }
+        }
+    }
+}
+
+/// The outputs of a run on a mirrored crop ([`mirror_crop`]) brought back to the
+/// unmirrored crop: x → 256 − x (tensor pixel edges), left and right landmarks swapped
+/// (the model names a person's own left, which the mirror shows on the right), mask rows
+/// and heatmap rows reversed (heatmap channels swapped as the landmarks). Buffers shorter
+/// than the model's come back as they are.
+pub fn unmirror_outputs(landmarks: &[f32], mask: &[f32], heatmap: &[f32]) -> [Vec<f32>; 3] {
+    let mut lm = landmarks.to_vec();
+    if landmarks.len() >= NUM_LANDMARKS * 5 {
+        for i in 0..NUM_LANDMARKS {
+            let j = mirrored_landmark(i);
+            lm[i * 5..i * 5 + 5].copy_from_slice(&landmarks[j * 5..j * 5 + 5]);
+            lm[i * 5] = INPUT as f32 - lm[i * 5];
+        }
+    }
+    let mut m = mask.to_vec();
+    if mask.len() >= INPUT * INPUT {
+        for row in m[..INPUT * INPUT].chunks_exact_mut(INPUT) {
+            row.reverse();
+        }
+    }
+    let mut h = heatmap.to_vec();
+    let cells = HEATMAP * HEATMAP * NUM_LANDMARKS;
+    if heatmap.len() >= cells {
+        for r in 0..HEATMAP {
+            for c in 0..HEATMAP {
+                for i in 0..NUM_LANDMARKS {
+                    let src =
+                        (r * HEATMAP + (HEATMAP - 1 - c)) * NUM_LANDMARKS + mirrored_landmark(i);
+                    h[(r * HEATMAP + c) * NUM_LANDMARKS + i] = heatmap[src];
+                }
+            }
+        }
+    }
+    [lm, m, h]
+}
+
+/// `pose` with its mask averaged with `mirrored`'s (the decoding of a run on the mirrored
+/// crop of the same ROI, [`unmirror_outputs`]): two estimates of each pixel's person
+/// probability whose errors are not mirror-symmetric (a ragged border, a thin forearm half
+/// missed), so the mean is steadier than either. Landmarks, flag and the rest stay
+/// `pose`'s: averaging the landmarks too was tried (docs/notes/2026-12-03-blazepose.md,
+/// 2026-12-04 session 41) and lost on the tune split, since the two runs may name crossed
+/// legs the other way round, and a mean of two hypotheses lies on neither limb. `pose`
+/// unchanged when the ROIs or mask sizes differ.
+pub fn average_masks(pose: &DecodedPose, mirrored: &DecodedPose) -> DecodedPose {
+    let mut out = pose.clone();
+    if pose.roi == mirrored.roi && pose.mask.len() == mirrored.mask.len() {
+        for (m, q) in out.mask.iter_mut().zip(&mirrored.mask) {
+            *m = 0.5 * (*m + q);
+        }
+    }
+    out
+}

@@ -110,6 +110,60 @@ fn heatmap_moves_a_landmark_to_its_peak() {
     assert_eq!(lm[12][0], 45.0);
 }
 
+#[test]
+fn a_mirrored_run_comes_back_to_the_unmirrored_crop() {
+    // Every pixel and channel distinct: mirroring twice is the identity, once moves
+    // column i to column 255 − i.
+    let mut crop: Vec<f32> = (0..INPUT * INPUT * 3).map(|k| k as f32).collect();
+    let original = crop.clone();
+    mirror_crop(&mut crop, INPUT);
+    assert_eq!(crop[3 * (INPUT - 1) + 2], original[2]);
+    mirror_crop(&mut crop, INPUT);
+    assert_eq!(crop, original);
+    // The mirror shows a person's left shoulder (11) where the right (12) was: a run on
+    // the mirrored crop that puts landmark 12 at x = 100 means landmark 11 at 256 − 100.
+    let mut landmarks = vec![0.0f32; NUM_LANDMARKS * 5];
+    landmarks[12 * 5..12 * 5 + 5].copy_from_slice(&[100.0, 40.0, -3.0, 1.5, 2.5]);
+    landmarks[0] = 128.5; // the nose stays the nose
+    let mask: Vec<f32> = (0..INPUT * INPUT).map(|k| (k % INPUT) as f32).collect();
+    let heat: Vec<f32> = (0..HEATMAP * HEATMAP * NUM_LANDMARKS)
+        .map(|k| k as f32)
+        .collect();
+    let [l, m, h] = unmirror_outputs(&landmarks, &mask, &heat);
+    assert_eq!(&l[11 * 5..11 * 5 + 5], &[156.0, 40.0, -3.0, 1.5, 2.5]);
+    assert_eq!(l[12 * 5], 256.0); // landmark 11's x = 0 of the mirrored run
+    assert_eq!(l[0], 127.5);
+    assert_eq!(m[0], (INPUT - 1) as f32);
+    // heatmap cell (row 0, col 0) of landmark 11 = the mirrored run's (0, 63) of 12
+    assert_eq!(h[11], heat[(HEATMAP - 1) * NUM_LANDMARKS + 12]);
+    for i in 0..NUM_LANDMARKS {
+        assert_eq!(mirrored_landmark(mirrored_landmark(i)), i);
+    }
+    let [l2, m2, h2] = unmirror_outputs(&l, &m, &h);
+    assert_eq!((l2, m2, h2), (landmarks, mask, heat));
+    // Short buffers (a malformed model) come back as they are, without a panic.
+    let [l3, m3, h3] = unmirror_outputs(&[1.0], &[2.0], &[]);
+    assert_eq!((l3, m3, h3), (vec![1.0], vec![2.0], vec![]));
+}
+
+#[test]
+fn a_pose_and_its_mirrored_run_average_their_masks_only() {
+    let pose = figure();
+    let mut mirrored = sure_pose(
+        upright_figure_xy(),
+        [50.0, 80.0],
+        160.0,
+        vec![0.5; INPUT * INPUT],
+    );
+    mirrored.xy[landmark::LEFT_ELBOW][0] += 10.0;
+    let mean = average_masks(&pose, &mirrored);
+    assert!(mean.mask.iter().all(|&m| m == 0.75));
+    assert_eq!(mean.xy, pose.xy, "landmarks stay the first run's");
+    // Another ROI: not the same crop, nothing to average.
+    mirrored.roi.side_px += 1.0;
+    assert_eq!(average_masks(&pose, &mirrored), pose);
+}
+
 /// An upright figure (image px), mask 1 everywhere.
 fn figure() -> DecodedPose {
     sure_pose(
