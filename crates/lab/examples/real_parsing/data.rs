@@ -14,6 +14,9 @@ pub struct Item {
     pub name: String,
     /// `parts7` (the 7 classes, exact) or `super5` (coarse super-classes).
     pub scheme: String,
+    /// The index's `split` when it has one (`holdout`: added after the rule was tuned,
+    /// never looked at while tuning), else `None` (the tune / test images).
+    pub split: Option<String>,
     /// Person boxes, inclusive pixel centres, image px.
     pub regions: Vec<PersonRegion>,
 }
@@ -59,6 +62,7 @@ pub fn read_index(dir: &Path) -> anyhow::Result<Vec<Item>> {
         };
         let name = field("name")?;
         let scheme = field("scheme")?;
+        let split = entry["split"].as_str().map(str::to_owned);
         let boxes = entry["person_boxes"]
             .as_array()
             .with_context(|| format!("{}: {name}: no person_boxes list", path.display()))?;
@@ -83,6 +87,7 @@ pub fn read_index(dir: &Path) -> anyhow::Result<Vec<Item>> {
         items.push(Item {
             name,
             scheme,
+            split,
             regions,
         });
     }

@@ -9,6 +9,7 @@
 //! ```
 //!
 //! KEY=VALUE (BlazePose only): `roi_scale`, `refine_passes`, `threads`, `min_pose_flag`,
+//! the switches `blank_retry`, `mirror_average`, `flat_shoulders`, `thighs_past_frame` (0/1),
 //! any numeric field of the rule's `RuleConfig` (`r_torso=0.3`, ...), and `poses=1` to
 //! write each image's poses as `<name>.poses.json` beside its PNG (for overlays). Time it with
 //! `perf stat -e task-clock,instructions:u` (the machine is shared: wall clock says little).
@@ -89,6 +90,7 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
                 "min_pose_flag" => options.min_pose_flag = value.parse().map_err(|e| bad(&e))?,
                 "poses" => write_poses = value == "1",
                 "blank_retry" => options.blank_retry = value == "1",
+                "mirror_average" => options.mirror_average = value == "1",
                 "flat_shoulders" => options.rule.flat_shoulders = value == "1",
                 "thighs_past_frame" => options.rule.thighs_past_frame = value == "1",
                 _ => match rule_field(&mut options.rule, key) {
@@ -169,8 +171,12 @@ fn main() -> anyhow::Result<()> {
         bodyseg_io::write_label_png(&out.join(format!("{}.png", item.name)), &labels)?;
     }
     let exact = items.iter().filter(|i| i.scheme == "parts7").count();
+    let holdout = items
+        .iter()
+        .filter(|i| i.split.as_deref() == Some("holdout"))
+        .count();
     eprintln!(
-        "{} images ({exact} with exact 7-class ground truth) -> {}",
+        "{} images ({exact} with exact 7-class ground truth; {holdout} hold-out) -> {}",
         items.len(),
         out.display()
     );
