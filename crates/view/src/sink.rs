@@ -8,6 +8,7 @@
 
 use bodyseg_io::DirectFile;
 use re_sdk::external::re_log_encoding::{Encoder, EncodingOptions};
+use re_sdk::log::ChunkBatcherConfig;
 use re_sdk::log::LogMsg;
 use re_sdk::sink::{LogSink, SinkFlushError};
 use std::path::Path;
@@ -20,6 +21,13 @@ use std::time::Duration;
 /// `FileSink` (its messages are chunks, so this bounds them by count, not bytes; the
 /// writer's back-pressure bounds the bytes).
 const QUEUE_MESSAGES: usize = 1024;
+
+/// Bytes of pending rows of one entity after which the SDK's batcher makes them a chunk
+/// (its default: 2 MiB). A frame's images (~0.4-0.8 MB each) then go out one row per chunk,
+/// as the clouds do, instead of two or three frames' rows being concatenated into one
+/// chunk: a copy and its fresh memory saved (docs/notes/2026-12-02-rerun.md, 2026-12-04,
+/// session 41). `RERUN_FLUSH_NUM_BYTES` still overrides it.
+const BATCH_FLUSH_BYTES: u64 = 256 << 10;
 
 enum Command {
     Write(Box<LogMsg>),
@@ -137,6 +145,13 @@ impl LogSink for RrdFileSink {
 
     fn defers_finalization_to_shutdown(&self) -> bool {
         true
+    }
+
+    fn default_batcher_config(&self) -> ChunkBatcherConfig {
+        ChunkBatcherConfig {
+            flush_num_bytes: BATCH_FLUSH_BYTES,
+            ..ChunkBatcherConfig::DEFAULT
+        }
     }
 }
 
