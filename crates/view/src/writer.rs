@@ -574,3 +574,38 @@ fn cluster_color(c: Option<(u32, u32)>) -> Rgba32 {
     let lift = |v: u8| 64 + v / 4 * 3;
     Rgba32::from_rgb(lift(r), lift(g), lift(b))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use re_sdk::external::arrow::array::Array;
+
+    #[test]
+    fn shared_positions_builds_one_array_per_slice() {
+        let a: Vec<Vec3> = vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
+        let b = a.clone();
+        let mut last = None;
+        let first = shared_positions(&mut last, &a);
+        let again = shared_positions(&mut last, &a);
+        assert!(
+            Arc::ptr_eq(&first, &again),
+            "the same slice reuses its array"
+        );
+        let other = shared_positions(&mut last, &b);
+        assert!(
+            !Arc::ptr_eq(&first, &other),
+            "another slice, even with equal values, gets its own array"
+        );
+        assert_eq!(other.len(), 2);
+        let list = other
+            .as_any()
+            .downcast_ref::<FixedSizeListArray>()
+            .expect("a FixedSizeList of 3 f32");
+        let values = list
+            .values()
+            .as_any()
+            .downcast_ref::<Float32Array>()
+            .expect("f32 values");
+        assert_eq!(values.values().to_vec(), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    }
+}
