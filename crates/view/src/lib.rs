@@ -33,6 +33,8 @@
 pub mod paths;
 
 #[cfg(feature = "rerun")]
+mod encoder;
+#[cfg(feature = "rerun")]
 mod sink;
 #[cfg(feature = "rerun")]
 mod writer;
