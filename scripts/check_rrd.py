@@ -11,8 +11,8 @@ the run's files in OUT (a run of the whole recording):
 
 - the `frame` timeline has one row per cloud in OUT/clouds/ (indices 0..n-1, the frames in
   stem order);
-- per frame, the points of world/refined + world/refined_unknown and of world/projected +
-  world/projected_unknown equal the vertex count of OUT/clouds/<stem>.ply;
+- per frame, the points of world/refined and of world/projected, and their class ids, equal
+  the vertex count of OUT/clouds/<stem>.ply (unknown points are in them with class id 255);
 - per frame, the boxes of world/boxes equal those of OUT/boxes/<stem>.json;
 - every camera's colour image (an EncodedImage with its media type: the recording's file),
   depth image, 2D labels and refined labels are there for every frame (with --recording
@@ -132,15 +132,14 @@ def main() -> int:
         want = ply_vertex_count(args.run / "clouds" / f"{stem}.ply")
         total_points += want
         for layer in ("refined", "projected"):
-            known = count(rows, f"world/{layer}", "Points3D", "positions")
-            unknown = count(rows, f"world/{layer}_unknown", "Points3D", "positions")
-            if known is None:
+            points = count(rows, f"world/{layer}", "Points3D", "positions")
+            ids = count(rows, f"world/{layer}", "Points3D", "class_ids")
+            if points is None:
                 failures.append(f"frame {stem}: no world/{layer} points")
                 continue
-            got = known + (unknown or 0)
-            if got != want:
+            if points != want or ids != want:
                 failures.append(
-                    f"frame {stem}: world/{layer} has {known} + {unknown or 0} unknown points, "
+                    f"frame {stem}: world/{layer} has {points} points and {ids} class ids, "
                     f"the PLY {want}"
                 )
         clusters = count(rows, "world/clusters", "Points3D", "positions")

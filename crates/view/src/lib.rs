@@ -25,13 +25,15 @@
 //! - Depth: the raw `u16` values with Rerun's `meter` = the camera's `depth_scale` (raw
 //!   units per metre); `depth_shift_mm` is not applied.
 //! - Class ids: our on-disk label ids (0..7, [`bodyseg_core::Class`]) with our names and
-//!   palette in an `AnnotationContext` on `world`; unknown points (id 255) are logged apart
-//!   (`…_unknown`), and id 255 in images is annotated `unknown`.
+//!   palette in an `AnnotationContext` on `world`, where id 255 is `unknown` (light grey):
+//!   unknown points stay in their cloud's entity with id 255, as unknown pixels in images.
 //! - Timelines: `frame` = the frame's index among the recording's frames (sequence);
 //!   `time` = its time stamp, when the recording has a `stamps.csv`.
 
 pub mod paths;
 
+#[cfg(feature = "rerun")]
+mod encoder;
 #[cfg(feature = "rerun")]
 mod sink;
 #[cfg(feature = "rerun")]

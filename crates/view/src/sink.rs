@@ -1,13 +1,15 @@
 //! [`RrdFileSink`]: the Rerun SDK's file sink, writing past the page cache.
 //!
-//! The same as the SDK's `FileSink` (one writer thread, a queue of 1024 messages,
-//! `re_log_encoding::Encoder` with LZ4 and the RRD footer), but the file is a
-//! [`bodyseg_io::DirectFile`]: on Linux `O_DIRECT` writes from an aligned buffer instead of
-//! copying ~11 MB a frame into the page cache, which cost most of the system time that
-//! `--rerun` added (docs/notes/2026-12-02-rerun.md, 2026-12-04).
+//! The same as the SDK's `FileSink` (one writer thread, a queue of 1024 messages, LZ4 and
+//! the RRD footer), but the file is a [`bodyseg_io::DirectFile`]: on Linux `O_DIRECT`
+//! writes from an aligned buffer instead of copying ~11 MB a frame into the page cache,
+//! which cost most of the system time that `--rerun` added (docs/notes/2026-12-02-rerun.md,
+//! 2026-12-04), and the stream is encoded by [`RrdEncoder`], the SDK encoder's format with
+//! buffers kept from one message to the next.
 
+use crate::encoder::RrdEncoder;
 use bodyseg_io::DirectFile;
-use re_sdk::external::re_log_encoding::{Encoder, EncodingOptions};
+use re_sdk::log::ChunkBatcherConfig;
 use re_sdk::log::LogMsg;
 use re_sdk::sink::{LogSink, SinkFlushError};
 use std::path::Path;
@@ -20,6 +22,13 @@ use std::time::Duration;
 /// `FileSink` (its messages are chunks, so this bounds them by count, not bytes; the
 /// writer's back-pressure bounds the bytes).
 const QUEUE_MESSAGES: usize = 1024;
+
+/// Bytes of pending rows of one entity after which the SDK's batcher makes them a chunk
+/// (its default: 2 MiB). A frame's images (~0.4-0.8 MB each) then go out one row per chunk,
+/// as the clouds do, instead of two or three frames' rows being concatenated into one
+/// chunk: a copy and its fresh memory saved (docs/notes/2026-12-02-rerun.md, 2026-12-04,
+/// session 41). `RERUN_FLUSH_NUM_BYTES` still overrides it.
+const BATCH_FLUSH_BYTES: u64 = 256 << 10;
 
 enum Command {
     Write(Box<LogMsg>),
@@ -46,9 +55,7 @@ impl RrdFileSink {
     pub(crate) fn create(path: &Path) -> Result<(RrdFileSink, Closed), String> {
         let file = DirectFile::create(path).map_err(|e| e.to_string())?;
         // As the SDK's `FileSink`: LZ4 (without it the file is ~40 % larger and no faster).
-        let options = EncodingOptions::PROTOBUF_COMPRESSED;
-        let encoder = Encoder::new_eager(re_sdk::build_info().version, options, file)
-            .map_err(|e| e.to_string())?;
+        let encoder = RrdEncoder::new(re_sdk::build_info().version, file)?;
         let (tx, rx) = sync_channel(QUEUE_MESSAGES);
         let closed: Closed = Arc::new(Mutex::new(None));
         let outcome = closed.clone();
@@ -76,7 +83,7 @@ impl RrdFileSink {
 /// The writer thread: encodes and writes each message; on a write error it drops the rest
 /// and answers every flush with the error. When the channel closes it ends the file; the
 /// first error of all, if any, is the result.
-fn write_all(mut encoder: Encoder<DirectFile>, rx: &Receiver<Command>) -> Result<(), String> {
+fn write_all(mut encoder: RrdEncoder<DirectFile>, rx: &Receiver<Command>) -> Result<(), String> {
     let mut failed: Option<String> = None;
     while let Ok(command) = rx.recv() {
         match command {
@@ -90,24 +97,19 @@ fn write_all(mut encoder: Encoder<DirectFile>, rx: &Receiver<Command>) -> Result
             Command::Flush(done) => {
                 let result = match &failed {
                     Some(e) => Err(e.clone()),
-                    None => encoder.flush_blocking().map_err(|e| e.to_string()),
+                    None => encoder.flush(),
                 };
                 done.send(result).ok();
             }
         }
     }
     if let Some(e) = failed {
-        // Unwrapped, the encoder does not try to end the file again (and warn) when dropped.
-        drop(encoder.into_inner());
         return Err(e);
     }
     // The channel is closed: end-of-stream marker and footer, the last block, then the
     // file is closed.
-    encoder
-        .finish()
-        .map_err(|e| format!("ending the file: {e}"))?;
     let file = encoder
-        .into_inner()
+        .finish()
         .map_err(|e| format!("ending the file: {e}"))?;
     file.finish().map_err(|e| format!("ending the file: {e}"))
 }
@@ -137,6 +139,13 @@ impl LogSink for RrdFileSink {
 
     fn defers_finalization_to_shutdown(&self) -> bool {
         true
+    }
+
+    fn default_batcher_config(&self) -> ChunkBatcherConfig {
+        ChunkBatcherConfig {
+            flush_num_bytes: BATCH_FLUSH_BYTES,
+            ..ChunkBatcherConfig::DEFAULT
+        }
     }
 }
 

@@ -11,12 +11,13 @@
 use crate::paths;
 use crate::{CameraView, CloudView, FrameSink, ImageFileFormat, ViewError, ViewFrame};
 use bodyseg_calib::{Intrinsics, Pose, Rig};
+use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label, LabelImage, PersonBox};
 use re_sdk::blueprint::{
     Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial2DView, Spatial3DView,
     TimeSeriesView, Vertical,
 };
-use re_sdk::external::arrow::array::{FixedSizeListArray, Float32Array, UInt16Array};
+use re_sdk::external::arrow::array::{ArrayRef, FixedSizeListArray, Float32Array, UInt16Array};
 use re_sdk::external::arrow::buffer::ScalarBuffer;
 use re_sdk::external::arrow::datatypes::{DataType, Field};
 use re_sdk::{RecordingStream, RecordingStreamBuilder, SerializedComponentBatch};
@@ -271,22 +272,16 @@ impl ViewWriter {
         {
             self.log_camera(stem, name, *scale, camera)?;
         }
-        for (layer, known, unknown, cloud) in [
-            (
-                "projected",
-                paths::PROJECTED,
-                paths::PROJECTED_UNKNOWN,
-                &frame.projected,
-            ),
-            (
-                "refined",
-                paths::REFINED,
-                paths::REFINED_UNKNOWN,
-                &frame.refined,
-            ),
+        // Projected and refined are the same points with other labels: their positions are
+        // handed to the SDK as one Arrow array, shared (reference counted), and copied once.
+        let mut positions: Option<(&[Vec3], ArrayRef)> = None;
+        for (layer, entity, cloud) in [
+            ("projected", paths::PROJECTED, frame.projected),
+            ("refined", paths::REFINED, frame.refined),
         ] {
             if let Some(cloud) = cloud {
-                self.log_cloud(stem, layer, known, unknown, cloud)?;
+                let xyz = shared_positions(&mut positions, cloud.positions_m);
+                self.log_cloud(stem, layer, entity, &cloud, xyz)?;
             }
         }
         if let (true, Some(clusters), Some(cloud)) = (
@@ -303,9 +298,10 @@ impl ViewWriter {
                 });
             }
             let colors = clusters.iter().map(|c| cluster_color(*c));
+            let xyz = shared_positions(&mut positions, cloud.positions_m);
             self.log(
                 paths::CLUSTERS,
-                &points(cloud.positions_m.as_flattened().to_vec(), None)
+                &points(xyz, None)
                     .with_colors(colors)
                     .with_radii([POINT_RADIUS_M]),
             )?;
@@ -393,13 +389,16 @@ impl ViewWriter {
         Ok(())
     }
 
+    /// Logs one cloud layer at `entity`: its positions (`xyz`, built from
+    /// `cloud.positions_m`) and one class id per point (255 for unknown points, which the
+    /// annotation context names `unknown`).
     fn log_cloud(
         &self,
         stem: &str,
         layer: &'static str,
-        known: &str,
-        unknown: &str,
+        entity: &str,
         cloud: &CloudView<'_>,
+        xyz: ArrayRef,
     ) -> Result<(), ViewError> {
         if cloud.labels.len() != cloud.positions_m.len() {
             return Err(ViewError::CloudLength {
@@ -409,31 +408,8 @@ impl ViewWriter {
                 labels: cloud.labels.len(),
             });
         }
-        let n_unknown = cloud.labels.iter().filter(|l| l.is_unknown()).count();
-        let n_known = cloud.labels.len() - n_unknown;
-        // Flat x, y, z per point: the Arrow layout of a `Position3D` batch, built here
-        // so that the SDK receives it as is (no per-point component structs).
-        let mut known_xyz = Vec::with_capacity(n_known * 3);
-        let mut known_id = Vec::with_capacity(n_known);
-        let mut unknown_xyz = Vec::with_capacity(n_unknown * 3);
-        for (p, l) in cloud.positions_m.iter().zip(cloud.labels) {
-            if l.is_unknown() {
-                unknown_xyz.extend_from_slice(p);
-            } else {
-                known_xyz.extend_from_slice(p);
-                known_id.push(u16::from(l.id()));
-            }
-        }
-        self.log(
-            known,
-            &points(known_xyz, Some(known_id)).with_radii([POINT_RADIUS_M]),
-        )?;
-        self.log(
-            unknown,
-            &points(unknown_xyz, None)
-                .with_class_ids([u16::from(Label::UNKNOWN_ID)])
-                .with_radii([POINT_RADIUS_M]),
-        )
+        let ids: Vec<u16> = cloud.labels.iter().map(|l| u16::from(l.id())).collect();
+        self.log(entity, &points(xyz, Some(ids)).with_radii([POINT_RADIUS_M]))
     }
 
     fn log(&self, entity: &str, what: &dyn re_sdk::AsComponents) -> Result<(), ViewError> {
@@ -528,20 +504,32 @@ fn pinhole(k: &Intrinsics) -> Pinhole {
     .with_principal_point([k.cx as f32, k.cy as f32])
 }
 
-/// A `Points3D` of these positions (x, y, z per point, metres) and, when given, these class
-/// ids (one per point), both handed to the SDK as ready-made Arrow arrays. Through
+/// The positions of a cloud as the Arrow array of a `Position3D` batch (x, y, z per point,
+/// metres): `last`'s array when it was built from the same slice (the projected and the
+/// refined cloud share their points), else a new one, which becomes `last`.
+fn shared_positions<'a>(last: &mut Option<(&'a [Vec3], ArrayRef)>, xyz_m: &'a [Vec3]) -> ArrayRef {
+    if let Some((slice, array)) = last
+        && std::ptr::eq(*slice, xyz_m)
+    {
+        return array.clone();
+    }
+    let xyz = Float32Array::new(ScalarBuffer::from(xyz_m.as_flattened().to_vec()), None);
+    // The datatype of `Position3D` (`Vec3D`): a non-nullable `item` of f32, 3 per point.
+    let item = Arc::new(Field::new("item", DataType::Float32, false));
+    let array: ArrayRef = Arc::new(FixedSizeListArray::new(item, 3, Arc::new(xyz), None));
+    *last = Some((xyz_m, array.clone()));
+    array
+}
+
+/// A `Points3D` of these positions ([`shared_positions`]) and, when given, these class ids
+/// (one per point), both handed to the SDK as ready-made Arrow arrays. Through
 /// `Position3D` / `ClassId` values the SDK rebuilds each array by growing a `Vec` point by
 /// point: ~16 ms of user CPU per 3-camera frame of ~350k points, and the fresh pages of
 /// its reallocations showed as system time (docs/notes/2026-12-02-rerun.md, 2026-12-03).
-fn points(xyz_m: Vec<f32>, class_ids: Option<Vec<u16>>) -> Points3D {
-    debug_assert_eq!(xyz_m.len() % 3, 0);
-    let xyz = Float32Array::new(ScalarBuffer::from(xyz_m), None);
-    // The datatype of `Position3D` (`Vec3D`): a non-nullable `item` of f32, 3 per point.
-    let item = Arc::new(Field::new("item", DataType::Float32, false));
-    let positions = FixedSizeListArray::new(item, 3, Arc::new(xyz), None);
+fn points(positions: ArrayRef, class_ids: Option<Vec<u16>>) -> Points3D {
     let mut p = Points3D::update_fields();
     p.positions = Some(SerializedComponentBatch::new(
-        Arc::new(positions),
+        positions,
         Points3D::descriptor_positions(),
     ));
     p.class_ids = class_ids.map(|ids| {
@@ -585,4 +573,39 @@ fn cluster_color(c: Option<(u32, u32)>) -> Rgba32 {
     // Lifted so that no cluster is near black (the background class's colour).
     let lift = |v: u8| 64 + v / 4 * 3;
     Rgba32::from_rgb(lift(r), lift(g), lift(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use re_sdk::external::arrow::array::Array;
+
+    #[test]
+    fn shared_positions_builds_one_array_per_slice() {
+        let a: Vec<Vec3> = vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
+        let b = a.clone();
+        let mut last = None;
+        let first = shared_positions(&mut last, &a);
+        let again = shared_positions(&mut last, &a);
+        assert!(
+            Arc::ptr_eq(&first, &again),
+            "the same slice reuses its array"
+        );
+        let other = shared_positions(&mut last, &b);
+        assert!(
+            !Arc::ptr_eq(&first, &other),
+            "another slice, even with equal values, gets its own array"
+        );
+        assert_eq!(other.len(), 2);
+        let list = other
+            .as_any()
+            .downcast_ref::<FixedSizeListArray>()
+            .expect("a FixedSizeList of 3 f32");
+        let values = list
+            .values()
+            .as_any()
+            .downcast_ref::<Float32Array>()
+            .expect("f32 values");
+        assert_eq!(values.values().to_vec(), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    }
 }
