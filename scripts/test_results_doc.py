@@ -127,6 +127,13 @@ class Document(unittest.TestCase):
         self.assertIn(f"`single` BlazePose {mrn:.2f}", self.doc)
         self.assertIn(f"`handover` BlazePose {100.0 * 100 / 216:.2f}", self.doc)
 
+    def test_error_shares_count_the_true_body_points(self):
+        # blazepose_naive, handover_2005, Reference: 70 wrong points per class, each to the
+        # next class; of the 6 x 170 true body points 5 x 70 go to another part, and the lower
+        # legs' 70 to background.
+        self.assertIn(f"BlazePose gives another body part to `handover` {100 * 350 / 1020:.1f}%", self.doc)
+        self.assertIn(f"and background to `handover` {100 * 70 / 1020:.1f}%", self.doc)
+
     def test_elapsed_time_is_written(self):
         self.assertIn("in 2 min 5 s.", self.doc)
 
