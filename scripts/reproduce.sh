@@ -13,9 +13,10 @@
 #
 #   scripts/reproduce.sh [WORK_DIR]        (default: target/reproduce; reused when run again)
 #
-# About 30 minutes on a 2-core machine (the BlazePose runs ~8 of them). A second run reuses the
-# rendered recordings (the same seeds give the same bytes) but runs every configuration
-# again: the code may have changed since.
+# About 35 minutes on a quiet 2-core machine (estimated: 22 without BlazePose, whose paper-mode
+# run takes 1.3 min; the improved refinement adds to each run); 66 minutes measured while other
+# builds shared the cores. A second run reuses the rendered recordings (the same seeds give the same bytes)
+# but runs every configuration again: the code may have changed since.
 set -euo pipefail
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
