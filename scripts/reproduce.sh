@@ -15,8 +15,8 @@
 #
 # About 35 minutes on a quiet 2-core machine (estimated: 22 without BlazePose, whose paper-mode
 # run takes 1.3 min; the improved refinement adds to each run); 66 minutes measured while other
-# builds shared the cores. A second run reuses the rendered recordings (the same seeds give the same bytes)
-# but runs every configuration again: the code may have changed since.
+# builds shared the cores. A second run reuses the rendered recordings (the same seeds give the
+# same bytes) but runs every configuration again: the code may have changed since.
 set -euo pipefail
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
