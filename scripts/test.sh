@@ -72,6 +72,9 @@ else
     echo "skipped: pip install numpy pillow scipy to test the benchmark scripts"
 fi
 
+step "python3 scripts/test_results_doc.py (docs/results.md's generator on a made-up work folder)"
+python3 scripts/test_results_doc.py
+
 step "Rerun Python SDK for tests/cli_rerun.rs (rerun-sdk[datafusion]==0.36.3 in .venv-rerun; ~4 min once)"
 # The e2e test of `--rerun` reads the .rrd back with the SDK of the Rust crate's version
 # (Cargo.toml's re_sdk); it skips, saying so, when this Python has no SDK.
