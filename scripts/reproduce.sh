@@ -12,6 +12,9 @@
 # docs/results.md.
 #
 #   scripts/reproduce.sh [WORK_DIR]        (default: target/reproduce; reused when run again)
+#   SOURCES=blazepose scripts/reproduce.sh  (re-runs only these 2D sources, of "recorded model
+#                                           blazepose", and their figure; the other sources'
+#                                           reports are read from WORK_DIR's last full run)
 #
 # About 35 minutes on a quiet 2-core machine (estimated: 22 without BlazePose, whose paper-mode
 # run takes 1.3 min; the improved refinement adds to each run); 66 minutes measured while other
@@ -22,7 +25,24 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 work="${1:-target/reproduce}"
 mkdir -p "$work"
-rm -rf "$work/runs" "$work/subset" "$work"/figure_*
+sources="${SOURCES:-recorded model blazepose}"
+for source in $sources; do
+    case $source in
+        recorded | model | blazepose) ;;
+        *) echo "reproduce.sh: SOURCES: unknown source '$source' (recorded, model, blazepose)" >&2; exit 2 ;;
+    esac
+done
+if [ "$sources" = "recorded model blazepose" ]; then
+    rm -rf "$work/runs" "$work/subset" "$work"/figure_*
+else
+    for source in $sources; do
+        if [ ! -d "$work/runs" ]; then
+            echo "reproduce.sh: SOURCES=$sources needs the reports of a full run in $work/runs" >&2
+            exit 2
+        fi
+        rm -rf "$work/runs/${source}"_*
+    done
+fi
 start=$(date +%s)
 
 echo "==> ONNX Runtime (once), release build"
@@ -63,7 +83,7 @@ convert() {
 # "model" is the bundled synthetic-trained model (parsing.segmenter = "onnx"); "blazepose" is
 # the default parser (trained on real photographs: the renders are outside its domain), named
 # here so that its rows stay BlazePose's if the default changes.
-for source in recorded model blazepose; do
+for source in $sources; do
     case $source in
         recorded) parser=(--parser recorded) ;;
         model) parser=(--parser model --set parsing.segmenter=onnx) ;;
@@ -110,6 +130,9 @@ done <<< "$recordings"
 
 elapsed=$(( $(date +%s) - start ))
 echo "==> docs/results.md"
-python3 scripts/results_doc.py "$work" "$elapsed" > docs/results.md.tmp
+# The time of the whole script is stated only for a full run.
+timing=("$elapsed")
+[ "$sources" = "recorded model blazepose" ] || timing=()
+python3 scripts/results_doc.py "$work" "${timing[@]}" > docs/results.md.tmp
 mv docs/results.md.tmp docs/results.md
 echo "done in ${elapsed} s: docs/results.md"
