@@ -104,7 +104,11 @@ class Model:
             self.pads_input = any(n.name.startswith("pad_input") for n in graph.node)
             self.uint8 = graph.input[0].type.tensor_type.elem_type == onnx.TensorProto.UINT8
             self.quant = {}  # uint8 outputs of a QDQ graph: name -> (scale, zero point)
-            if graph.output[0].type.tensor_type.elem_type == onnx.TensorProto.UINT8:
+            sidecar = self.path.with_suffix(".json")  # models/bodypix_*.json: the scales
+            if graph.output[0].type.tensor_type.elem_type == onnx.TensorProto.UINT8 and sidecar.exists():
+                outs = json.loads(sidecar.read_text())["outputs"]
+                self.quant = {n: (outs[n]["scale"], outs[n]["zero_point"]) for n in (self.seg, self.parts)}
+            elif graph.output[0].type.tensor_type.elem_type == onnx.TensorProto.UINT8:
                 tflite = self.path.parent / (self.path.name.split(".")[0] + ".tflite")
                 from ai_edge_litert.interpreter import Interpreter
                 for d in Interpreter(model_path=str(tflite)).get_output_details():
