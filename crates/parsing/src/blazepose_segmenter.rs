@@ -7,6 +7,7 @@ use crate::blazepose::{
     DecodedPose, INPUT, NUM_LANDMARKS, PersonLabels, Roi, RuleConfig, blank_outside, crop_into,
     decode, label_person, landmark, merge_people,
 };
+use crate::bodypix::{BodyPix, BodyPixOptions};
 use crate::onnx::{float_dims, load_session};
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
 use bodyseg_core::{LabelImage, RgbImage};
@@ -15,6 +16,8 @@ use ort::value::TensorRef;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+mod parts;
 
 /// Which of BlazePose's landmark models runs (the sizes MediaPipe ships).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -70,6 +73,9 @@ pub struct BlazePoseOptions {
     pub blank_retry: bool,
     /// The landmarks + mask → classes rule.
     pub rule: RuleConfig,
+    /// BodyPix's crop and threshold, when the body parts come from BodyPix
+    /// ([`BlazePoseSegmenter::with_bodypix`]).
+    pub bodypix: BodyPixOptions,
 }
 
 impl Default for BlazePoseOptions {
@@ -81,6 +87,7 @@ impl Default for BlazePoseOptions {
             min_pose_flag: 0.1,
             blank_retry: true,
             rule: RuleConfig::default(),
+            bodypix: BodyPixOptions::default(),
         }
     }
 }
@@ -173,6 +180,8 @@ struct Worker {
     input: Vec<f32>,
     /// Inferences run so far (for benches and logs).
     runs: u64,
+    /// BodyPix's session when the body parts come from it ([`parts`]).
+    bodypix: Option<BodyPix>,
 }
 
 impl std::fmt::Debug for BlazePoseSegmenter {
@@ -256,6 +265,7 @@ impl BlazePoseSegmenter {
             session,
             input: Vec::with_capacity(INPUT * INPUT * 3),
             runs: 0,
+            bodypix: None,
         };
         let narrow = if options.threads >= 2 {
             (0..options.threads)
@@ -295,6 +305,9 @@ impl BlazePoseSegmenter {
         image: &RgbImage,
         regions: Option<&[PersonRegion]>,
     ) -> Result<LabelImage, ParsingError> {
+        if self.wide.bodypix.is_some() {
+            return self.segment_with_bodypix(image, regions);
+        }
         let (w, h) = (image.width as usize, image.height as usize);
         let people: Vec<PersonLabels> = self
             .per_region(image, regions, Worker::person)?

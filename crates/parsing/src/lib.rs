@@ -41,7 +41,7 @@ pub mod transform;
 
 pub use blazepose_segmenter::{BlazePoseOptions, BlazePoseSegmenter, BlazePoseVariant};
 pub use bodypix::{BodyPix, BodyPixOptions};
-pub use config::{ParsingConfig, SegmenterKind};
+pub use config::{BodyParts, ParsingConfig, SegmenterKind};
 pub use error::ParsingError;
 pub use onnx::{OnnxOptions, OnnxSegmenter, load_runtime};
 pub use segmenter::{ParsedView, PersonRegion, PixelBox, RecordedSegmenter, Segmenter, ViewInput};

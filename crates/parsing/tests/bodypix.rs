@@ -10,7 +10,9 @@
 
 use bodyseg_core::Label;
 use bodyseg_parsing::bodypix::{merge_part_maps, part_labels};
-use bodyseg_parsing::{BodyPix, BodyPixOptions, ParsingError, PixelBox};
+use bodyseg_parsing::{
+    BlazePoseOptions, BlazePoseSegmenter, BodyPix, BodyPixOptions, ParsingError, PixelBox,
+};
 use std::path::PathBuf;
 
 #[path = "common/runtime.rs"]
@@ -150,4 +152,65 @@ fn bad_regions_give_nothing() {
         let map = bp.run_region(&image, &b, &options).expect("runs");
         assert!(map.is_some());
     }
+}
+
+fn fused(threads: usize) -> BlazePoseSegmenter {
+    let path = root().join("models/blazepose_full.onnx");
+    let bytes = std::fs::read(&path).expect("committed model");
+    let options = BlazePoseOptions {
+        threads,
+        ..BlazePoseOptions::default()
+    };
+    let segmenter = BlazePoseSegmenter::new(&runtime_library(), &bytes, &path, &options)
+        .expect("BlazePose loads");
+    let bytes = std::fs::read(model()).expect("committed model");
+    segmenter
+        .with_bodypix(&runtime_library(), &bytes, &model())
+        .expect("BodyPix loads")
+}
+
+/// BlazePose with BodyPix's parts: a view with nobody (no region) is all background; the
+/// two-person view has every body class, with probabilities in (0, 1], and the same labels
+/// with one session as with regions at once.
+#[test]
+fn fused_segmenter_labels_people_and_nobody() {
+    let (image, regions) = two_people::view();
+    let mut seg = fused(2);
+    assert!(seg.uses_bodypix());
+    let empty = seg.segment_image(&image, Some(&[])).expect("runs");
+    assert!(empty.labels.iter().all(|l| *l == Label::BACKGROUND));
+    let labels = seg.segment_image(&image, Some(&regions)).expect("runs");
+    let probs = labels.probs.as_ref().expect("probabilities");
+    for class in 1..7u8 {
+        let n = labels.labels.iter().filter(|l| l.id() == class).count();
+        assert!(n > 100, "class {class}: {n} pixels");
+    }
+    for (l, p) in labels.labels.iter().zip(probs) {
+        assert!((0.0..=1.0).contains(p), "{p}");
+        if *l != Label::BACKGROUND {
+            assert!(*p > 0.0);
+        }
+    }
+    let one = fused(1)
+        .segment_image(&image, Some(&regions))
+        .expect("runs");
+    assert_eq!(one.labels, labels.labels);
+}
+
+#[test]
+fn fused_segmenter_refuses_a_landmark_model_as_bodypix() {
+    let path = root().join("models/blazepose_full.onnx");
+    let bytes = std::fs::read(&path).expect("committed model");
+    let segmenter = BlazePoseSegmenter::new(
+        &runtime_library(),
+        &bytes,
+        &path,
+        &BlazePoseOptions::default(),
+    )
+    .expect("BlazePose loads");
+    let err = segmenter
+        .with_bodypix(&runtime_library(), &bytes, &path)
+        .expect_err("not BodyPix");
+    assert!(err.to_string().contains("blazepose_full.onnx"), "{err}");
+    assert!(matches!(err, ParsingError::NotBodyPix { .. }), "{err:?}");
 }
