@@ -40,12 +40,15 @@ pub const PART_TO_CLASS: [u8; NUM_PARTS] = [
 /// The largest crop side taken, px ([`BodyPixOptions::long_side`] is clamped to it).
 pub const MAX_LONG_SIDE: usize = 2048;
 
-/// How BodyPix runs on a region; defaults are the probe's (chosen on the tune split).
+/// How BodyPix runs on a region; defaults are the probe's (chosen on the tune split), but
+/// for the crop side.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BodyPixOptions {
     /// The region is widened by this × its width (height) on each side. Default 0.3.
     pub margin: f64,
-    /// The crop's longer side, px (rounded to a multiple of 16). Default 512.
+    /// The crop's longer side, px (rounded to a multiple of 16). Default 448: on the real
+    /// photographs as good as the probe's 512 (mIoU 0.561 vs 0.559, tune split 0.550 vs
+    /// 0.549), ~20 % less BodyPix time (384: 0.551, tune 0.542).
     pub long_side: usize,
     /// A pixel is BodyPix's person where its person probability is at least this. Default 0.7.
     pub threshold: f64,
@@ -55,7 +58,7 @@ impl Default for BodyPixOptions {
     fn default() -> Self {
         BodyPixOptions {
             margin: 0.3,
-            long_side: 512,
+            long_side: 448,
             threshold: 0.7,
         }
     }

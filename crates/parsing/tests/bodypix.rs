@@ -55,7 +55,11 @@ fn labels_equal_the_python_reference() {
         .expect("write the regions");
     }
     let mut bp = bodypix();
-    let options = BodyPixOptions::default();
+    // The reference's size: longer side 513 -> 512.
+    let options = BodyPixOptions {
+        long_side: 512,
+        ..BodyPixOptions::default()
+    };
     let maps: Vec<_> = regions
         .iter()
         .map(|r| bp.run_region(&image, &r.bounds, &options).expect("runs"))
