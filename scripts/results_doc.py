@@ -332,9 +332,9 @@ def main():
     w("")
     w("![improved refinement](images/results_improved.png)")
     w("")
-    w('Real organised RGB-D frame, the default parser (BlazePose full on the people found from depth): PCL\'s `test/five_people.pcd`, five people seen from behind; every person gets a region and parts (labels over the image; [notes](notes/2026-12-02-blazepose-segmenter.md)). The synthetic-benchmark rows of this page use the bundled synthetic-trained model (`parsing.segmenter = "onnx"`); the BlazePose rows on the synthetic benchmark are not generated yet; the real-photograph table below is.')
+    w('Real organised RGB-D frame, the default parser (BlazePose full on the people found from depth, body parts from BodyPix): PCL\'s `test/five_people.pcd`, five people seen from behind; every person gets a region and parts (labels over the image; [notes](notes/2026-12-04-bodypix-probe.md); BlazePose alone: [image](images/five_people_blazepose.png), [notes](notes/2026-12-02-blazepose-segmenter.md)). The synthetic-benchmark rows of this page use the bundled synthetic-trained model (`parsing.segmenter = "onnx"`); the BlazePose rows on the synthetic benchmark are not generated yet; the real-photograph table below is.')
     w('')
-    w('![five_people, BlazePose](images/five_people_blazepose.png)')
+    w('![five_people, BlazePose + BodyPix](images/five_people_bodypix.png)')
     w('')
     # The real-photograph scores come from their own commands (kept in the fragment, with
     # the figures), not from reproduce.sh: copied in so that this page stays whole.
