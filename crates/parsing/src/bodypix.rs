@@ -37,6 +37,11 @@ pub const STRIDE: usize = 16;
 pub const PART_TO_CLASS: [u8; NUM_PARTS] = [
     1, 1, 3, 3, 3, 3, 4, 4, 4, 4, 4, 4, 2, 2, 5, 5, 5, 5, 6, 6, 6, 6, 6, 6,
 ];
+/// Below this person probability a pixel's part is not sampled (class 0): such a pixel is
+/// BodyPix's background, and where BlazePose gives a person there its label stays
+/// ([`fuse`]). Most of a region's window is far below it; sampling the 24 part logits is
+/// most of BodyPix's time after the model.
+pub const PART_FLOOR: f32 = 0.01;
 /// The largest crop side taken, px ([`BodyPixOptions::long_side`] is clamped to it).
 pub const MAX_LONG_SIDE: usize = 2048;
 
@@ -77,7 +82,8 @@ pub struct PartMap {
     pub v1: usize,
     /// Person probability per window pixel, row-major; −1 where no crop covers it.
     pub person: Vec<f32>,
-    /// Class id (1–6) of the part with the largest logit (0 where not covered).
+    /// Class id (1–6) of the part with the largest logit (0 where not covered or the person
+    /// probability is below [`PART_FLOOR`]).
     pub class: Vec<u8>,
     /// That class's probability given a person (softmax over the 24 parts, summed over the
     /// class's parts, sampled bilinearly from the output grid).
@@ -418,6 +424,9 @@ impl Grid<'_> {
         for (k, &(xa, xb, fx)) in columns.iter().enumerate() {
             let logit = lerp(seg[xa], seg[xb], fx);
             person[k] = 1.0 / (1.0 + (-logit).exp());
+            if person[k] < PART_FLOOR {
+                continue; // class 0, probability 0: not sampled
+            }
             let (pa, pb) = (
                 &parts[xa * NUM_PARTS..][..NUM_PARTS],
                 &parts[xb * NUM_PARTS..][..NUM_PARTS],
@@ -475,8 +484,9 @@ pub fn part_labels(map: &PartMap, threshold: f64) -> Vec<u8> {
 /// image fused (fusion C of the probe note): a pixel is a person's where either says so
 /// (BlazePose: a body class; BodyPix: person probability ≥ `threshold`); there the class is
 /// BodyPix's, except where BlazePose gives an upper or lower leg (its legs are the better:
-/// BodyPix's lower legs score 0.02–0.09 on the tune photographs) or no BodyPix crop covers
-/// the pixel, where BlazePose's label stays. Probabilities: BodyPix's class probability ×
+/// BodyPix's lower legs score 0.02–0.09 on the tune photographs), no BodyPix crop covers
+/// the pixel or BodyPix's person probability is below [`PART_FLOOR`] (no part sampled),
+/// where BlazePose's label stays. Probabilities: BodyPix's class probability ×
 /// the larger of the two person probabilities (BlazePose's is its label's) where BodyPix
 /// decides, BlazePose's where it decides; background pixels 1 − the larger person
 /// probability. A `map` of another size leaves `labels` as they are.
@@ -494,8 +504,8 @@ pub fn fuse(labels: &mut LabelImage, map: &PartMap, threshold: f64) {
             continue;
         }
         let person = map.person[i];
-        if person < 0.0 {
-            continue; // no BodyPix crop here
+        if person < 0.0 || (blazepose_person && map.class[i] == 0) {
+            continue; // no BodyPix crop here, or no part sampled (below PART_FLOOR)
         }
         if !(blazepose_person || person >= threshold) {
             *label = Label::BACKGROUND;
@@ -576,28 +586,33 @@ mod tests {
 
     /// Pixel by pixel: BlazePose's legs stay; a BlazePose person takes BodyPix's part even
     /// where BodyPix's probability is low; BodyPix alone adds a person; neither = background;
-    /// an uncovered pixel keeps BlazePose's label; a map of another size changes nothing.
+    /// an uncovered pixel or one with no part sampled keeps BlazePose's label; a map of
+    /// another size changes nothing.
     #[test]
     fn fusion_takes_bodypix_parts_inside_the_union_and_keeps_blazepose_legs() {
-        let ids = [5u8, 2, 0, 0, 3];
+        let ids = [5u8, 2, 0, 0, 3, 2];
         let mut labels = LabelImage {
-            width: 5,
+            width: 6,
             height: 1,
             labels: ids.iter().map(|&i| Label::from_id_or_unknown(i)).collect(),
-            probs: Some(vec![0.9, 0.8, 0.7, 0.9, 0.6]),
+            probs: Some(vec![0.9, 0.8, 0.7, 0.9, 0.6, 0.7]),
         };
-        let map = map_of(0, vec![0.9, 0.1, 0.8, 0.2, -1.0], vec![2, 1, 4, 3, 0]);
+        let map = map_of(
+            0,
+            vec![0.9, 0.1, 0.8, 0.2, -1.0, 0.005],
+            vec![2, 1, 4, 3, 0, 0],
+        );
         let before = labels.clone();
         fuse(&mut labels, &map_of(0, vec![0.9], vec![1]), 0.7);
         assert_eq!(labels, before);
         fuse(&mut labels, &map, 0.7);
         let got: Vec<u8> = labels.labels.iter().map(|l| l.id()).collect();
-        assert_eq!(got, [5, 1, 4, 0, 3]);
+        assert_eq!(got, [5, 1, 4, 0, 3, 2]);
         let p = labels.probs.expect("probabilities");
         assert!((p[1] - 0.5 * 0.8).abs() < 1e-6, "{p:?}");
         assert!((p[2] - 0.5 * 0.8).abs() < 1e-6, "{p:?}");
         assert!((p[3] - 0.8).abs() < 1e-6, "{p:?}");
-        assert_eq!((p[0], p[4]), (0.9, 0.6));
+        assert_eq!((p[0], p[4], p[5]), (0.9, 0.6, 0.7));
     }
 
     #[test]
