@@ -1,8 +1,10 @@
 //! BlazePose (full, default options) on the exact-ground-truth real photographs of
 //! `scripts/real_parsing_data.py`, with the index's person boxes as regions: the pooled
 //! person-vs-background IoU and body-part mIoU must stay at their measured levels (0.804 and
-//! 0.462 on 2026-12-04, docs/notes/2026-12-03-blazepose.md). Skips (passes with a message)
-//! when .data/real_parsing is absent: the photographs are not in git.
+//! 0.462 on 2026-12-04, docs/notes/2026-12-03-blazepose.md); with BodyPix's parts (the
+//! default, `parsing.body_parts = "bodypix"`) 0.829 and 0.561 (docs/notes/2026-12-04-bodypix-probe.md).
+//! Skips (passes with a message) when .data/real_parsing is absent: the photographs are not
+//! in git.
 
 #[path = "../examples/real_parsing/data.rs"]
 mod data;
@@ -17,9 +19,24 @@ use std::path::Path;
 const MIN_PERSON_IOU: f64 = 0.77;
 /// See [`MIN_PERSON_IOU`]; the mean IoU of the 6 body parts, pixels pooled.
 const MIN_PART_MIOU: f64 = 0.43;
+/// The floors with BodyPix's parts: the measured 0.829 and 0.561 less the same margins.
+const MIN_PERSON_IOU_BODYPIX: f64 = 0.80;
+/// See [`MIN_PERSON_IOU_BODYPIX`].
+const MIN_PART_MIOU_BODYPIX: f64 = 0.53;
 
 #[test]
 fn blazepose_finds_the_people_of_real_photographs() {
+    check(false, MIN_PERSON_IOU, MIN_PART_MIOU);
+}
+
+#[test]
+fn blazepose_with_bodypix_parts_reaches_the_targets_on_real_photographs() {
+    check(true, MIN_PERSON_IOU_BODYPIX, MIN_PART_MIOU_BODYPIX);
+}
+
+/// Scores BlazePose full (with BodyPix's parts when `bodypix`) on the exact images and
+/// checks the floors.
+fn check(bodypix: bool, min_person_iou: f64, min_part_miou: f64) {
     let dir = data::default_dir();
     if !dir.join("index.json").is_file() {
         eprintln!(
@@ -37,6 +54,13 @@ fn blazepose_finds_the_people_of_real_photographs() {
     let mut segmenter =
         BlazePoseSegmenter::new(&library, &bytes, &model, &BlazePoseOptions::default())
             .expect("the full model loads");
+    if bodypix {
+        let model = root.join("models/bodypix_mobilenet_v1_075_quant.onnx");
+        let bytes = std::fs::read(&model).expect("committed model");
+        segmenter = segmenter
+            .with_bodypix(&library, &bytes, &model)
+            .expect("the BodyPix model loads");
+    }
     let items = data::read_index(&dir).expect("index");
     let (mut both, mut either, mut images) = (0u64, 0u64, 0);
     // confusion[truth][prediction] over the class ids 0–6
@@ -65,8 +89,8 @@ fn blazepose_finds_the_people_of_real_photographs() {
     assert!(images >= 8, "only {images} exact images in the index");
     let iou = both as f64 / either.max(1) as f64;
     assert!(
-        iou >= MIN_PERSON_IOU,
-        "person IoU {iou:.3} < {MIN_PERSON_IOU} over {images} images"
+        iou >= min_person_iou,
+        "person IoU {iou:.3} < {min_person_iou} over {images} images (bodypix {bodypix})"
     );
     let part_iou = |c: usize| {
         let inter = confusion[c][c];
@@ -76,7 +100,7 @@ fn blazepose_finds_the_people_of_real_photographs() {
     };
     let miou = (1..7).map(part_iou).sum::<f64>() / 6.0;
     assert!(
-        miou >= MIN_PART_MIOU,
-        "body-part mIoU {miou:.3} < {MIN_PART_MIOU} over {images} images"
+        miou >= min_part_miou,
+        "body-part mIoU {miou:.3} < {min_part_miou} over {images} images (bodypix {bodypix})"
     );
 }
