@@ -3,8 +3,8 @@
 //! at once, each on its own single-threaded session): per person the crop, the landmark
 //! model (the first ROI and the refinement pass), decoding, the landmarks + mask → classes
 //! rule, and merging the people; target ≤ 80 ms. `full_bodypix` (the default,
-//! `parsing.body_parts = "bodypix"`) adds BodyPix on each region (crop longer side 448;
-//! `full_bodypix512`: 512) on the same worker and the fusion; `full` is `landmarks`. Input: frame 0 of the `robot_cell` synth
+//! `parsing.body_parts = "bodypix"`) adds BodyPix on each region (crop longer side 384;
+//! `full_bodypix448`: 448) on the same worker and the fusion; `full` is `landmarks`. Input: frame 0 of the `robot_cell` synth
 //! preset, seed 1, camera 0, the regions of its two largest people (their pixels' bounding
 //! boxes in synth's per-pixel person ids, as a box found from depth would give).
 //! `blazepose_rule` measures the labelling alone on two 500 px people.
@@ -51,8 +51,8 @@ fn blazepose(c: &mut Criterion) {
     group.throughput(Throughput::Elements(1));
     group.sample_size(20);
     let setups = [
-        ("full_bodypix", BlazePoseVariant::Full, Some(448)),
-        ("full_bodypix512", BlazePoseVariant::Full, Some(512)),
+        ("full_bodypix", BlazePoseVariant::Full, Some(384)),
+        ("full_bodypix448", BlazePoseVariant::Full, Some(448)),
         ("full", BlazePoseVariant::Full, None),
         ("lite", BlazePoseVariant::Lite, None),
     ];

@@ -28,7 +28,7 @@ pub enum BodyParts {
     /// BodyPix 2.0 (`models/bodypix_mobilenet_v1_075_quant.onnx`) on the same regions: the
     /// person is BlazePose's mask ∪ BodyPix's, the part BodyPix's, except BlazePose's legs
     /// ([`crate::bodypix::fuse`]). About one more model run per person. The default
-    /// (real photographs: body-part mIoU 0.559 against 0.462, docs/results.md).
+    /// (real photographs: body-part mIoU 0.550 against 0.462, docs/results.md).
     #[default]
     Bodypix,
 }
