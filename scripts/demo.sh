@@ -3,7 +3,9 @@
 # Runtime from PyPI), builds the release binary, renders a synthetic recording (two people
 # handing over an object, three Kinect v2 cameras, exact ground truth) and runs the whole
 # pipeline on it with the default 2D parser (BlazePose full, models/blazepose_full.onnx, on
-# the people found from depth; --set parsing.segmenter=onnx for the synthetic-trained model):
+# the people found from depth, body parts from BodyPix, models/bodypix_mobilenet_v1_075_quant.onnx;
+# --set parsing.body_parts=landmarks for BlazePose alone, parsing.segmenter=onnx for the
+# synthetic-trained model):
 # people from depth -> parse -> DSA projection -> person boxes -> clustering refinement ->
 # evaluation. Prints the paper-style table (Reference, M, N,
 # M-N, M-R-N against the ground truth) and the path of the Figure-5-style picture.
@@ -49,7 +51,7 @@ if [ ! -f "$out/rec/rig.toml" ] || [ "$(ls "$out/rec/cam0/depth" | wc -l)" -ne "
     "$bodyseg" synth --preset handover --frames "$frames" --seed 1 --force --out "$out/rec"
 fi
 
-echo "==> bodyseg run: people from depth, BlazePose, DSA projection, boxes, refinement, evaluation"
+echo "==> bodyseg run: people from depth, BlazePose + BodyPix, DSA projection, boxes, refinement, evaluation"
 rrd=()
 if [ "$rerun" = 1 ]; then
     rrd=(--rerun "$out/run/run.rrd")

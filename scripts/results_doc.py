@@ -457,15 +457,15 @@ def main():
     w("")
     w("![improved refinement](images/results_improved.png)")
     w("")
-    w("The same frame with BlazePose (paper mode, DSA): the two people of the hand-over overlap in "
-      "the views and BlazePose labels them as one: the front person's head takes the torso label of "
-      "the person behind.")
+    w("The same frame with the default parser (BlazePose on the people found from depth, BodyPix's "
+      "parts; paper mode, DSA): the two people of the hand-over overlap in the views and are "
+      "labelled as one: the front person's head takes the torso label of the person behind.")
     w("")
     w("![BlazePose, paper mode](images/results_blazepose.png)")
     w("")
-    w('Real organised RGB-D frame, the default parser (BlazePose full on the people found from depth): PCL\'s `test/five_people.pcd`, five people seen from behind; every person gets a region and parts (labels over the image; [notes](notes/2026-12-02-blazepose-segmenter.md)). Its rows on the synthetic benchmark are above; on real photographs, the table below.')
+    w('Real organised RGB-D frame, the default parser (BlazePose full on the people found from depth, body parts from BodyPix): PCL\'s `test/five_people.pcd`, five people seen from behind; every person gets a region and parts (labels over the image; [notes](notes/2026-12-04-bodypix-probe.md); BlazePose alone: [image](images/five_people_blazepose.png), [notes](notes/2026-12-02-blazepose-segmenter.md)). Its rows on the synthetic benchmark are above; on real photographs, the table below.')
     w('')
-    w('![five_people, BlazePose](images/five_people_blazepose.png)')
+    w('![five_people, BlazePose + BodyPix](images/five_people_bodypix.png)')
     w('')
     # The real-photograph scores come from their own commands (kept in the fragment, with
     # the figures), not from reproduce.sh: copied in so that this page stays whole.

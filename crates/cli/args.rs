@@ -310,7 +310,8 @@ image, where each pixel takes the most probable class (shared/ALGORITHM.md §2).
 Model: --model FILE.onnx with its sidecar FILE.json (input_size, channel_order, mean, std, \
 class_names, output_stride, align_corners), or parsing.model of the configuration; default \
 BlazePose (parsing.segmenter = blazepose, models/blazepose_full.onnx) on the people \
-found from depth; parsing.segmenter = onnx without a model runs the bundled \
+found from depth, with body parts from BodyPix (parsing.body_parts = bodypix, \
+models/bodypix_mobilenet_v1_075_quant.onnx; landmarks: BlazePose's alone); parsing.segmenter = onnx without a model runs the bundled \
 models/bodyseg_parser_small.onnx (trained on bodyseg synth data by scripts/train_parser.py). \
 SCHP checkpoints convert with scripts/export_schp_onnx.py. \
 --recorded uses the recording's own parsing/ images instead (e.g. synth's simulated \

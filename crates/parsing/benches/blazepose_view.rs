@@ -2,7 +2,9 @@
 //! [`BlazePoseSegmenter`] (`models/blazepose_full.onnx`, default options: the two regions
 //! at once, each on its own single-threaded session): per person the crop, the landmark
 //! model (the first ROI and the refinement pass), decoding, the landmarks + mask → classes
-//! rule, and merging the people; target ≤ 80 ms. Input: frame 0 of the `robot_cell` synth
+//! rule, and merging the people; target ≤ 80 ms. `full_bodypix` (the default,
+//! `parsing.body_parts = "bodypix"`) adds BodyPix on each region (crop longer side 384;
+//! `full_bodypix448`: 448) on the same worker and the fusion; `full` is `landmarks`. Input: frame 0 of the `robot_cell` synth
 //! preset, seed 1, camera 0, the regions of its two largest people (their pixels' bounding
 //! boxes in synth's per-pixel person ids, as a box found from depth would give).
 //! `blazepose_rule` measures the labelling alone on two 500 px people.
@@ -24,12 +26,22 @@ use runtime::{root, runtime_library};
 mod two_people;
 use two_people::view;
 
-fn segmenter(variant: BlazePoseVariant) -> BlazePoseSegmenter {
+/// The segmenter of `variant`, with BodyPix's parts at crop side `bodypix` when given.
+fn segmenter(variant: BlazePoseVariant, bodypix: Option<usize>) -> BlazePoseSegmenter {
     let library = runtime_library();
     let model = root().join(format!("models/blazepose_{}.onnx", variant.name()));
     let bytes = std::fs::read(&model).expect("committed BlazePose model");
-    BlazePoseSegmenter::new(&library, &bytes, &model, &BlazePoseOptions::default())
-        .expect("ONNX Runtime (scripts/setup_onnxruntime.sh) and the model")
+    let mut options = BlazePoseOptions::default();
+    options.bodypix.long_side = bodypix.unwrap_or(options.bodypix.long_side);
+    let seg = BlazePoseSegmenter::new(&library, &bytes, &model, &options)
+        .expect("ONNX Runtime (scripts/setup_onnxruntime.sh) and the model");
+    if bodypix.is_none() {
+        return seg;
+    }
+    let model = root().join("models/bodypix_mobilenet_v1_075_quant.onnx");
+    let bytes = std::fs::read(&model).expect("committed BodyPix model");
+    seg.with_bodypix(&library, &bytes, &model)
+        .expect("the BodyPix model")
 }
 
 fn blazepose(c: &mut Criterion) {
@@ -38,9 +50,15 @@ fn blazepose(c: &mut Criterion) {
     let mut group = c.benchmark_group("blazepose_view_960x540");
     group.throughput(Throughput::Elements(1));
     group.sample_size(20);
-    for variant in [BlazePoseVariant::Full, BlazePoseVariant::Lite] {
-        let mut seg = segmenter(variant);
-        group.bench_function(BenchmarkId::new("two_people", variant.name()), |b| {
+    let setups = [
+        ("full_bodypix", BlazePoseVariant::Full, Some(384)),
+        ("full_bodypix448", BlazePoseVariant::Full, Some(448)),
+        ("full", BlazePoseVariant::Full, None),
+        ("lite", BlazePoseVariant::Lite, None),
+    ];
+    for (name, variant, bodypix) in setups {
+        let mut seg = segmenter(variant, bodypix);
+        group.bench_function(BenchmarkId::new("two_people", name), |b| {
             b.iter(|| {
                 let input = ViewInput {
                     camera: "cam0",
@@ -53,7 +71,7 @@ fn blazepose(c: &mut Criterion) {
             })
         });
         let runs = seg.runs();
-        eprintln!("{}: {runs} landmark-model runs in all", variant.name());
+        eprintln!("{name}: {runs} landmark-model runs in all");
     }
     group.finish();
 }

@@ -7,6 +7,7 @@ use crate::blazepose::{
     DecodedPose, INPUT, NUM_LANDMARKS, PersonLabels, Roi, RuleConfig, average_masks, blank_outside,
     crop_into, decode, label_person, landmark, merge_people, mirror_crop, unmirror_outputs,
 };
+use crate::bodypix::{BodyPix, BodyPixOptions};
 use crate::onnx::{float_dims, load_session};
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
 use bodyseg_core::{LabelImage, RgbImage};
@@ -15,6 +16,8 @@ use ort::value::TensorRef;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+mod parts;
 
 /// Which of BlazePose's landmark models runs (the sizes MediaPipe ships).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -79,6 +82,9 @@ pub struct BlazePoseOptions {
     pub mirror_average: bool,
     /// The landmarks + mask → classes rule.
     pub rule: RuleConfig,
+    /// BodyPix's crop and threshold, when the body parts come from BodyPix
+    /// ([`BlazePoseSegmenter::with_bodypix`]).
+    pub bodypix: BodyPixOptions,
 }
 
 impl Default for BlazePoseOptions {
@@ -91,6 +97,7 @@ impl Default for BlazePoseOptions {
             blank_retry: true,
             mirror_average: false,
             rule: RuleConfig::default(),
+            bodypix: BodyPixOptions::default(),
         }
     }
 }
@@ -183,6 +190,8 @@ struct Worker {
     input: Vec<f32>,
     /// Inferences run so far (for benches and logs).
     runs: u64,
+    /// BodyPix's session when the body parts come from it ([`parts`]).
+    bodypix: Option<BodyPix>,
 }
 
 impl std::fmt::Debug for BlazePoseSegmenter {
@@ -266,6 +275,7 @@ impl BlazePoseSegmenter {
             session,
             input: Vec::with_capacity(INPUT * INPUT * 3),
             runs: 0,
+            bodypix: None,
         };
         let narrow = if options.threads >= 2 {
             (0..options.threads)
@@ -305,6 +315,9 @@ impl BlazePoseSegmenter {
         image: &RgbImage,
         regions: Option<&[PersonRegion]>,
     ) -> Result<LabelImage, ParsingError> {
+        if self.wide.bodypix.is_some() {
+            return self.segment_with_bodypix(image, regions);
+        }
         let (w, h) = (image.width as usize, image.height as usize);
         let people: Vec<PersonLabels> = self
             .per_region(image, regions, Worker::person)?

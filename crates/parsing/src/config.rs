@@ -18,6 +18,31 @@ pub enum SegmenterKind {
     Onnx,
 }
 
+/// Where `segmenter = "blazepose"` takes the body parts from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BodyParts {
+    /// BlazePose's landmarks: each pixel of its person mask takes the class of the nearest
+    /// bone ([`crate::blazepose`]).
+    Landmarks,
+    /// BodyPix 2.0 (`models/bodypix_mobilenet_v1_075_quant.onnx`) on the same regions: the
+    /// person is BlazePose's mask ∪ BodyPix's, the part BodyPix's, except BlazePose's legs
+    /// ([`crate::bodypix::fuse`]). About one more model run per person. The default
+    /// (real photographs: body-part mIoU 0.550 against 0.462, docs/results.md).
+    #[default]
+    Bodypix,
+}
+
+impl BodyParts {
+    /// `landmarks` or `bodypix`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BodyParts::Landmarks => "landmarks",
+            BodyParts::Bodypix => "bodypix",
+        }
+    }
+}
+
 /// How 2D parsing runs (`[parsing]` in the pipeline configuration).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -28,6 +53,10 @@ pub struct ParsingConfig {
     /// `heavy` (`models/blazepose_<variant>.onnx`; heavy is made by
     /// `scripts/convert_blazepose.py`).
     pub blazepose_variant: BlazePoseVariant,
+    /// Where `segmenter = "blazepose"` takes the body parts from: `bodypix` (default:
+    /// BodyPix's parts inside BlazePose's and BodyPix's person, BlazePose's legs;
+    /// `models/bodypix_mobilenet_v1_075_quant.onnx`) or `landmarks` (BlazePose's rule alone).
+    pub body_parts: BodyParts,
     /// ONNX model file (`segmenter = "onnx"`); its sidecar is the same path with `.json`.
     /// Empty (default) = the bundled model, `models/bodyseg_parser_small.onnx`.
     pub model: String,
@@ -47,6 +76,7 @@ impl Default for ParsingConfig {
         ParsingConfig {
             segmenter: SegmenterKind::Blazepose,
             blazepose_variant: BlazePoseVariant::Full,
+            body_parts: BodyParts::Bodypix,
             model: String::new(),
             runtime_library: String::new(),
             threads: 2,

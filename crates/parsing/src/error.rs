@@ -67,6 +67,19 @@ pub enum ParsingError {
         /// The model file.
         path: PathBuf,
     },
+    /// A model given as BodyPix is not one (other inputs or outputs).
+    #[error(
+        "{}: not a BodyPix model: {reason} (expected the conversion of \
+         scripts/convert_bodypix.sh: input sub_2 uint8 [1,h,w,3], outputs float_segments \
+         uint8 [1,h',w',1] and float_part_heatmaps uint8 [1,h',w',24])",
+        .path.display()
+    )]
+    NotBodyPix {
+        /// What differs.
+        reason: String,
+        /// The model file.
+        path: PathBuf,
+    },
     /// The model's output has a number of channels other than 7 (one per class).
     #[error(
         "{}: model output has {got} channels, expected 7 (one logit per class: background, \

@@ -12,7 +12,8 @@
 //! - [`RecordedSegmenter`]: label images computed earlier (a recording's `parsing/`,
 //!   read by the caller and handed over in [`ViewInput::recorded`]).
 //! - [`blazepose`]: BlazePose landmarks + mask → the 7 classes (issue 29), pure functions;
-//!   its segmenter on person regions comes with the pipeline integration.
+//!   [`BlazePoseSegmenter`] runs it on person regions.
+//! - [`bodypix`]: BodyPix 2.0's body parts on person regions, fused with BlazePose's.
 //!
 //! This crate does no file I/O: model bytes, sidecar text and images come from the
 //! caller (bodyseg-pipeline reads them with bodyseg-io). `ort` and `ndarray` types do not
@@ -30,6 +31,7 @@
 
 pub mod blazepose;
 mod blazepose_segmenter;
+pub mod bodypix;
 mod config;
 mod error;
 mod onnx;
@@ -38,7 +40,8 @@ mod spec;
 pub mod transform;
 
 pub use blazepose_segmenter::{BlazePoseOptions, BlazePoseSegmenter, BlazePoseVariant};
-pub use config::{ParsingConfig, SegmenterKind};
+pub use bodypix::{BodyPix, BodyPixOptions};
+pub use config::{BodyParts, ParsingConfig, SegmenterKind};
 pub use error::ParsingError;
 pub use onnx::{OnnxOptions, OnnxSegmenter, load_runtime};
 pub use segmenter::{ParsedView, PersonRegion, PixelBox, RecordedSegmenter, Segmenter, ViewInput};

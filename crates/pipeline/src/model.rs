@@ -19,13 +19,14 @@
 //!
 //! The bundled models follow the same rule (a model is data, but a planted one would
 //! mislead): `parsing.model` (for `"onnx"`), else `<prefix>/share/bodyseg/models/…`, else
-//! the checkout's `models/` (`bodyseg_parser_small.onnx`, `blazepose_<variant>.onnx`). [`describe_parser_files`] says what would be
+//! the checkout's `models/` (`bodyseg_parser_small.onnx`, `blazepose_<variant>.onnx`,
+//! `bodypix_mobilenet_v1_075_quant.onnx` for `parsing.body_parts = "bodypix"`). [`describe_parser_files`] says what would be
 //! loaded (`bodyseg version -v`).
 
 use crate::config::PipelineConfig;
 use crate::recording::{Layer, Recording};
 use anyhow::{Context, Result, bail};
-use bodyseg_parsing::{BlazePoseSegmenter, BlazePoseVariant};
+use bodyseg_parsing::{BlazePoseSegmenter, BlazePoseVariant, BodyParts};
 use bodyseg_parsing::{
     ModelSpec, OnnxSegmenter, RecordedSegmenter, Segmenter, SegmenterKind, sidecar_path,
 };
@@ -43,6 +44,30 @@ pub(crate) const PREFIX_MODEL: &str = "share/bodyseg/models/bodyseg_parser_small
 /// `<prefix>/share/bodyseg/` for an install).
 pub(crate) fn blazepose_model(variant: BlazePoseVariant) -> String {
     format!("models/blazepose_{}.onnx", variant.name())
+}
+
+/// BodyPix's model (`parsing.body_parts = "bodypix"`), relative to the checkout (the same
+/// under `<prefix>/share/bodyseg/` for an install).
+pub(crate) const BODYPIX_MODEL: &str = "models/bodypix_mobilenet_v1_075_quant.onnx";
+
+/// BodyPix's model file: the install prefix's, else the checkout's.
+///
+/// # Errors
+/// Neither exists.
+fn resolve_bodypix_model() -> Result<(PathBuf, FoundBy)> {
+    let exe = std::env::current_exe().ok();
+    let prefix_relative = format!("share/bodyseg/{BODYPIX_MODEL}");
+    first_file(bundled_candidates(
+        exe.as_deref(),
+        &prefix_relative,
+        BODYPIX_MODEL,
+    ))
+    .with_context(|| {
+        format!(
+            "BodyPix model {BODYPIX_MODEL} not found (checkout or <prefix>/{prefix_relative}): \
+                 it is part of the checkout (models/), or use parsing.body_parts = \"landmarks\""
+        )
+    })
 }
 
 /// Where `scripts/setup_onnxruntime.sh` puts the ONNX Runtime library, relative to the
@@ -211,10 +236,20 @@ pub fn describe_parser_files(config: &PipelineConfig) -> Vec<String> {
         Ok((path, by)) => format!("{what}: {} (from {by})", path.display()),
         Err(e) => format!("{what}: none ({e:#})"),
     };
-    vec![
+    let mut lines = vec![
         line("ONNX Runtime library", resolve_runtime_library(config)),
         line("model", resolve_model(config)),
-    ]
+    ];
+    if uses_bodypix(config) {
+        lines.push(line("body parts model", resolve_bodypix_model()));
+    }
+    lines
+}
+
+/// Whether the configured parser takes its body parts from BodyPix.
+fn uses_bodypix(config: &PipelineConfig) -> bool {
+    config.parsing.segmenter == SegmenterKind::Blazepose
+        && config.parsing.body_parts == BodyParts::Bodypix
 }
 
 /// Loads an SCHP-contract ONNX model and its sidecar (`model.json`) into an
@@ -255,12 +290,19 @@ pub(crate) fn load_segmenter(
         SegmenterKind::Blazepose => {
             let (library, _) = resolve_runtime_library(config)?;
             let bytes = bodyseg_io::read_bytes(model).context("BlazePose landmark model")?;
-            Box::new(BlazePoseSegmenter::new(
+            let segmenter = BlazePoseSegmenter::new(
                 &library,
                 &bytes,
                 model,
                 &config.parsing.blazepose_options(),
-            )?)
+            )?;
+            if uses_bodypix(config) {
+                let (bodypix, _) = resolve_bodypix_model()?;
+                let bytes = bodyseg_io::read_bytes(&bodypix).context("BodyPix model")?;
+                Box::new(segmenter.with_bodypix(&library, &bytes, &bodypix)?)
+            } else {
+                Box::new(segmenter)
+            }
         }
     })
 }

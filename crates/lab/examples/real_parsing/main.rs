@@ -8,8 +8,10 @@
 //! cargo run --release -p bodyseg-lab --example real_parsing -- OUT_DIR onnx:models/bodyseg_parser_small.onnx
 //! ```
 //!
-//! KEY=VALUE (BlazePose only): `roi_scale`, `refine_passes`, `threads`, `min_pose_flag`,
-//! the switches `blank_retry`, `mirror_average`, `flat_shoulders`, `thighs_past_frame` (0/1),
+//! KEY=VALUE (BlazePose only): `parts=bodypix|landmarks` (`parsing.body_parts`; default
+//! landmarks) with `bodypix_margin`, `bodypix_long_side`, `bodypix_threshold`; `roi_scale`,
+//! `refine_passes`, `threads`, `min_pose_flag`, the switches `blank_retry`,
+//! `mirror_average`, `flat_shoulders`, `thighs_past_frame` (0/1),
 //! any numeric field of the rule's `RuleConfig` (`r_torso=0.3`, ...), and `poses=1` to
 //! write each image's poses as `<name>.poses.json` beside its PNG (for overlays). Time it with
 //! `perf stat -e task-clock,instructions:u` (the machine is shared: wall clock says little).
@@ -20,8 +22,8 @@ use anyhow::{Context, bail};
 use bodyseg_core::Label;
 use bodyseg_parsing::blazepose::{DecodedPose, RuleConfig};
 use bodyseg_parsing::{
-    BlazePoseOptions, BlazePoseSegmenter, ModelSpec, OnnxOptions, OnnxSegmenter, Segmenter,
-    sidecar_path,
+    BlazePoseOptions, BlazePoseSegmenter, BodyParts, ModelSpec, OnnxOptions, OnnxSegmenter,
+    Segmenter, sidecar_path,
 };
 use std::path::{Path, PathBuf};
 
@@ -78,6 +80,7 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
     if let Some(variant) = which.strip_prefix("blazepose:") {
         let mut options = BlazePoseOptions::default();
         let mut write_poses = false;
+        let mut parts = BodyParts::Landmarks;
         for s in settings {
             let (key, value) = s
                 .split_once('=')
@@ -89,6 +92,20 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
                 "threads" => options.threads = value.parse().map_err(|e| bad(&e))?,
                 "min_pose_flag" => options.min_pose_flag = value.parse().map_err(|e| bad(&e))?,
                 "poses" => write_poses = value == "1",
+                "parts" => {
+                    parts = match value {
+                        "bodypix" => BodyParts::Bodypix,
+                        "landmarks" => BodyParts::Landmarks,
+                        _ => bail!("parts={value}: bodypix or landmarks"),
+                    }
+                }
+                "bodypix_margin" => options.bodypix.margin = value.parse().map_err(|e| bad(&e))?,
+                "bodypix_long_side" => {
+                    options.bodypix.long_side = value.parse().map_err(|e| bad(&e))?
+                }
+                "bodypix_threshold" => {
+                    options.bodypix.threshold = value.parse().map_err(|e| bad(&e))?
+                }
                 "blank_retry" => options.blank_retry = value == "1",
                 "mirror_average" => options.mirror_average = value == "1",
                 "flat_shoulders" => options.rule.flat_shoulders = value == "1",
@@ -96,16 +113,23 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
                 _ => match rule_field(&mut options.rule, key) {
                     Some(field) => *field = value.parse().map_err(|e| bad(&e))?,
                     None => bail!(
-                        "{key}: unknown setting (roi_scale, refine_passes, threads, \
-                         min_pose_flag, poses, or a RuleConfig field; booleans 0/1)"
+                        "{key}: unknown setting (parts, bodypix_margin, bodypix_long_side, \
+                         bodypix_threshold, roi_scale, refine_passes, threads, min_pose_flag, \
+                         poses, or a RuleConfig field; booleans 0/1)"
                     ),
                 },
             }
         }
         let model = root().join(format!("models/blazepose_{variant}.onnx"));
         let bytes = std::fs::read(&model).with_context(|| model.display().to_string())?;
+        let mut segmenter = BlazePoseSegmenter::new(&library, &bytes, &model, &options)?;
+        if parts == BodyParts::Bodypix {
+            let model = root().join("models/bodypix_mobilenet_v1_075_quant.onnx");
+            let bytes = std::fs::read(&model).with_context(|| model.display().to_string())?;
+            segmenter = segmenter.with_bodypix(&library, &bytes, &model)?;
+        }
         return Ok(Opened::BlazePose {
-            segmenter: Box::new(BlazePoseSegmenter::new(&library, &bytes, &model, &options)?),
+            segmenter: Box::new(segmenter),
             write_poses,
         });
     }
