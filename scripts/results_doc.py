@@ -166,15 +166,16 @@ def why_not_lower_arms(rows, best):
 def blazepose_section(w, work, runs):
     """The default parser against the synthetic-trained model on the benchmark, and which to
     choose when."""
-    w("## BlazePose, the default parser, on the synthetic benchmark")
+    w("## BlazePose + BodyPix, the default parser, on the synthetic benchmark")
     w("")
-    w("The same 300 frames with BlazePose (the parser `bodyseg run` uses on real images) and with the "
+    w("The same 300 frames with the default parser (BlazePose full on the people found from depth, body "
+      "parts from BodyPix: the parser `bodyseg run` uses on real images) and with the "
       "bundled synthetic-trained model; Reference and M-R-N of each refinement setting, in %:")
     w("")
     w("| 2D labels | projection | Reference mIoU | M-R-N mIoU | Reference BIoU | M-R-N BIoU | "
       "improved M-R-N BIoU | improved + vote M-R-N BIoU |")
     w("|---|---|---:|---:|---:|---:|---:|---:|")
-    for source, name in [("model", "bundled ONNX model (synthetic-trained)"), ("blazepose", "BlazePose full")]:
+    for source, name in [("model", "bundled ONNX model (synthetic-trained)"), ("blazepose", "BlazePose + BodyPix")]:
         for mode in ["naive", "dsa"]:
             paper = runs[(source, mode)]
             w(f"| {name} | {mode} | {paper['Reference']['miou']:.2f} | {paper['M-R-N']['miou']:.2f} | "
@@ -250,7 +251,7 @@ def main():
     weighted = {mode: load(work / "runs" / f"model_{mode}_weighted" / "report.json") for mode in ["naive", "dsa"]}
     subset = load(work / "subset" / "report.json")
     source_name = {"recorded": "synthetic parser errors", "model": "bundled ONNX model",
-                   "blazepose": "BlazePose (default parser)"}
+                   "blazepose": "BlazePose + BodyPix (default parser)"}
     mode_name = {
         "naive": "naive projection",
         "dsa": "DSA projection",
@@ -277,7 +278,8 @@ def main():
       "(`parsing/`: small parts grown into their neighbours, boundary jitter, elbow/knee swaps, missed "
       "forearms), the **bundled ONNX model** (`models/bodyseg_parser_small.onnx`, 2D mIoU 0.63, trained "
       "on renders like these; `--parser model --set parsing.segmenter=onnx`) on the colour images, and "
-      "**BlazePose**, the default parser for real images (BlazePose full on the people found from depth; "
+      "**BlazePose + BodyPix**, the default parser for real images (BlazePose full on the people found from "
+      "depth, body parts from BodyPix inside its mask; "
       "`--parser model`, `parsing.segmenter = \"blazepose\"`), on the same colour images. Two projections: "
       "**naive** (the paper's: the label of the nearest colour pixel) and "
       "**DSA** (bodyseg's: points the colour camera cannot be trusted on are left unknown, which scores as "

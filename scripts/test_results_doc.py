@@ -114,15 +114,15 @@ class Document(unittest.TestCase):
         self.doc = text.getvalue()
 
     def test_blazepose_has_its_section_tables_and_figure(self):
-        self.assertIn("## BlazePose, the default parser, on the synthetic benchmark", self.doc)
-        self.assertIn("### BlazePose (default parser), DSA projection, improved refinement\n", self.doc)
+        self.assertIn("## BlazePose + BodyPix, the default parser, on the synthetic benchmark", self.doc)
+        self.assertIn("### BlazePose + BodyPix (default parser), DSA projection, improved refinement\n", self.doc)
         self.assertIn("![BlazePose, paper mode](images/results_blazepose.png)", self.doc)
         self.assertNotIn("not generated yet", self.doc)
 
     def test_blazepose_row_holds_its_runs_numbers(self):
         # blazepose_dsa: Reference 60 wrong points per class, M-R-N (fifth row) 60 - 12.
         ref, mrn = 100.0 * 100 / 220, 100.0 * 100 / 196
-        self.assertIn(f"| BlazePose full | dsa | {ref:.2f} | {mrn:.2f} | {ref:.2f} | {mrn:.2f} |", self.doc)
+        self.assertIn(f"| BlazePose + BodyPix | dsa | {ref:.2f} | {mrn:.2f} | {ref:.2f} | {mrn:.2f} |", self.doc)
         # Per preset: single_2001 as the run, handover_2005 with 10 more wrong points.
         self.assertIn(f"`single` BlazePose {mrn:.2f}", self.doc)
         self.assertIn(f"`handover` BlazePose {100.0 * 100 / 216:.2f}", self.doc)
