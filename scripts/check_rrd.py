@@ -11,8 +11,10 @@ the run's files in OUT (a run of the whole recording):
 
 - the `frame` timeline has one row per cloud in OUT/clouds/ (indices 0..n-1, the frames in
   stem order);
-- per frame, the points of world/refined and of world/projected, and their class ids, equal
-  the vertex count of OUT/clouds/<stem>.ply (unknown points are in them with class id 255);
+- per frame and layer (refined, projected), the points of world/<layer> (as many class ids,
+  none 255) + world/<layer>_unknown (class id 255) equal the vertex count of
+  OUT/clouds/<stem>.ply; world/refined's class ids, counted per class, and its unknown points
+  equal the PLY's `label`s (the refined labels: the points are in another order);
 - per frame, the boxes of world/boxes equal those of OUT/boxes/<stem>.json;
 - every camera's colour image (an EncodedImage with its media type: the recording's file),
   depth image, 2D labels and refined labels are there for every frame (with --recording
@@ -42,6 +44,39 @@ def ply_vertex_count(path: Path) -> int:
             if line == "end_header":
                 break
     raise ValueError(f"{path}: no `element vertex` in the header")
+
+
+def ply_labels(path: Path):
+    """The `label` of every vertex of a binary little-endian PLY (numpy uint8 array)."""
+    import numpy as np
+
+    types = {"float": "<f4", "uchar": "u1", "uint": "<u4", "int": "<i4", "ushort": "<u2",
+             "short": "<i2", "char": "i1", "double": "<f8"}
+    fields = []
+    with open(path, "rb") as f:
+        while True:
+            line = f.readline().decode("ascii", "replace").strip()
+            if line.startswith("format") and "binary_little_endian" not in line:
+                raise ValueError(f"{path}: {line}: only binary_little_endian is read")
+            if line.startswith("element vertex"):
+                n = int(line.split()[2])
+            elif line.startswith("property"):
+                _, kind, name = line.split()
+                fields.append((name, types[kind]))
+            elif line == "end_header" or not line:
+                break
+        return np.fromfile(f, dtype=np.dtype(fields), count=n)["label"]
+
+
+def class_counts(values) -> dict[int, int]:
+    """Class id -> count over the cells of one column (lists of class ids)."""
+    import numpy as np
+
+    cells = [np.asarray(v, dtype=np.int64) for v in values if v is not None]
+    if not cells:
+        return {}
+    ids, counts = np.unique(np.concatenate(cells), return_counts=True)
+    return {int(i): int(c) for i, c in zip(ids, counts)}
 
 
 def column(df, entity: str, archetype: str, component: str) -> str | None:
@@ -79,6 +114,7 @@ def main() -> int:
         import rerun as rr
         import rerun.experimental as rrx
         import datafusion  # noqa: F401  (the dataframe API's engine)
+        import numpy as np
     except ImportError as e:
         print(
             f"check_rrd: the Rerun SDK is not installed ({e}); "
@@ -131,17 +167,35 @@ def main() -> int:
         rows = rows_of(index)
         want = ply_vertex_count(args.run / "clouds" / f"{stem}.ply")
         total_points += want
+        labels = ply_labels(args.run / "clouds" / f"{stem}.ply")
         for layer in ("refined", "projected"):
-            points = count(rows, f"world/{layer}", "Points3D", "positions")
+            known = count(rows, f"world/{layer}", "Points3D", "positions")
             ids = count(rows, f"world/{layer}", "Points3D", "class_ids")
-            if points is None:
-                failures.append(f"frame {stem}: no world/{layer} points")
+            # An entity whose positions are always empty has no positions column.
+            unknown = count(rows, f"world/{layer}_unknown", "Points3D", "positions") or 0
+            if known is None or not present(rows, f"world/{layer}_unknown", "Points3D",
+                                            "class_ids"):
+                failures.append(f"frame {stem}: no world/{layer} or world/{layer}_unknown")
                 continue
-            if points != want or ids != want:
+            if known + unknown != want or ids != known:
                 failures.append(
-                    f"frame {stem}: world/{layer} has {points} points and {ids} class ids, "
-                    f"the PLY {want}"
+                    f"frame {stem}: world/{layer} has {known} points ({ids} class ids) + "
+                    f"{unknown} unknown points, the PLY {want}"
                 )
+            name = column(df, f"world/{layer}", "Points3D", "class_ids")
+            got = class_counts(rows[name]) if name else {}
+            if 255 in got:
+                failures.append(f"frame {stem}: world/{layer} has {got[255]} unknown points")
+            name = column(df, f"world/{layer}_unknown", "Points3D", "class_ids")
+            if unknown and (name is None or set(class_counts(rows[name])) != {255}):
+                failures.append(f"frame {stem}: world/{layer}_unknown: class ids not 255")
+            if layer == "refined":
+                ply = {int(k): int(v) for k, v in zip(*np.unique(labels, return_counts=True))}
+                if {**got, **({255: unknown} if unknown else {})} != ply:
+                    failures.append(
+                        f"frame {stem}: world/refined's class ids {sorted(got.items())} + "
+                        f"{unknown} unknown, the PLY's labels {sorted(ply.items())}"
+                    )
         clusters = count(rows, "world/clusters", "Points3D", "positions")
         if args.clusters == "yes" and clusters != want:
             failures.append(f"frame {stem}: world/clusters has {clusters} points, the PLY {want}")

@@ -25,8 +25,10 @@
 //! - Depth: the raw `u16` values with Rerun's `meter` = the camera's `depth_scale` (raw
 //!   units per metre); `depth_shift_mm` is not applied.
 //! - Class ids: our on-disk label ids (0..7, [`bodyseg_core::Class`]) with our names and
-//!   palette in an `AnnotationContext` on `world`, where id 255 is `unknown` (light grey):
-//!   unknown points stay in their cloud's entity with id 255, as unknown pixels in images.
+//!   palette in an `AnnotationContext` on `world`; unknown points (id 255) are logged apart
+//!   (`…_unknown`, class id 255), and id 255 in images is annotated `unknown`.
+//! - Clouds: the projected and the refined cloud share their points, gathered once into
+//!   one positions array ordered so that each entity is a slice of it (`order.rs`).
 //! - Timelines: `frame` = the frame's index among the recording's frames (sequence);
 //!   `time` = its time stamp, when the recording has a `stamps.csv`.
 
@@ -34,6 +36,8 @@ pub mod paths;
 
 #[cfg(feature = "rerun")]
 mod encoder;
+#[cfg(feature = "rerun")]
+mod order;
 #[cfg(feature = "rerun")]
 mod sink;
 #[cfg(feature = "rerun")]

@@ -3,10 +3,14 @@
 
 /// The world frame (z up); holds the class `AnnotationContext`.
 pub const WORLD: &str = "world";
-/// The projected cloud: every point with its class id (255 = unknown).
+/// The projected cloud's labelled points (class ids).
 pub const PROJECTED: &str = "world/projected";
-/// The refined cloud: every point with its class id (255 = unknown).
+/// The projected cloud's unknown points.
+pub const PROJECTED_UNKNOWN: &str = "world/projected_unknown";
+/// The refined cloud's labelled points (class ids).
 pub const REFINED: &str = "world/refined";
+/// The refined cloud's unknown points.
+pub const REFINED_UNKNOWN: &str = "world/refined_unknown";
 /// The DBSCAN clusters of the refinement (one colour per cluster, noise grey); hidden by
 /// the file's blueprint.
 pub const CLUSTERS: &str = "world/clusters";

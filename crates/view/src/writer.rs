@@ -8,18 +8,16 @@
 //! logged (back-pressure), which bounds what is queued (memory still grows slowly over a
 //! long recording: docs/notes/2026-12-02-rerun.md).
 
+use crate::order::{self, CloudBatch, Layers, Paint};
 use crate::paths;
 use crate::{CameraView, CloudView, FrameSink, ImageFileFormat, ViewError, ViewFrame};
 use bodyseg_calib::{Intrinsics, Pose, Rig};
-use bodyseg_core::math::Vec3;
 use bodyseg_core::{Class, Label, LabelImage, PersonBox};
 use re_sdk::blueprint::{
     Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial2DView, Spatial3DView,
     TimeSeriesView, Vertical,
 };
-use re_sdk::external::arrow::array::{ArrayRef, FixedSizeListArray, Float32Array, UInt16Array};
-use re_sdk::external::arrow::buffer::ScalarBuffer;
-use re_sdk::external::arrow::datatypes::{DataType, Field};
+use re_sdk::external::arrow::array::ArrayRef;
 use re_sdk::{RecordingStream, RecordingStreamBuilder, SerializedComponentBatch};
 use re_sdk_types::archetypes::{
     AnnotationContext, Boxes3D, DepthImage, EncodedImage, Image, Pinhole, Points3D, Scalars,
@@ -31,7 +29,6 @@ use re_sdk_types::datatypes::{
 };
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The application id the files carry (the viewer groups recordings by it).
@@ -272,39 +269,38 @@ impl ViewWriter {
         {
             self.log_camera(stem, name, *scale, camera)?;
         }
-        // Projected and refined are the same points with other labels: their positions are
-        // handed to the SDK as one Arrow array, shared (reference counted), and copied once.
-        let mut positions: Option<(&[Vec3], ArrayRef)> = None;
-        for (layer, entity, cloud) in [
-            ("projected", paths::PROJECTED, frame.projected),
-            ("refined", paths::REFINED, frame.refined),
-        ] {
-            if let Some(cloud) = cloud {
-                let xyz = shared_positions(&mut positions, cloud.positions_m);
-                self.log_cloud(stem, layer, entity, &cloud, xyz)?;
+        for (layer, cloud) in [("projected", frame.projected), ("refined", frame.refined)] {
+            if let Some(cloud) = cloud
+                && cloud.labels.len() != cloud.positions_m.len()
+            {
+                return Err(ViewError::CloudLength {
+                    stem: stem.into(),
+                    layer,
+                    positions: cloud.positions_m.len(),
+                    labels: cloud.labels.len(),
+                });
             }
         }
-        if let (true, Some(clusters), Some(cloud)) = (
+        let clusters = match (
             self.clusters,
             frame.clusters,
             frame.refined.or(frame.projected),
         ) {
-            if clusters.len() != cloud.positions_m.len() {
-                return Err(ViewError::CloudLength {
-                    stem: stem.into(),
-                    layer: "clusters",
-                    positions: cloud.positions_m.len(),
-                    labels: clusters.len(),
-                });
+            (true, Some(clusters), Some(cloud)) => {
+                if clusters.len() != cloud.positions_m.len() {
+                    return Err(ViewError::CloudLength {
+                        stem: stem.into(),
+                        layer: "clusters",
+                        positions: cloud.positions_m.len(),
+                        labels: clusters.len(),
+                    });
+                }
+                Some(clusters)
             }
-            let colors = clusters.iter().map(|c| cluster_color(*c));
-            let xyz = shared_positions(&mut positions, cloud.positions_m);
-            self.log(
-                paths::CLUSTERS,
-                &points(xyz, None)
-                    .with_colors(colors)
-                    .with_radii([POINT_RADIUS_M]),
-            )?;
+            _ => None,
+        };
+        for batch in frame_cloud_batches(frame.projected, frame.refined, clusters) {
+            self.log(batch.entity, &points(batch.positions, batch.paint))?;
         }
         if let Some(boxes) = frame.boxes {
             self.log(paths::BOXES, &boxes_3d(boxes))?;
@@ -387,29 +383,6 @@ impl ViewWriter {
             }
         }
         Ok(())
-    }
-
-    /// Logs one cloud layer at `entity`: its positions (`xyz`, built from
-    /// `cloud.positions_m`) and one class id per point (255 for unknown points, which the
-    /// annotation context names `unknown`).
-    fn log_cloud(
-        &self,
-        stem: &str,
-        layer: &'static str,
-        entity: &str,
-        cloud: &CloudView<'_>,
-        xyz: ArrayRef,
-    ) -> Result<(), ViewError> {
-        if cloud.labels.len() != cloud.positions_m.len() {
-            return Err(ViewError::CloudLength {
-                stem: stem.into(),
-                layer,
-                positions: cloud.positions_m.len(),
-                labels: cloud.labels.len(),
-            });
-        }
-        let ids: Vec<u16> = cloud.labels.iter().map(|l| u16::from(l.id())).collect();
-        self.log(entity, &points(xyz, Some(ids)).with_radii([POINT_RADIUS_M]))
     }
 
     fn log(&self, entity: &str, what: &dyn re_sdk::AsComponents) -> Result<(), ViewError> {
@@ -504,41 +477,71 @@ fn pinhole(k: &Intrinsics) -> Pinhole {
     .with_principal_point([k.cx as f32, k.cy as f32])
 }
 
-/// The positions of a cloud as the Arrow array of a `Position3D` batch (x, y, z per point,
-/// metres): `last`'s array when it was built from the same slice (the projected and the
-/// refined cloud share their points), else a new one, which becomes `last`.
-fn shared_positions<'a>(last: &mut Option<(&'a [Vec3], ArrayRef)>, xyz_m: &'a [Vec3]) -> ArrayRef {
-    if let Some((slice, array)) = last
-        && std::ptr::eq(*slice, xyz_m)
-    {
-        return array.clone();
+/// The batches of a frame's clouds ([`order::cloud_batches`]): the projected and the
+/// refined cloud gathered together when they share their points (the same slice), else
+/// each on its own; the clusters (of the refined cloud, else the projected) with them.
+fn frame_cloud_batches(
+    projected: Option<CloudView<'_>>,
+    refined: Option<CloudView<'_>>,
+    clusters: Option<&[Option<(u32, u32)>]>,
+) -> Vec<CloudBatch> {
+    let shared = match (projected, refined) {
+        (Some(p), Some(r)) => std::ptr::eq(p.positions_m, r.positions_m),
+        _ => true,
+    };
+    if shared {
+        let Some(cloud) = refined.or(projected) else {
+            return Vec::new();
+        };
+        return order::cloud_batches(
+            Layers {
+                positions_m: cloud.positions_m,
+                projected: projected.map(|c| c.labels),
+                refined: refined.map(|c| c.labels),
+                clusters,
+            },
+            cluster_color,
+        );
     }
-    let xyz = Float32Array::new(ScalarBuffer::from(xyz_m.as_flattened().to_vec()), None);
-    // The datatype of `Position3D` (`Vec3D`): a non-nullable `item` of f32, 3 per point.
-    let item = Arc::new(Field::new("item", DataType::Float32, false));
-    let array: ArrayRef = Arc::new(FixedSizeListArray::new(item, 3, Arc::new(xyz), None));
-    *last = Some((xyz_m, array.clone()));
-    array
+    let mut batches = Vec::new();
+    for (cloud, is_refined) in [(projected, false), (refined, true)] {
+        let Some(cloud) = cloud else { continue };
+        batches.extend(order::cloud_batches(
+            Layers {
+                positions_m: cloud.positions_m,
+                projected: (!is_refined).then_some(cloud.labels),
+                refined: is_refined.then_some(cloud.labels),
+                clusters: clusters.filter(|_| is_refined),
+            },
+            cluster_color,
+        ));
+    }
+    batches
 }
 
-/// A `Points3D` of these positions ([`shared_positions`]) and, when given, these class ids
-/// (one per point), both handed to the SDK as ready-made Arrow arrays. Through
-/// `Position3D` / `ClassId` values the SDK rebuilds each array by growing a `Vec` point by
-/// point: ~16 ms of user CPU per 3-camera frame of ~350k points, and the fresh pages of
-/// its reallocations showed as system time (docs/notes/2026-12-02-rerun.md, 2026-12-03).
-fn points(positions: ArrayRef, class_ids: Option<Vec<u16>>) -> Points3D {
+/// A `Points3D` of these positions (a `Position3D` batch) painted so, handed to the SDK as
+/// ready-made Arrow arrays. Through `Position3D` / `ClassId` values the SDK rebuilds each
+/// array by growing a `Vec` point by point: ~16 ms of user CPU per 3-camera frame of
+/// ~350k points, and the fresh pages of its reallocations showed as system time
+/// (docs/notes/2026-12-02-rerun.md, 2026-12-03).
+fn points(positions: ArrayRef, paint: Paint) -> Points3D {
     let mut p = Points3D::update_fields();
     p.positions = Some(SerializedComponentBatch::new(
         positions,
         Points3D::descriptor_positions(),
     ));
-    p.class_ids = class_ids.map(|ids| {
-        SerializedComponentBatch::new(
-            Arc::new(UInt16Array::new(ScalarBuffer::from(ids), None)),
-            Points3D::descriptor_class_ids(),
-        )
-    });
-    p
+    let p = match paint {
+        Paint::Classes(ids) => {
+            p.class_ids = Some(SerializedComponentBatch::new(
+                ids,
+                Points3D::descriptor_class_ids(),
+            ));
+            p
+        }
+        Paint::Unknown => p.with_class_ids([u16::from(Label::UNKNOWN_ID)]),
+        Paint::Colors(colors) => p.with_colors(colors),
+    };
+    p.with_radii([POINT_RADIUS_M])
 }
 
 fn segmentation(l: &LabelImage) -> SegmentationImage {
@@ -578,34 +581,68 @@ fn cluster_color(c: Option<(u32, u32)>) -> Rgba32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use re_sdk::external::arrow::array::Array;
+    use re_sdk::external::arrow::array::{Array, AsArray};
+    use re_sdk::external::arrow::datatypes::Float32Type;
+
+    fn allocation(b: &CloudBatch) -> *const u8 {
+        let list = b.positions.as_fixed_size_list();
+        let values = list.values().as_primitive::<Float32Type>().values();
+        values.inner().data_ptr().as_ptr()
+    }
 
     #[test]
-    fn shared_positions_builds_one_array_per_slice() {
-        let a: Vec<Vec3> = vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
-        let b = a.clone();
-        let mut last = None;
-        let first = shared_positions(&mut last, &a);
-        let again = shared_positions(&mut last, &a);
+    fn layers_of_one_slice_share_one_positions_array_others_do_not() {
+        let xyz: Vec<[f32; 3]> = (0..4).map(|i| [i as f32, 0.0, 0.0]).collect();
+        let copy = xyz.clone();
+        let p = [
+            Label::BACKGROUND,
+            Label::UNKNOWN,
+            Label::BACKGROUND,
+            Label::UNKNOWN,
+        ];
+        let r = [
+            Label::BACKGROUND,
+            Label::UNKNOWN,
+            Label::UNKNOWN,
+            Label::UNKNOWN,
+        ];
+        let clusters = [None; 4];
+        let view = |positions_m, labels| CloudView {
+            positions_m,
+            labels,
+        };
+        // The same slice (C empty): every entity, the clusters too, in one allocation.
+        let batches =
+            frame_cloud_batches(Some(view(&xyz, &p)), Some(view(&xyz, &r)), Some(&clusters));
+        assert_eq!(batches.len(), 5);
         assert!(
-            Arc::ptr_eq(&first, &again),
-            "the same slice reuses its array"
+            batches
+                .iter()
+                .all(|b| allocation(b) == allocation(&batches[0]))
         );
-        let other = shared_positions(&mut last, &b);
+        // Equal values in another slice: one array per layer, the clusters the refined's.
+        let batches =
+            frame_cloud_batches(Some(view(&xyz, &p)), Some(view(&copy, &r)), Some(&clusters));
+        let entities: Vec<&str> = batches.iter().map(|b| b.entity).collect();
+        assert_eq!(
+            entities,
+            [
+                paths::PROJECTED,
+                paths::PROJECTED_UNKNOWN,
+                paths::REFINED,
+                paths::REFINED_UNKNOWN,
+                paths::CLUSTERS
+            ]
+        );
+        assert_eq!(allocation(&batches[0]), allocation(&batches[1]));
+        assert_ne!(allocation(&batches[0]), allocation(&batches[2]));
         assert!(
-            !Arc::ptr_eq(&first, &other),
-            "another slice, even with equal values, gets its own array"
+            batches[2..]
+                .iter()
+                .all(|b| allocation(b) == allocation(&batches[2]))
         );
-        assert_eq!(other.len(), 2);
-        let list = other
-            .as_any()
-            .downcast_ref::<FixedSizeListArray>()
-            .expect("a FixedSizeList of 3 f32");
-        let values = list
-            .values()
-            .as_any()
-            .downcast_ref::<Float32Array>()
-            .expect("f32 values");
-        assert_eq!(values.values().to_vec(), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(batches[0].positions.len(), 2);
+        assert_eq!(batches[3].positions.len(), 3);
+        assert!(frame_cloud_batches(None, None, None).is_empty());
     }
 }
