@@ -8,11 +8,10 @@ use crate::blazepose::{
     crop_into, decode, label_person, landmark, merge_people, mirror_crop, unmirror_outputs,
 };
 use crate::bodypix::{BodyPix, BodyPixOptions};
-use crate::onnx::{float_dims, load_session};
+use crate::onnx::{float_dims, inference_error, load_session, named_output, run_one_input};
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
 use bodyseg_core::{LabelImage, RgbImage};
 use ort::session::Session;
-use ort::value::TensorRef;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -473,25 +472,15 @@ impl Worker {
             mirror_crop(&mut self.input, INPUT);
         }
         let path = model_path;
-        let infer = |cause: String| ParsingError::Inference {
-            cause,
-            path: path.to_path_buf(),
-        };
-        let tensor = TensorRef::from_array_view(([1usize, INPUT, INPUT, 3], &self.input[..]))
-            .map_err(|e| infer(e.to_string()))?;
-        let outputs = self
-            .session
-            .run(ort::inputs![INPUT_NAME => tensor])
-            .map_err(|e| infer(e.to_string()))?;
-        let get = |name: &str| -> Result<&[f32], ParsingError> {
-            let value = outputs
-                .get(name)
-                .ok_or_else(|| infer(format!("no output {name}")))?;
-            let (_, data) = value
-                .try_extract_tensor::<f32>()
-                .map_err(|e| infer(format!("{name}: {e}")))?;
-            Ok(data)
-        };
+        let infer = |cause: String| inference_error(path, cause);
+        let outputs = run_one_input(
+            &mut self.session,
+            INPUT_NAME,
+            [1, INPUT, INPUT, 3],
+            &self.input,
+            path,
+        )?;
+        let get = |name: &str| named_output::<f32>(&outputs, name, path).map(|(_, data)| data);
         let landmarks = get(LANDMARKS.0)?;
         let flag = get(FLAG.0)?.first().copied().unwrap_or(0.0);
         let mask = get(MASK.0)?;

@@ -13,11 +13,11 @@
 //! every image pixel the widened box covers.
 
 use crate::ParsingError;
-use crate::onnx::load_session;
+use crate::onnx::{inference_error, load_session, named_output, run_one_input};
 use crate::segmenter::PixelBox;
 use bodyseg_core::{Label, LabelImage, RgbImage};
 use ort::session::Session;
-use ort::value::{TensorElementType, TensorRef, ValueType};
+use ort::value::{TensorElementType, ValueType};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -314,25 +314,18 @@ impl BodyPix {
         let k = (options.long_side.clamp(STRIDE, MAX_LONG_SIDE) + 1) as f64 / w.max(h);
         let (win, hin) = (snap(w * k), snap(h * k));
         crop_extent(image, rect, (win, hin), &mut self.input);
-        let path = self.model_path.clone();
-        let infer = |cause: String| ParsingError::Inference {
-            cause,
-            path: path.clone(),
-        };
-        let tensor = TensorRef::from_array_view(([1usize, hin, win, 3], &self.input[..]))
-            .map_err(|e| infer(e.to_string()))?;
-        let outputs = self
-            .session
-            .run(ort::inputs![INPUT_NAME => tensor])
-            .map_err(|e| infer(e.to_string()))?;
+        let path = &self.model_path;
+        let infer = |cause: String| inference_error(path, cause);
+        let outputs = run_one_input(
+            &mut self.session,
+            INPUT_NAME,
+            [1, hin, win, 3],
+            &self.input,
+            path,
+        )?;
         let (gw, gh) = (win / STRIDE + 1, hin / STRIDE + 1);
         let get = |(name, channels, scale, zero): (&str, usize, f32, f32)| {
-            let value = outputs
-                .get(name)
-                .ok_or_else(|| infer(format!("no output {name}")))?;
-            let (shape, data) = value
-                .try_extract_tensor::<u8>()
-                .map_err(|e| infer(format!("{name}: {e}")))?;
+            let (shape, data) = named_output::<u8>(&outputs, name, path)?;
             let want = [1, gh as i64, gw as i64, channels as i64];
             if shape[..] != want[..] || data.len() != gw * gh * channels {
                 return Err(infer(format!(

@@ -9,8 +9,10 @@ use crate::transform::{
 use bodyseg_core::{Label, LabelImage, NUM_CLASSES};
 use ort::environment::Environment;
 use ort::session::Session;
+use ort::session::SessionOutputs;
 use ort::session::builder::GraphOptimizationLevel;
-use ort::value::{Tensor, ValueType};
+use ort::value::{PrimitiveTensorElementType, Shape, Tensor, TensorRef, ValueType};
+use std::fmt::Debug;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -35,6 +37,45 @@ impl Default for OnnxOptions {
 /// The process's ONNX Runtime environment and the library it came from. ONNX Runtime
 /// allows one environment per process; it is created by the first [`load_runtime`].
 static RUNTIME: Mutex<Option<(Environment, PathBuf)>> = Mutex::new(None);
+
+/// [`ParsingError::Inference`] for `cause`, naming the model file `path`.
+pub(crate) fn inference_error(path: &Path, cause: String) -> ParsingError {
+    ParsingError::Inference {
+        cause,
+        path: path.to_path_buf(),
+    }
+}
+
+/// One run of `session` on the tensor `data` of `shape`, fed to the input `input_name`
+/// (BlazePose's and BodyPix's crops: one NHWC image each); errors name `path`.
+pub(crate) fn run_one_input<'s, T: PrimitiveTensorElementType + Debug + Clone + 'static>(
+    session: &'s mut Session,
+    input_name: &'static str,
+    shape: [usize; 4],
+    data: &[T],
+    path: &Path,
+) -> Result<SessionOutputs<'s>, ParsingError> {
+    let tensor = TensorRef::from_array_view((shape, data))
+        .map_err(|e| inference_error(path, e.to_string()))?;
+    session
+        .run(ort::inputs![input_name => tensor])
+        .map_err(|e| inference_error(path, e.to_string()))
+}
+
+/// The output `name` of `outputs` as its shape and values of type `T`; errors (no such
+/// output, another element type) name `path`.
+pub(crate) fn named_output<'o, T: PrimitiveTensorElementType>(
+    outputs: &'o SessionOutputs<'_>,
+    name: &str,
+    path: &Path,
+) -> Result<(&'o Shape, &'o [T]), ParsingError> {
+    let value = outputs
+        .get(name)
+        .ok_or_else(|| inference_error(path, format!("no output {name}")))?;
+    value
+        .try_extract_tensor::<T>()
+        .map_err(|e| inference_error(path, format!("{name}: {e}")))
+}
 
 /// A session of `model_bytes` (`model_path` names it in errors) in the ONNX Runtime of
 /// `runtime_library`: full graph optimisation, `threads` intra-op threads (0 lets ONNX
