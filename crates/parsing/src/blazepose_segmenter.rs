@@ -86,7 +86,8 @@ pub struct BlazePoseOptions {
     /// ([`BlazePoseSegmenter::with_bodypix`]).
     pub bodypix: BodyPixOptions,
     /// With BodyPix's parts: a pixel of BlazePose's person where BodyPix's person
-    /// probability is below this is background (`person_mask::veto_blazepose`; 0: off).
+    /// probability is below this is not the person's, on people BodyPix sees (at least
+    /// half of their pixels at BodyPix's threshold; `person_mask::veto_blazepose`). 0: off.
     /// Default 0.15, chosen on the tune split of the real photographs
     /// (docs/notes/2026-12-03-blazepose.md, 2026-12-04 session 42: tune mIoU + person IoU
     /// over 0, 0.05, 0.1, 0.15, 0.2, 0.3, flat from 0.1 to 0.2): BlazePose's mask, cut at

@@ -73,9 +73,17 @@ impl BlazePoseSegmenter {
                 (None, None) => {}
             }
         }
-        let mut labels = merge_people(w, h, &people);
         let merged = merge_part_maps(w, h, &maps);
-        veto_blazepose(&mut labels, &merged, options.bodypix_background_below);
+        for person in &mut people {
+            veto_blazepose(
+                person,
+                &merged,
+                options.bodypix_background_below,
+                options.bodypix.threshold,
+                w,
+            );
+        }
+        let mut labels = merge_people(w, h, &people);
         if options.drop_detached {
             anchors.blazepose = labels
                 .labels
