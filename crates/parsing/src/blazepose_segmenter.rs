@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 mod parts;
+mod person_mask;
 
 /// Which of BlazePose's landmark models runs (the sizes MediaPipe ships).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -84,6 +85,20 @@ pub struct BlazePoseOptions {
     /// BodyPix's crop and threshold, when the body parts come from BodyPix
     /// ([`BlazePoseSegmenter::with_bodypix`]).
     pub bodypix: BodyPixOptions,
+    /// With BodyPix's parts: a pixel of BlazePose's person where BodyPix's person
+    /// probability is below this is not the person's, on people BodyPix sees (at least
+    /// half of their pixels at BodyPix's threshold; `person_mask::veto_blazepose`). 0: off.
+    /// Default 0.15, chosen on the tune split of the real photographs
+    /// (docs/notes/2026-12-03-blazepose.md, 2026-12-04 session 42: tune mIoU + person IoU
+    /// over 0, 0.05, 0.1, 0.15, 0.2, 0.3, flat from 0.1 to 0.2): BlazePose's mask, cut at
+    /// the rule's 0.35, is a few pixels wider than the body, and BodyPix's probability
+    /// below 0.15 there marks background far more often than body.
+    pub bodypix_background_below: f64,
+    /// With BodyPix's parts: pieces of the fused person mask that hold no pixel of
+    /// BlazePose's person and no confident landmark, in no region where BlazePose found
+    /// nobody, are background (`person_mask::drop_detached`: BodyPix's parts on a horse
+    /// under its rider). Default on (the tune split does not move; test and hold-out rise).
+    pub drop_detached: bool,
 }
 
 impl Default for BlazePoseOptions {
@@ -97,6 +112,8 @@ impl Default for BlazePoseOptions {
             mirror_average: false,
             rule: RuleConfig::default(),
             bodypix: BodyPixOptions::default(),
+            bodypix_background_below: 0.15,
+            drop_detached: true,
         }
     }
 }
@@ -398,6 +415,22 @@ impl BlazePoseSegmenter {
     }
 }
 
+/// The labels of `pose`, the person of `region` in `image`, with the region's depth;
+/// `None` when the pose labels no pixel.
+fn person_of(
+    pose: &DecodedPose,
+    image: &RgbImage,
+    region: &PersonRegion,
+    options: &BlazePoseOptions,
+) -> Option<PersonLabels> {
+    let (w, h) = (image.width as usize, image.height as usize);
+    label_person(pose, &options.rule, w, h).map(|mut person| {
+        person.depth_m =
+            (region.depth_m.is_finite() && region.depth_m > 0.0).then_some(region.depth_m);
+        person
+    })
+}
+
 impl Worker {
     /// The labels of `region`'s person, `None` when the region is unusable or nobody is
     /// found there.
@@ -408,15 +441,8 @@ impl Worker {
         model_path: &Path,
         options: &BlazePoseOptions,
     ) -> Result<Option<PersonLabels>, ParsingError> {
-        let Some(pose) = self.accepted_pose(image, region, model_path, options)? else {
-            return Ok(None);
-        };
-        let (w, h) = (image.width as usize, image.height as usize);
-        Ok(label_person(&pose, &options.rule, w, h).map(|mut person| {
-            person.depth_m =
-                (region.depth_m.is_finite() && region.depth_m > 0.0).then_some(region.depth_m);
-            person
-        }))
+        let pose = self.accepted_pose(image, region, model_path, options)?;
+        Ok(pose.and_then(|pose| person_of(&pose, image, region, options)))
     }
 
     /// The pose of `region`'s person, `None` when the region is unusable or its pose flag

@@ -27,8 +27,12 @@ pub enum BodyParts {
     Landmarks,
     /// BodyPix 2.0 (`models/bodypix_mobilenet_v1_075_quant.onnx`) on the same regions: the
     /// person is BlazePose's mask ∪ BodyPix's, the part BodyPix's, except BlazePose's legs
-    /// ([`crate::bodypix::fuse`]). About one more model run per person. The default
-    /// (real photographs: body-part mIoU 0.550 against 0.462, docs/results.md).
+    /// ([`crate::bodypix::fuse`]); BlazePose's rim where BodyPix is sure of background and
+    /// pieces held by no landmark or BlazePose pixel are taken off
+    /// ([`crate::BlazePoseOptions::bodypix_background_below`],
+    /// [`crate::BlazePoseOptions::drop_detached`]). About one more model run per person.
+    /// The default (real photographs, tune + test: body-part mIoU 0.554 against 0.462,
+    /// docs/results.md).
     #[default]
     Bodypix,
 }

@@ -9,7 +9,8 @@
 //! ```
 //!
 //! KEY=VALUE (BlazePose only): `parts=bodypix|landmarks` (`parsing.body_parts`; default
-//! landmarks) with `bodypix_margin`, `bodypix_long_side`, `bodypix_threshold`; `roi_scale`,
+//! landmarks) with `bodypix_margin`, `bodypix_long_side`, `bodypix_threshold`,
+//! `bodypix_background_below`, `drop_detached` (0/1); `roi_scale`,
 //! `refine_passes`, `threads`, `min_pose_flag`, the switches `blank_retry`,
 //! `mirror_average`, `flat_shoulders`, `thighs_past_frame` (0/1),
 //! any numeric field of the rule's `RuleConfig` (`r_torso=0.3`, ...), and `poses=1` to
@@ -106,6 +107,10 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
                 "bodypix_threshold" => {
                     options.bodypix.threshold = value.parse().map_err(|e| bad(&e))?
                 }
+                "bodypix_background_below" => {
+                    options.bodypix_background_below = value.parse().map_err(|e| bad(&e))?
+                }
+                "drop_detached" => options.drop_detached = value == "1",
                 "blank_retry" => options.blank_retry = value == "1",
                 "mirror_average" => options.mirror_average = value == "1",
                 "flat_shoulders" => options.rule.flat_shoulders = value == "1",
@@ -114,8 +119,8 @@ fn open(which: &str, settings: &[String]) -> anyhow::Result<Opened> {
                     Some(field) => *field = value.parse().map_err(|e| bad(&e))?,
                     None => bail!(
                         "{key}: unknown setting (parts, bodypix_margin, bodypix_long_side, \
-                         bodypix_threshold, roi_scale, refine_passes, threads, min_pose_flag, \
-                         poses, or a RuleConfig field; booleans 0/1)"
+                         bodypix_threshold, bodypix_background_below, drop_detached, roi_scale, \
+                         refine_passes, threads, min_pose_flag, poses, or a RuleConfig field; booleans 0/1)"
                     ),
                 },
             }
