@@ -11,6 +11,7 @@
 //! encoder (the same framing types, the manifest built by its `RrdManifestBuilder`), and
 //! `scripts/check_rrd.py` reads the files back with the Python SDK.
 
+use crate::ipc::IpcStream;
 use re_protos::common::v1alpha1::Compression as ProtoCompression;
 use re_protos::log_msg::v1alpha1::{ArrowMsg as ProtoArrowMsg, Encoding as ProtoEncoding};
 use re_sdk::external::arrow::array::RecordBatch;
@@ -125,11 +126,19 @@ impl<W: Write> RrdEncoder<W> {
     /// The batch as an Arrow IPC stream into `ipc`; its length.
     fn encode_ipc(&mut self, batch: &RecordBatch) -> Result<u64, String> {
         self.ipc.clear();
-        let mut writer =
-            StreamWriter::try_new(&mut self.ipc, batch.schema_ref()).map_err(|e| e.to_string())?;
-        writer.write(batch).map_err(|e| e.to_string())?;
-        writer.finish().map_err(|e| e.to_string())?;
-        drop(writer);
+        match IpcStream::new(batch).map_err(|e| e.to_string())? {
+            Some(stream) => {
+                // One copy of each buffer, into a buffer kept from chunk to chunk.
+                self.ipc.reserve(stream.len());
+                stream.write_to(&mut self.ipc).map_err(|e| e.to_string())?;
+            }
+            None => {
+                let mut writer = StreamWriter::try_new(&mut self.ipc, batch.schema_ref())
+                    .map_err(|e| e.to_string())?;
+                writer.write(batch).map_err(|e| e.to_string())?;
+                writer.finish().map_err(|e| e.to_string())?;
+            }
+        }
         Ok(self.ipc.len() as u64)
     }
 
