@@ -105,6 +105,11 @@ impl IpcStream {
         self.len
     }
 
+    /// The body's buffers (without padding), in order.
+    pub(crate) fn body(&self) -> impl Iterator<Item = &[u8]> {
+        self.body.iter().map(|b| b.as_slice())
+    }
+
     /// Writes the stream ([`IpcStream::len`] bytes) to `out`.
     ///
     /// # Errors
