@@ -4,17 +4,27 @@
 # <= 1.15), and the peak memory (max RSS, /usr/bin/time -v) of `run --rerun` at two
 # recording lengths (flat memory: the file streams frame by frame).
 #
-#   scripts/bench_rerun.sh [FRAMES] [LONG_FRAMES] [SHORT_FRAMES]   (default 24, 500, 100)
+#   scripts/bench_rerun.sh [FRAMES] [LONG_FRAMES] [SHORT_FRAMES] [MODEL_FRAMES]
+#                                                          (default 24, 500, 100, 8)
 #
 # Needs a release binary built with the feature: cargo build --release --features rerun.
-# Time: the ratio of `run`'s wall-clock times and of its CPU times (user + sys, from
-# /usr/bin/time; the figure to compare on a loaded machine), each the median of 3 (recorded
-# parser, no figure), after a warm-up; memory: 1 camera, colour 480 px wide, recorded parser.
+# Time, for two runs of the handover scene (3 cameras), each the ratio of `run`'s wall-clock
+# times and of its CPU times (user + sys, from /usr/bin/time; the figure to compare on a
+# loaded machine), medians of 3 rounds (one run without and one with `--rerun` per round)
+# after a warm-up, no figure:
+#   - the default parser (BlazePose + BodyPix, `--parser model`: what `--parser auto` picks
+#     on a recording without recorded labels) on MODEL_FRAMES frames: a user's run. Needs
+#     the ONNX Runtime (ORT_DYLIB_PATH, else .deps/onnxruntime/); skipped, saying so,
+#     without it. The 2D parsing dominates its time, so few frames are enough;
+#   - the recorded parser (`--parser recorded`: no 2D parsing, the cheapest run there is) on
+#     FRAMES frames: the worst case for the ratio.
+# Memory: 1 camera, colour 480 px wide, recorded parser.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 frames="${1:-24}"
 long="${2:-500}"
 short="${3:-100}"
+model_frames="${4:-8}"
 bin="${BODYSEG:-target/release/bodyseg}"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
@@ -26,30 +36,50 @@ synth() { # synth NAME ARGS...: the recording $recs/NAME, made once
     local name="$1"; shift
     [ -f "$recs/$name/rig.toml" ] || "$bin" synth --no-preview "$@" --out "$recs/$name" >/dev/null 2>&1
 }
-synth "handover$frames" --preset handover --frames "$frames" --seed 1
 
-run() { # run OUT [extra args]: "wall cpu" seconds of one full run (cpu = user + sys)
-    local out="$1"; shift
+run() { # run REC OUT [extra args]: "wall cpu" seconds of one full run (cpu = user + sys)
+    local rec="$1" out="$2"; shift 2
     /usr/bin/time -f "%e %U %S" -o "$tmp/time" \
-        "$bin" --quiet run --recording "$recs/handover$frames" --out "$out" --parser recorded --figure none --force "$@" >/dev/null
+        "$bin" --quiet run --recording "$recs/$rec" --out "$out" --figure none --force "$@" >/dev/null
     awk '{printf "%s %.2f\n", $1, $2 + $3}' "$tmp/time"
 }
 median() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
 
-run "$tmp/warm" >/dev/null
-plain=(); with=(); plain_cpu=(); with_cpu=()
-for _ in 1 2 3; do
-    read -r wall cpu < <(run "$tmp/plain"); plain+=("$wall"); plain_cpu+=("$cpu")
-    read -r wall cpu < <(run "$tmp/with" --rerun "$tmp/with/run.rrd"); with+=("$wall"); with_cpu+=("$cpu")
-done
-p=$(median "${plain[@]}"); w=$(median "${with[@]}")
-pc=$(median "${plain_cpu[@]}"); wc=$(median "${with_cpu[@]}")
-size=$(stat -c %s "$tmp/with/run.rrd")
-printf 'run, %d frames, 3 cameras: %.3f s/frame without --rerun, %.3f s/frame with (ratio %.3f), .rrd %.1f MB\n' \
-    "$frames" "$(echo "$p / $frames" | bc -l)" "$(echo "$w / $frames" | bc -l)" "$(echo "$w / $p" | bc -l)" \
-    "$(echo "$size / 1000000" | bc -l)"
-printf 'run, %d frames, 3 cameras: CPU (user + sys) %.2f s without --rerun, %.2f s with (ratio %.3f)\n' \
-    "$frames" "$pc" "$wc" "$(echo "$wc / $pc" | bc -l)"
+ratio() { # ratio LABEL REC FRAMES PARSER: prints the wall and CPU ratios of --rerun
+    local label="$1" rec="$2" n="$3" parser="$4"
+    run "$rec" "$tmp/warm" --parser "$parser" >/dev/null
+    local plain=() with=() plain_cpu=() with_cpu=() wall cpu
+    for _ in 1 2 3; do
+        read -r wall cpu < <(run "$rec" "$tmp/plain" --parser "$parser"); plain+=("$wall"); plain_cpu+=("$cpu")
+        read -r wall cpu < <(run "$rec" "$tmp/with" --parser "$parser" --rerun "$tmp/with/run.rrd")
+        with+=("$wall"); with_cpu+=("$cpu")
+    done
+    local p w pc wc size
+    p=$(median "${plain[@]}"); w=$(median "${with[@]}")
+    pc=$(median "${plain_cpu[@]}"); wc=$(median "${with_cpu[@]}")
+    size=$(stat -c %s "$tmp/with/run.rrd")
+    printf '%s, %d frames, 3 cameras: wall %.3f s/frame without --rerun, %.3f s/frame with (ratio %.3f), .rrd %.1f MB (%.1f MB/frame)\n' \
+        "$label" "$n" "$(echo "$p / $n" | bc -l)" "$(echo "$w / $n" | bc -l)" "$(echo "$w / $p" | bc -l)" \
+        "$(echo "$size / 1000000" | bc -l)" "$(echo "$size / 1000000 / $n" | bc -l)"
+    printf '%s, %d frames, 3 cameras: CPU (user + sys) %.2f s without --rerun, %.2f s with (ratio %.3f)\n' \
+        "$label" "$n" "$pc" "$wc" "$(echo "$wc / $pc" | bc -l)"
+}
+
+# A user's run: the default parser (BlazePose + BodyPix).
+if [ -z "${ORT_DYLIB_PATH:-}" ]; then
+    ORT_DYLIB_PATH="$(ls .deps/onnxruntime/libonnxruntime.so* 2>/dev/null | head -1 || true)"
+    export ORT_DYLIB_PATH
+fi
+if [ -n "$ORT_DYLIB_PATH" ] && [ -e "$ORT_DYLIB_PATH" ]; then
+    synth "handover$model_frames" --preset handover --frames "$model_frames" --seed 1
+    ratio "default parser (BlazePose + BodyPix)" "handover$model_frames" "$model_frames" model
+else
+    echo "default parser (BlazePose + BodyPix): skipped, no ONNX Runtime (set ORT_DYLIB_PATH)"
+fi
+
+# The worst case: no 2D parsing at all.
+synth "handover$frames" --preset handover --frames "$frames" --seed 1
+ratio "recorded parser (no 2D parsing, worst case)" "handover$frames" "$frames" recorded
 
 # Memory over a long recording: small images, one camera.
 small=(--set rig.cameras=1 --set rig.color_width=480 --set people.count=1)

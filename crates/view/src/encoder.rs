@@ -1,16 +1,23 @@
 //! [`RrdEncoder`]: the `.rrd` stream of `re_log_encoding` 0.36.3's `Encoder` (stream
-//! header, LZ4-compressed Arrow IPC messages, end marker, RRD footer with its manifest),
-//! written with buffers kept from one message to the next.
+//! header, Arrow IPC messages, end marker, RRD footer with its manifest), written with
+//! buffers kept from one message to the next.
 //!
 //! The SDK's `Encoder::append` encodes each chunk into a new `Vec` grown by doubling, LZ4
 //! compresses it into another new `Vec`, then copies the result into a scratch `Vec` before
 //! writing it: on this project's 2-core VM the fresh pages of those buffers and the copies
 //! were most of the writer thread's time (docs/notes/2026-12-02-rerun.md, 2026-12-04,
-//! session 41). Here the IPC and LZ4 buffers live as long as the file, and a chunk's
-//! payload goes from the LZ4 buffer straight to the file. The bytes are those of the SDK's
-//! encoder (the same framing types, the manifest built by its `RrdManifestBuilder`), and
-//! `scripts/check_rrd.py` reads the files back with the Python SDK.
+//! sessions 41 and 42). Here a chunk's Arrow IPC stream is gathered from the batch's own
+//! buffers ([`IpcStream`]) and copied once: into the IPC buffer kept as long as the file, then
+//! LZ4-compressed into the LZ4 buffer (also kept) and written from there; or, for a chunk that
+//! LZ4 would barely shrink (float positions, the colour images' PNG/JPEG files), straight
+//! into the file, uncompressed. Each message says its compression (`ArrowMsg.compression`,
+//! which `re_log_encoding`'s decoder reads per message; the stream header's LZ4 is the
+//! default its encoder writes, and its decoder does not decompress by it). The bytes are those
+//! of the SDK's encoder (the same framing types, the manifest built by its
+//! `RrdManifestBuilder`) but for that per-chunk choice, and `scripts/check_rrd.py` reads the
+//! files back with the Python SDK.
 
+use crate::ipc::IpcStream;
 use re_protos::common::v1alpha1::Compression as ProtoCompression;
 use re_protos::log_msg::v1alpha1::{ArrowMsg as ProtoArrowMsg, Encoding as ProtoEncoding};
 use re_sdk::external::arrow::array::RecordBatch;
@@ -27,6 +34,26 @@ use std::io::Write;
 /// Protobuf key of `ArrowMsg.payload` (field 5, length-delimited): the field written by
 /// hand after the rest of the message (a decoder takes fields in any order).
 const PAYLOAD_KEY: u8 = (5 << 3) | 2;
+
+/// Chunks shorter than this (bytes of Arrow IPC) are always LZ4-compressed, as the SDK does:
+/// too small for the choice to matter.
+const ALWAYS_COMPRESS_BELOW: usize = 64 << 10;
+
+/// A chunk is LZ4-compressed when LZ4 is expected to save at least this fraction of it.
+/// Measured on handover24 (docs/notes/2026-12-02-rerun.md, 2026-12-04, session 42): LZ4
+/// leaves float positions and the colour files as they are (ratio 1.004), shrinks depth to
+/// ~0.51, label images and class ids to ~0.03. So the colour files and the unknown points'
+/// positions go uncompressed and the file is as large as with LZ4 everywhere; a known
+/// layer's chunk (positions and class ids, ~14 % saved) stays compressed: at 1/4 it too went
+/// uncompressed, the file grew by 11 % and the CPU time did not measurably drop.
+const MIN_SAVING: f64 = 0.125;
+
+/// Bytes of each sample LZ4 compresses to estimate a buffer's ratio, and how many samples
+/// (spread over the buffer) a buffer gets; buffers under one sample are compressed whole,
+/// buffers under [`IGNORE_BELOW`] not at all (they count as incompressible).
+const SAMPLE_BYTES: usize = 16 << 10;
+const SAMPLES: usize = 3;
+const IGNORE_BELOW: usize = 1 << 10;
 
 /// Writes a `.rrd` stream to `W` (see the module documentation).
 pub(crate) struct RrdEncoder<W: Write> {
@@ -81,12 +108,23 @@ impl<W: Write> RrdEncoder<W> {
         let batch = &arrow_msg.batch;
         // Parsed as the SDK's encoder does, for the static flag and the manifest.
         let chunk_batch = re_sorbet::ChunkBatch::try_from(batch).map_err(|e| e.to_string())?;
-        let uncompressed_size = self.encode_ipc(batch)?;
-        let payload_len = self.compress()?;
+        let stream = IpcStream::new(batch).map_err(|e| e.to_string())?;
+        // A chunk that LZ4 would barely shrink (float positions, PNG/JPEG files) is written
+        // as it is, straight from the batch's buffers; any other goes through LZ4.
+        let (compression, uncompressed_size, payload_len) = match &stream {
+            Some(stream) if !worth_compressing(stream) => {
+                (ProtoCompression::None, stream.len(), stream.len())
+            }
+            _ => {
+                self.encode_ipc(batch, stream.as_ref())?;
+                (ProtoCompression::Lz4, self.ipc.len(), self.compress()?)
+            }
+        };
+        let uncompressed_size = uncompressed_size as u64;
         let proto = ProtoArrowMsg {
             store_id: Some(store_id.clone().into()),
             chunk_id: Some(arrow_msg.chunk_id.into()),
-            compression: ProtoCompression::Lz4 as i32,
+            compression: compression as i32,
             uncompressed_size,
             encoding: ProtoEncoding::ArrowIpc as i32,
             payload: Default::default(),
@@ -111,9 +149,11 @@ impl<W: Write> RrdEncoder<W> {
             len,
         };
         self.write_head()?;
-        self.out
-            .write_all(&self.lz4[..payload_len])
-            .map_err(|e| e.to_string())?;
+        match (compression, &stream) {
+            (ProtoCompression::None, Some(stream)) => stream.write_to(&mut self.out),
+            _ => self.out.write_all(&self.lz4[..payload_len]),
+        }
+        .map_err(|e| e.to_string())?;
         self.written += payload_len as u64;
         self.manifests
             .entry(store_id.clone())
@@ -122,15 +162,26 @@ impl<W: Write> RrdEncoder<W> {
             .map_err(|e| e.to_string())
     }
 
-    /// The batch as an Arrow IPC stream into `ipc`; its length.
-    fn encode_ipc(&mut self, batch: &RecordBatch) -> Result<u64, String> {
+    /// The batch as an Arrow IPC stream into `ipc` (from `stream` where it has one).
+    fn encode_ipc(
+        &mut self,
+        batch: &RecordBatch,
+        stream: Option<&IpcStream>,
+    ) -> Result<(), String> {
         self.ipc.clear();
-        let mut writer =
-            StreamWriter::try_new(&mut self.ipc, batch.schema_ref()).map_err(|e| e.to_string())?;
-        writer.write(batch).map_err(|e| e.to_string())?;
-        writer.finish().map_err(|e| e.to_string())?;
-        drop(writer);
-        Ok(self.ipc.len() as u64)
+        match stream {
+            Some(stream) => {
+                // One copy of each buffer, into a buffer kept from chunk to chunk.
+                self.ipc.reserve(stream.len());
+                stream.write_to(&mut self.ipc).map_err(|e| e.to_string())
+            }
+            None => {
+                let mut writer = StreamWriter::try_new(&mut self.ipc, batch.schema_ref())
+                    .map_err(|e| e.to_string())?;
+                writer.write(batch).map_err(|e| e.to_string())?;
+                writer.finish().map_err(|e| e.to_string())
+            }
+        }
     }
 
     /// `ipc` LZ4-compressed (block format, as the SDK) into `lz4`; its length.
@@ -189,6 +240,36 @@ impl<W: Write> RrdEncoder<W> {
         self.flush()?;
         Ok(self.out)
     }
+}
+
+/// Whether LZ4 is expected to save at least [`MIN_SAVING`] of `stream`, from a few samples
+/// of each of its buffers.
+fn worth_compressing(stream: &IpcStream) -> bool {
+    let len = stream.len();
+    if len < ALWAYS_COMPRESS_BELOW {
+        return true;
+    }
+    let mut saved = 0.0;
+    for buffer in stream.body() {
+        if buffer.len() < IGNORE_BELOW {
+            continue;
+        }
+        let samples: Vec<&[u8]> = if buffer.len() <= SAMPLES * SAMPLE_BYTES {
+            vec![buffer]
+        } else {
+            let step = (buffer.len() - SAMPLE_BYTES) / (SAMPLES - 1);
+            (0..SAMPLES)
+                .map(|i| &buffer[i * step..i * step + SAMPLE_BYTES])
+                .collect()
+        };
+        let raw: usize = samples.iter().map(|s| s.len()).sum();
+        let packed: usize = samples
+            .iter()
+            .map(|s| lz4_flex::block::compress(s).len())
+            .sum();
+        saved += buffer.len() as f64 * (1.0 - (packed as f64 / raw as f64).min(1.0));
+    }
+    saved >= MIN_SAVING * len as f64
 }
 
 /// Appends `v` as a protobuf varint.
@@ -315,6 +396,64 @@ mod tests {
             assert_eq!(fields(got), fields(want));
             assert_eq!(got.data, want.data, "manifest of {id:?}");
         }
+    }
+
+    /// Pseudo-random bits (xorshift64), for data LZ4 cannot shrink.
+    fn noise(n: usize) -> Vec<f32> {
+        let mut x = 0x9e37_79b9_7f4a_7c15_u64;
+        (0..n)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                f32::from_bits((x as u32 & 0x3fff_ffff) | 0x3c00_0000)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn chunks_lz4_barely_shrinks_are_written_uncompressed_and_read_back_the_same() {
+        let (rec, storage) = RecordingStreamBuilder::new("encoder_test")
+            .memory()
+            .expect("memory recording");
+        rec.set_time_sequence("frame", 0);
+        let n = 20_000;
+        let xyz = noise(3 * n);
+        let positions = || xyz.chunks_exact(3).map(|p| [p[0], p[1], p[2]]);
+        // Random positions: ~240 kB LZ4 cannot shrink; the same with constant class ids
+        // (~40 kB LZ4 shrinks to nothing, 14 % of the chunk); and all zeros.
+        rec.log("noise", &Points3D::new(positions())).expect("log");
+        rec.log(
+            "noise_with_ids",
+            &Points3D::new(positions()).with_class_ids(vec![3_u16; n]),
+        )
+        .expect("log");
+        rec.log("zeros", &Points3D::new(vec![[0.0_f32; 3]; n]))
+            .expect("log");
+        rec.flush_blocking().expect("flush");
+        let msgs = storage.take();
+        let mut ours = RrdEncoder::new(re_sdk::build_info().version, Vec::new()).expect("encoder");
+        for m in &msgs {
+            ours.append(m).expect("append");
+        }
+        let (decoded, _) = parse(&ours.finish().expect("bytes"));
+        let mut compression = HashMap::new();
+        for (original, decoded) in msgs.iter().zip(&decoded) {
+            let (LogMsg::ArrowMsg(_, original), Msg::ArrowMsg(decoded)) = (original, decoded)
+            else {
+                continue;
+            };
+            let entity = re_sorbet::ChunkBatch::try_from(&original.batch)
+                .expect("chunk")
+                .entity_path()
+                .to_string();
+            compression.insert(entity, decoded.compression());
+            let back = decoded.to_application(()).expect("decodes");
+            assert!(back.batch == original.batch, "a chunk reads back as logged");
+        }
+        assert_eq!(compression["/noise"], ProtoCompression::None);
+        assert_eq!(compression["/noise_with_ids"], ProtoCompression::Lz4);
+        assert_eq!(compression["/zeros"], ProtoCompression::Lz4);
     }
 
     #[test]

@@ -37,6 +37,8 @@ pub mod paths;
 #[cfg(feature = "rerun")]
 mod encoder;
 #[cfg(feature = "rerun")]
+mod ipc;
+#[cfg(feature = "rerun")]
 mod order;
 #[cfg(feature = "rerun")]
 mod sink;

@@ -1,8 +1,8 @@
 //! [`RrdFileSink`]: the Rerun SDK's file sink, writing past the page cache.
 //!
-//! The same as the SDK's `FileSink` (one writer thread, a queue of 1024 messages, LZ4 and
-//! the RRD footer), but the file is a [`bodyseg_io::DirectFile`]: on Linux `O_DIRECT`
-//! writes from an aligned buffer instead of copying ~11 MB a frame into the page cache,
+//! The same as the SDK's `FileSink` (one writer thread, a queue of 1024 messages, LZ4 where it
+//! shrinks a chunk, the RRD footer), but the file is a [`bodyseg_io::DirectFile`]: on Linux
+//! `O_DIRECT` writes from an aligned buffer instead of copying ~11 MB a frame into the page cache,
 //! which cost most of the system time that `--rerun` added (docs/notes/2026-12-02-rerun.md,
 //! 2026-12-04), and the stream is encoded by [`RrdEncoder`], the SDK encoder's format with
 //! buffers kept from one message to the next.
@@ -41,7 +41,8 @@ enum Command {
 /// replaces without a way to answer, so the writer reads the outcome here.
 pub(crate) type Closed = Arc<Mutex<Option<Result<(), String>>>>;
 
-/// Writes the messages it is sent to a `.rrd` file (LZ4, as the SDK does) on its own thread.
+/// Writes the messages it is sent to a `.rrd` file (LZ4 where it shrinks a chunk) on its own
+/// thread.
 /// Dropping it closes the file (end-of-stream marker, footer, last block) and joins the
 /// thread; the outcome goes to its [`Closed`].
 pub(crate) struct RrdFileSink {
@@ -54,7 +55,7 @@ impl RrdFileSink {
     /// closing the file went.
     pub(crate) fn create(path: &Path) -> Result<(RrdFileSink, Closed), String> {
         let file = DirectFile::create(path).map_err(|e| e.to_string())?;
-        // As the SDK's `FileSink`: LZ4 (without it the file is ~40 % larger and no faster).
+        // LZ4 where it shrinks a chunk (without it the file is ~40 % larger and no faster).
         let encoder = RrdEncoder::new(re_sdk::build_info().version, file)?;
         let (tx, rx) = sync_channel(QUEUE_MESSAGES);
         let closed: Closed = Arc::new(Mutex::new(None));
