@@ -407,3 +407,122 @@ impl Bone {
         d / self.scale_px + 1.0 + self.bias
     }
 }
+
+/// A segment a–b of a bone with what [`segment_distance`] derives from its ends alone.
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    a: P2,
+    b: P2,
+    /// b − a.
+    ab: P2,
+    /// |ab|², px².
+    l2: f64,
+}
+
+impl Segment {
+    fn new(a: P2, b: P2) -> Segment {
+        let ab = sub(b, a);
+        Segment {
+            a,
+            b,
+            ab,
+            l2: dot(ab, ab),
+        }
+    }
+
+    /// [`segment_distance`] of `q` to a–b: the same operations on the same values.
+    fn distance(&self, q: P2) -> f64 {
+        if self.l2 < 1e-18 {
+            return norm(sub(q, self.a));
+        }
+        let t = (dot(sub(q, self.a), self.ab) / self.l2).clamp(0.0, 1.0);
+        norm(sub(q, add(self.a, scale(self.ab, t))))
+    }
+}
+
+/// A [`Bone`] with the parts of its score that do not depend on the pixel computed once
+/// ([`label_person`](super::label_person) scores each bone at up to a few 10⁵ pixels):
+/// [`PreparedBone::score`] equals [`Bone::score`] bit for bit.
+#[derive(Clone, Debug)]
+pub(crate) struct PreparedBone {
+    pub(crate) class: u8,
+    pub(crate) scale_px: f64,
+    radius_px: f64,
+    bias: f64,
+    segments: Vec<Segment>,
+    /// The torso quad's edges (even-odd test on them), else a polyline's segments.
+    quad: bool,
+    /// A flat medial start: the first point, the first segment's axis, its length and the
+    /// outward unit vector.
+    flat: Option<(P2, P2, f64, P2)>,
+}
+
+impl PreparedBone {
+    pub(crate) fn new(bone: &Bone) -> PreparedBone {
+        let (segments, quad, flat) = match &bone.shape {
+            BoneShape::Polyline(pts) => {
+                let flat = match (pts.as_slice(), bone.start) {
+                    ([a, b, ..], BoneStart::FlatMedial { outward }) if norm(sub(*b, *a)) > 1e-9 => {
+                        let axis = sub(*b, *a);
+                        Some((*a, axis, norm(axis), outward))
+                    }
+                    _ => None,
+                };
+                let segments = pts.windows(2).map(|w| Segment::new(w[0], w[1])).collect();
+                (segments, false, flat)
+            }
+            BoneShape::Quad(quad) => {
+                let n = quad.len();
+                let segments = (0..n)
+                    .map(|i| Segment::new(quad[i], quad[(i + 1) % n]))
+                    .collect();
+                (segments, true, None)
+            }
+        };
+        PreparedBone {
+            class: bone.class,
+            scale_px: bone.scale_px,
+            radius_px: bone.radius_px,
+            bias: bone.bias,
+            segments,
+            quad,
+            flat,
+        }
+    }
+
+    /// [`Bone::score`] at `q`.
+    pub(crate) fn score(&self, q: P2) -> f64 {
+        let d = if self.quad {
+            // polygon_distance with the edges' differences taken once.
+            let mut d = f64::INFINITY;
+            let mut inside = false;
+            for s in &self.segments {
+                d = d.min(s.distance(q));
+                let (a, b) = (s.a, s.b);
+                if (a[1] > q[1]) != (b[1] > q[1]) {
+                    let x = a[0] + (q[1] - a[1]) * s.ab[0] / s.ab[1];
+                    if q[0] < x {
+                        inside = !inside;
+                    }
+                }
+            }
+            (if inside { 0.0 } else { d }) - self.radius_px
+        } else {
+            let d = self
+                .segments
+                .iter()
+                .map(|s| s.distance(q))
+                .fold(f64::INFINITY, f64::min)
+                - self.radius_px;
+            let behind = match self.flat {
+                Some((a, axis, length, outward)) => {
+                    let behind = -dot(sub(q, a), axis) / length;
+                    behind.min(-dot(sub(q, a), outward))
+                }
+                None => f64::NEG_INFINITY,
+            };
+            d.max(behind)
+        };
+        d / self.scale_px + 1.0 + self.bias
+    }
+}

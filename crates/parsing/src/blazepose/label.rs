@@ -1,6 +1,6 @@
 //! Labelling the pixels of one person from its bones and mask, and merging people.
 
-use super::bone::{Bone, RuleConfig, bones};
+use super::bone::{PreparedBone, RuleConfig, bones};
 use super::decode::DecodedPose;
 use super::model::INPUT;
 use super::roi::{P2, Roi, dot, sub};
@@ -43,8 +43,9 @@ pub(crate) fn mask_at(pose: &DecodedPose, axes: (P2, P2), q: P2) -> f64 {
         return 0.0;
     }
     let (tx, ty) = (tx.clamp(0.0, last), ty.clamp(0.0, last));
-    let ix = (tx.floor() as usize).min(INPUT - 2);
-    let iy = (ty.floor() as usize).min(INPUT - 2);
+    // In [0, 255] after the clamp: the casts are the floor (without a libm call).
+    let ix = (tx as usize).min(INPUT - 2);
+    let iy = (ty as usize).min(INPUT - 2);
     let (fx, fy) = (tx - ix as f64, ty - iy as f64);
     let m = |x: usize, y: usize| f64::from(pose.mask[y * INPUT + x]);
     (m(ix, iy) * (1.0 - fx) + m(ix + 1, iy) * fx) * (1.0 - fy)
@@ -117,7 +118,10 @@ pub fn label_person(
         return None;
     }
     let (u0, u1, v0, v1) = roi_window(&pose.roi, width, height)?;
-    let bl = bones(pose, cfg, width, height);
+    let bl: Vec<PreparedBone> = bones(pose, cfg, width, height)
+        .iter()
+        .map(PreparedBone::new)
+        .collect();
     if bl.is_empty() {
         return None;
     }
@@ -174,7 +178,7 @@ struct Band<'a> {
 fn label_band(
     pose: &DecodedPose,
     cfg: &RuleConfig,
-    bl: &[Bone],
+    bl: &[PreparedBone],
     axes: (P2, P2),
     (u0, u1): (usize, usize),
     (bv, bv1): (usize, usize),
