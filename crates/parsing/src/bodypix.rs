@@ -492,28 +492,80 @@ pub fn fuse(labels: &mut LabelImage, map: &PartMap, threshold: f64) {
     let probs = labels.probs.get_or_insert_with(|| vec![1.0; n]);
     let threshold = threshold as f32;
     for (i, (label, prob)) in labels.labels.iter_mut().zip(probs.iter_mut()).enumerate() {
-        let id = label.id();
-        let blazepose_person = (1..7).contains(&id);
-        if id == 5 || id == 6 {
-            continue;
-        }
-        let person = map.person[i];
-        if person < 0.0 || (blazepose_person && map.class[i] == 0) {
-            continue; // no BodyPix crop here, or no part sampled (below PART_FLOOR)
-        }
-        if !(blazepose_person || person >= threshold) {
-            *label = Label::BACKGROUND;
-            *prob = prob.min(1.0 - person);
-            continue;
-        }
-        let sure = if blazepose_person {
-            person.max(*prob)
-        } else {
-            person
-        };
-        *label = Label::from_id_or_unknown(map.class[i]);
-        *prob = (map.class_prob[i] * sure).clamp(0.0, 1.0);
+        let part = (map.person[i], map.class[i], map.class_prob[i]);
+        fuse_pixel(label, prob, part, threshold);
     }
+}
+
+/// [`fuse`] of `labels` with [`merge_part_maps`] of `maps` over the labels' image, without
+/// the merged map: rows are merged and fused one at a time, in parallel (each row's result
+/// depends on that row alone, so the labels are [`fuse`]'s).
+pub(crate) fn fuse_part_maps(labels: &mut LabelImage, maps: &[PartMap], threshold: f64) {
+    let width = labels.width as usize;
+    let n = labels.labels.len();
+    if width == 0 || n != width * labels.height as usize {
+        return;
+    }
+    let probs = labels.probs.get_or_insert_with(|| vec![1.0; n]);
+    let threshold = threshold as f32;
+    labels
+        .labels
+        .par_chunks_mut(width)
+        .zip(probs.par_chunks_mut(width))
+        .enumerate()
+        .for_each_init(
+            || PartMap::empty(0, width, 0, 1),
+            |row, (v, (labels, probs))| {
+                row.person.fill(-1.0);
+                row.class.fill(0);
+                row.class_prob.fill(0.0);
+                for m in maps.iter().filter(|m| (m.v0..m.v1).contains(&v)) {
+                    let start = (v - m.v0) * (m.u1 - m.u0);
+                    for u in m.u0..m.u1.min(width) {
+                        let k = start + (u - m.u0);
+                        if m.person[k] > row.person[u] {
+                            row.person[u] = m.person[k];
+                            row.class[u] = m.class[k];
+                            row.class_prob[u] = m.class_prob[k];
+                        }
+                    }
+                }
+                for (u, (label, prob)) in labels.iter_mut().zip(probs.iter_mut()).enumerate() {
+                    let part = (row.person[u], row.class[u], row.class_prob[u]);
+                    fuse_pixel(label, prob, part, threshold);
+                }
+            },
+        );
+}
+
+/// One pixel of [`fuse`]: BlazePose's `label` and `prob` with BodyPix's merged (person
+/// probability, class, class probability) there.
+fn fuse_pixel(
+    label: &mut Label,
+    prob: &mut f32,
+    (person, class, class_prob): (f32, u8, f32),
+    threshold: f32,
+) {
+    let id = label.id();
+    let blazepose_person = (1..7).contains(&id);
+    if id == 5 || id == 6 {
+        return;
+    }
+    if person < 0.0 || (blazepose_person && class == 0) {
+        return; // no BodyPix crop here, or no part sampled (below PART_FLOOR)
+    }
+    if !(blazepose_person || person >= threshold) {
+        *label = Label::BACKGROUND;
+        *prob = prob.min(1.0 - person);
+        return;
+    }
+    let sure = if blazepose_person {
+        person.max(*prob)
+    } else {
+        person
+    };
+    *label = Label::from_id_or_unknown(class);
+    *prob = (class_prob * sure).clamp(0.0, 1.0);
 }
 
 #[cfg(test)]
@@ -617,5 +669,55 @@ mod tests {
         assert_eq!(m.class, [1, 4, 6, 0]);
         assert_eq!(m.person, [0.9, 0.8, 0.3, -1.0]);
         assert_eq!(part_labels(&m, 0.7), [1, 4, 0, 0]);
+    }
+
+    /// Row-wise fusion equals merging the maps over the image and fusing: random windows
+    /// (overlapping, reaching past the image's right and bottom edges), random labels.
+    #[test]
+    fn fusing_row_by_row_equals_fusing_the_merged_map() {
+        let (w, h) = (37usize, 23usize);
+        // A fixed linear congruential sequence: the same case every run.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |n: usize| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((state >> 33) % n as u64) as usize
+        };
+        for case in 0..20 {
+            let maps: Vec<PartMap> = (0..3)
+                .map(|_| {
+                    let (u0, v0) = (next(w), next(h));
+                    let (u1, v1) = (u0 + 1 + next(w), v0 + 1 + next(h));
+                    let n = (u1 - u0) * (v1 - v0);
+                    let mut m = PartMap::empty(u0, u1, v0, v1);
+                    for k in 0..n {
+                        // Coarse values: ties between regions are common (the earlier wins).
+                        m.person[k] = next(20) as f32 / 19.0;
+                        m.class[k] = if m.person[k] < PART_FLOOR {
+                            0
+                        } else {
+                            next(7) as u8
+                        };
+                        m.class_prob[k] = next(1000) as f32 / 999.0;
+                    }
+                    m
+                })
+                .collect();
+            let labels = LabelImage {
+                width: w as u32,
+                height: h as u32,
+                labels: (0..w * h)
+                    .map(|_| Label::from_id_or_unknown(next(8) as u8))
+                    .collect(),
+                probs: Some((0..w * h).map(|_| next(1000) as f32 / 999.0).collect()),
+            };
+            let mut want = labels.clone();
+            fuse(&mut want, &merge_part_maps(w, h, &maps), 0.7);
+            let mut got = labels.clone();
+            fuse_part_maps(&mut got, &maps, 0.7);
+            assert_eq!(got, want, "case {case}");
+            assert_ne!(got, labels, "case {case}: the maps change something");
+        }
     }
 }

@@ -6,7 +6,7 @@
 use super::{BlazePoseOptions, BlazePoseSegmenter, Worker};
 use crate::ParsingError;
 use crate::blazepose::{PersonLabels, merge_people};
-use crate::bodypix::{BodyPix, PartMap, fuse, merge_part_maps};
+use crate::bodypix::{BodyPix, PartMap, fuse_part_maps};
 use crate::segmenter::PersonRegion;
 use bodyseg_core::{LabelImage, RgbImage};
 use std::path::Path;
@@ -40,7 +40,7 @@ impl BlazePoseSegmenter {
     }
 
     /// [`BlazePoseSegmenter::segment_image`] with BodyPix's parts: BlazePose's people
-    /// merged, BodyPix's regions merged, the two fused.
+    /// merged, BodyPix's regions merged and fused with them row by row.
     ///
     /// # Errors
     /// [`ParsingError::Inference`].
@@ -57,11 +57,7 @@ impl BlazePoseSegmenter {
         let people: Vec<PersonLabels> = people.into_iter().flatten().collect();
         let maps: Vec<PartMap> = maps.into_iter().flatten().collect();
         let mut labels = merge_people(w, h, &people);
-        fuse(
-            &mut labels,
-            &merge_part_maps(w, h, &maps),
-            self.options.bodypix.threshold,
-        );
+        fuse_part_maps(&mut labels, &maps, self.options.bodypix.threshold);
         Ok(labels)
     }
 }
