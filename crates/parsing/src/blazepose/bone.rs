@@ -430,14 +430,57 @@ impl Segment {
         }
     }
 
-    /// [`segment_distance`] of `q` to a–b: the same operations on the same values.
-    fn distance(&self, q: P2) -> f64 {
+    /// `q` minus its nearest point on a–b: [`segment_distance`] is its length (the same
+    /// operations on the same values).
+    fn offset(&self, q: P2) -> P2 {
         if self.l2 < 1e-18 {
-            return norm(sub(q, self.a));
+            return sub(q, self.a);
         }
         let t = (dot(sub(q, self.a), self.ab) / self.l2).clamp(0.0, 1.0);
-        norm(sub(q, add(self.a, scale(self.ab, t))))
+        sub(q, add(self.a, scale(self.ab, t)))
     }
+}
+
+/// The most segments [`min_distance`] compares by their squares (the torso quad's four).
+const MAX_SQUARED: usize = 4;
+/// Two squared distances this far apart (relative) cannot swap order once `hypot` (within
+/// an ulp of the true length) takes their roots.
+const SQUARED_MARGIN: f64 = 1e-9;
+
+/// The smallest of `q`'s distances to `segments` (`+∞` for none), as
+/// `segments.map(segment_distance).fold(+∞, f64::min)` gives it, with `hypot` (a libm call,
+/// most of a bone score's time) taken only of the segments whose squared distance is
+/// within [`SQUARED_MARGIN`] of the smallest: the others' lengths are larger, so the
+/// minimum is the same value. Anything unusual (a non-finite or tiny square, more segments
+/// than [`MAX_SQUARED`]) takes every root.
+fn min_distance(segments: &[Segment], q: P2) -> f64 {
+    let all = || {
+        segments
+            .iter()
+            .map(|s| norm(s.offset(q)))
+            .fold(f64::INFINITY, f64::min)
+    };
+    if segments.len() < 2 || segments.len() > MAX_SQUARED {
+        return all();
+    }
+    let mut offsets = [[0.0; 2]; MAX_SQUARED];
+    let mut squares = [0.0; MAX_SQUARED];
+    for (k, s) in segments.iter().enumerate() {
+        offsets[k] = s.offset(q);
+        squares[k] = dot(offsets[k], offsets[k]);
+    }
+    let squares = &squares[..segments.len()];
+    let smallest = squares.iter().copied().fold(f64::INFINITY, f64::min);
+    if !(smallest.is_finite() && smallest > 1e-200) || squares.iter().any(|s| s.is_nan()) {
+        return all();
+    }
+    let limit = smallest * (1.0 + SQUARED_MARGIN);
+    squares
+        .iter()
+        .zip(&offsets)
+        .filter(|&(&s, _)| s <= limit)
+        .map(|(_, &o)| norm(o))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// A [`Bone`] with the parts of its score that do not depend on the pixel computed once
@@ -493,11 +536,10 @@ impl PreparedBone {
     /// [`Bone::score`] at `q`.
     pub(crate) fn score(&self, q: P2) -> f64 {
         let d = if self.quad {
-            // polygon_distance with the edges' differences taken once.
-            let mut d = f64::INFINITY;
+            // polygon_distance with the edges' differences taken once, and the distance
+            // to the edges only outside (inside it is 0 whatever they are).
             let mut inside = false;
             for s in &self.segments {
-                d = d.min(s.distance(q));
                 let (a, b) = (s.a, s.b);
                 if (a[1] > q[1]) != (b[1] > q[1]) {
                     let x = a[0] + (q[1] - a[1]) * s.ab[0] / s.ab[1];
@@ -506,14 +548,14 @@ impl PreparedBone {
                     }
                 }
             }
-            (if inside { 0.0 } else { d }) - self.radius_px
+            let d = if inside {
+                0.0
+            } else {
+                min_distance(&self.segments, q)
+            };
+            d - self.radius_px
         } else {
-            let d = self
-                .segments
-                .iter()
-                .map(|s| s.distance(q))
-                .fold(f64::INFINITY, f64::min)
-                - self.radius_px;
+            let d = min_distance(&self.segments, q) - self.radius_px;
             let behind = match self.flat {
                 Some((a, axis, length, outward)) => {
                     let behind = -dot(sub(q, a), axis) / length;
