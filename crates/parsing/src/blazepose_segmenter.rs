@@ -5,7 +5,8 @@
 use crate::ParsingError;
 use crate::blazepose::{
     DecodedPose, INPUT, NUM_LANDMARKS, PersonLabels, Roi, RuleConfig, average_masks, blank_outside,
-    crop_into, decode, label_person, landmark, merge_people, mirror_crop, unmirror_outputs,
+    crop_into, decode_landmarks, label_person, landmark, mask_from_logits, merge_people,
+    mirror_crop, unmirror_outputs,
 };
 use crate::bodypix::{BodyPix, BodyPixOptions};
 use crate::onnx::{float_dims, inference_error, load_session, named_output, run_one_input};
@@ -180,6 +181,39 @@ pub struct BlazePoseSegmenter {
     narrow: Vec<Worker>,
     model_path: PathBuf,
     options: BlazePoseOptions,
+}
+
+/// One run's pose before its mask: the landmarks and flag decoded (`mask` empty) and the
+/// mask's logits, made into the mask ([`Decoding::finish`]) only for the pose a region
+/// keeps: the sigmoid of 256×256 logits is most of decoding, and the first run's pose is
+/// dropped whenever the refinement pass is kept. Reads as its pose (`Deref`) for the
+/// choices between runs, which look at landmarks and flags only.
+struct Decoding {
+    pose: DecodedPose,
+    mask_logits: Vec<f32>,
+}
+
+impl Decoding {
+    /// The pose with its mask, as [`crate::blazepose::decode`] gives it.
+    fn finish(self) -> DecodedPose {
+        DecodedPose {
+            mask: mask_from_logits(&self.mask_logits),
+            ..self.pose
+        }
+    }
+}
+
+impl std::ops::Deref for Decoding {
+    type Target = DecodedPose;
+    fn deref(&self) -> &DecodedPose {
+        &self.pose
+    }
+}
+
+impl std::ops::DerefMut for Decoding {
+    fn deref_mut(&mut self) -> &mut DecodedPose {
+        &mut self.pose
+    }
 }
 
 /// One ONNX Runtime session with its crop buffer: a region's runs stay on one worker.
@@ -447,7 +481,7 @@ impl Worker {
         image: &RgbImage,
         roi: &Roi,
         model_path: &Path,
-    ) -> Result<DecodedPose, ParsingError> {
+    ) -> Result<Decoding, ParsingError> {
         self.run_seeing(image, roi, None, false, model_path)
     }
 
@@ -463,7 +497,7 @@ impl Worker {
         only: Option<&PixelBox>,
         mirror: bool,
         model_path: &Path,
-    ) -> Result<DecodedPose, ParsingError> {
+    ) -> Result<Decoding, ParsingError> {
         crop_into(image, roi, INPUT, &mut self.input);
         if let Some(keep) = only {
             blank_outside(&mut self.input, roi, INPUT, keep, 0.0);
@@ -494,12 +528,18 @@ impl Worker {
         } else {
             (landmarks, mask, heatmap)
         };
-        decode(roi, landmarks, flag, mask, Some(heatmap)).ok_or_else(|| {
+        let pose = decode_landmarks(roi, landmarks, flag, Some(heatmap))
+            .filter(|_| mask.len() >= INPUT * INPUT);
+        let pose = pose.ok_or_else(|| {
             infer(format!(
                 "outputs shorter than BlazePose's ({} landmark values, {} mask values)",
                 landmarks.len(),
                 mask.len()
             ))
+        })?;
+        Ok(Decoding {
+            pose,
+            mask_logits: mask[..INPUT * INPUT].to_vec(),
         })
     }
 
@@ -527,11 +567,12 @@ impl Worker {
         options: &BlazePoseOptions,
     ) -> Result<DecodedPose, ParsingError> {
         let (pose, only) = self.first_pose_in(image, bounds, model_path, options)?;
+        let pose = pose.finish();
         if !options.mirror_average || pose.flag < options.min_pose_flag {
             return Ok(pose);
         }
         let mirrored = self.run_seeing(image, &pose.roi, only.as_ref(), true, model_path)?;
-        Ok(average_masks(&pose, &mirrored))
+        Ok(average_masks(&pose, &mirrored.finish()))
     }
 
     /// [`Worker::pose_in`] before the mirrored run: the pose and the box its crop was
@@ -545,7 +586,7 @@ impl Worker {
         bounds: &PixelBox,
         model_path: &Path,
         options: &BlazePoseOptions,
-    ) -> Result<(DecodedPose, Option<PixelBox>), ParsingError> {
+    ) -> Result<(Decoding, Option<PixelBox>), ParsingError> {
         let (w, h) = (image.width as usize, image.height as usize);
         let mut pose = self.run(image, &Roi::from_box(bounds, options.roi_scale), model_path)?;
         let inside = centre_inside(&pose, bounds, w, h);
