@@ -478,8 +478,7 @@ impl Worker {
         if !usable {
             return Ok(None);
         }
-        let pose = self.pose_in(image, b, model_path, options)?;
-        Ok((pose.flag >= options.min_pose_flag).then_some(pose))
+        self.pose_in(image, b, model_path, options)
     }
 
     /// One run of the landmark model on `roi` of `image`.
@@ -636,7 +635,8 @@ impl Worker {
     /// [`RETRY_ROI_SCALE`] × the region is tried, and kept when its centre is in the region
     /// (and its flag higher); the retry's crop is blanked outside the widened region
     /// ([`BlazePoseOptions::blank_retry`]). When neither pose is in the region the result
-    /// has flag 0 (no person).
+    /// has flag 0 (no person). `None` when the pose's flag is below
+    /// [`BlazePoseOptions::min_pose_flag`] (its mask is then never made).
     ///
     /// # Errors
     /// [`ParsingError::Inference`].
@@ -646,15 +646,18 @@ impl Worker {
         bounds: &PixelBox,
         model_path: &Path,
         options: &BlazePoseOptions,
-    ) -> Result<DecodedPose, ParsingError> {
+    ) -> Result<Option<DecodedPose>, ParsingError> {
         let (pose, only) = self.first_pose_in(image, bounds, model_path, options)?;
+        if pose.flag < options.min_pose_flag {
+            return Ok(None);
+        }
         let pose = self.finish(image, pose, model_path)?;
-        if !options.mirror_average || pose.flag < options.min_pose_flag {
-            return Ok(pose);
+        if !options.mirror_average {
+            return Ok(Some(pose));
         }
         let mirrored = self.run_seeing(image, &pose.roi, only.as_ref(), true, model_path)?;
         let mirrored = self.finish(image, mirrored, model_path)?;
-        Ok(average_masks(&pose, &mirrored))
+        Ok(Some(average_masks(&pose, &mirrored)))
     }
 
     /// [`Worker::pose_in`] before the mirrored run: the pose and the box its crop was
