@@ -1,7 +1,8 @@
 //! Guards issue 29's time budget: one 960×540 view with 2 people through
 //! [`BlazePoseSegmenter`] (`models/blazepose_full.onnx`, default options: the two regions
 //! at once, each on its own single-threaded session): per person the crop, the landmark
-//! model (the first ROI and the refinement pass), decoding, the landmarks + mask → classes
+//! model (the first ROI on the model cut at its mask output, the refinement pass on the
+//! full model), decoding, the landmarks + mask → classes
 //! rule, and merging the people; target ≤ 80 ms. `full_bodypix` (the default,
 //! `parsing.body_parts = "bodypix"`) adds BodyPix on each region (crop longer side 384;
 //! `full_bodypix448`: 448) on the same worker and the fusion; `full` is `landmarks`. Input: frame 0 of the `robot_cell` synth

@@ -34,6 +34,7 @@ pub use bone::{Bone, BoneShape, BoneStart, RuleConfig, bones, polygon_distance, 
 pub use decode::{
     DecodedPose, average_masks, decode, mirror_crop, refine_from_heatmap, unmirror_outputs,
 };
+pub(crate) use decode::{decode_landmarks, mask_from_logits};
 pub use label::{PersonLabels, SIDE_BY_SIDE_M, label_person, merge_people};
 pub use model::{HEATMAP, INPUT, NUM_LANDMARKS};
 pub use roi::{Roi, blank_outside, crop, crop_into};

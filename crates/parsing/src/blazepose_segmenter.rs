@@ -5,10 +5,13 @@
 use crate::ParsingError;
 use crate::blazepose::{
     DecodedPose, INPUT, NUM_LANDMARKS, PersonLabels, Roi, RuleConfig, average_masks, blank_outside,
-    crop_into, decode, label_person, landmark, merge_people, mirror_crop, unmirror_outputs,
+    crop_into, decode_landmarks, label_person, landmark, mask_from_logits, merge_people,
+    mirror_crop, unmirror_outputs,
 };
 use crate::bodypix::{BodyPix, BodyPixOptions};
-use crate::onnx::{float_dims, inference_error, load_session, named_output, run_one_input};
+use crate::onnx::{
+    float_dims, inference_error, load_session, named_output, run_one_input, without_outputs,
+};
 use crate::segmenter::{ParsedView, PersonRegion, PixelBox, Segmenter, ViewInput};
 use bodyseg_core::{LabelImage, RgbImage};
 use ort::session::Session;
@@ -199,9 +202,40 @@ pub struct BlazePoseSegmenter {
     options: BlazePoseOptions,
 }
 
+/// One run's pose before its mask: the landmarks and flag decoded (`mask` empty) and the
+/// mask's logits, made into the mask ([`Decoding::finish`]) only for the pose a region
+/// keeps: the sigmoid of 256×256 logits is most of decoding, and the first run's pose is
+/// dropped whenever the refinement pass is kept (that run has no mask at all when it is
+/// made without the mask head, [`Worker::landmarks_only`]). Reads as its pose (`Deref`) for the
+/// choices between runs, which look at landmarks and flags only.
+struct Decoding {
+    pose: DecodedPose,
+    /// `None` for a run of [`Worker::landmarks_only`].
+    mask_logits: Option<Vec<f32>>,
+}
+
+impl std::ops::Deref for Decoding {
+    type Target = DecodedPose;
+    fn deref(&self) -> &DecodedPose {
+        &self.pose
+    }
+}
+
+impl std::ops::DerefMut for Decoding {
+    fn deref_mut(&mut self) -> &mut DecodedPose {
+        &mut self.pose
+    }
+}
+
 /// One ONNX Runtime session with its crop buffer: a region's runs stay on one worker.
 struct Worker {
     session: Session,
+    /// The same model without its mask output and the nodes only the mask needs (`None`
+    /// when the graph could not be cut): a region's first run, whose mask is dropped
+    /// whenever the refinement pass is kept, runs on it (the 256×256 mask decoder is over
+    /// a third of a run with ONNX Runtime's AVX-512 kernels, its 8 channels padded to 16);
+    /// landmarks, flag and heatmap are the same values as the full model's (the same nodes).
+    landmarks_only: Option<Session>,
     /// The crop, reused from run to run (NHWC, 256×256×3).
     input: Vec<f32>,
     /// Inferences run so far (for benches and logs).
@@ -287,22 +321,32 @@ impl BlazePoseSegmenter {
                 )));
             }
         }
-        let worker = |session| Worker {
-            session,
-            input: Vec::with_capacity(INPUT * INPUT * 3),
-            runs: 0,
-            bodypix: None,
+        let landmarks_only = without_outputs(model_bytes, &[MASK.0]);
+        let worker = |session, intra_op_threads| -> Result<Worker, ParsingError> {
+            let landmarks_only = landmarks_only
+                .as_deref()
+                .map(|bytes| {
+                    load_session(runtime_library, bytes, model_path, intra_op_threads, false)
+                })
+                .transpose()?;
+            Ok(Worker {
+                session,
+                landmarks_only,
+                input: Vec::with_capacity(INPUT * INPUT * 3),
+                runs: 0,
+                bodypix: None,
+            })
         };
         let narrow = if options.threads >= 2 {
             (0..options.threads)
-                .map(|_| load(1).map(worker))
+                .map(|_| worker(load(1)?, 1))
                 .collect::<Result<Vec<_>, _>>()?
         } else {
             Vec::new()
         };
         tracing::debug!(model = %model_path.display(), "loaded BlazePose landmark model");
         Ok(BlazePoseSegmenter {
-            wide: worker(session),
+            wide: worker(session, options.threads)?,
             narrow,
             model_path: model_path.to_path_buf(),
             options: options.clone(),
@@ -460,8 +504,7 @@ impl Worker {
         if !usable {
             return Ok(None);
         }
-        let pose = self.pose_in(image, b, model_path, options)?;
-        Ok((pose.flag >= options.min_pose_flag).then_some(pose))
+        self.pose_in(image, b, model_path, options)
     }
 
     /// One run of the landmark model on `roi` of `image`.
@@ -473,8 +516,79 @@ impl Worker {
         image: &RgbImage,
         roi: &Roi,
         model_path: &Path,
-    ) -> Result<DecodedPose, ParsingError> {
+    ) -> Result<Decoding, ParsingError> {
         self.run_seeing(image, roi, None, false, model_path)
+    }
+
+    /// A region's first run: [`Worker::run`] without the mask when there is a
+    /// [`Worker::landmarks_only`] session ([`Worker::finish`] makes the mask if the pose
+    /// is kept).
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`] naming the model file.
+    fn first_run(
+        &mut self,
+        image: &RgbImage,
+        roi: &Roi,
+        model_path: &Path,
+    ) -> Result<Decoding, ParsingError> {
+        let Some(session) = self.landmarks_only.as_mut() else {
+            return self.run(image, roi, model_path);
+        };
+        crop_into(image, roi, INPUT, &mut self.input);
+        let outputs = run_one_input(
+            session,
+            INPUT_NAME,
+            [1, INPUT, INPUT, 3],
+            &self.input,
+            model_path,
+        )?;
+        let get =
+            |name: &str| named_output::<f32>(&outputs, name, model_path).map(|(_, data)| data);
+        let landmarks = get(LANDMARKS.0)?;
+        let flag = get(FLAG.0)?.first().copied().unwrap_or(0.0);
+        let heatmap = get(HEATMAP.0)?;
+        self.runs += 1;
+        let pose = decode_landmarks(roi, landmarks, flag, Some(heatmap)).ok_or_else(|| {
+            inference_error(
+                model_path,
+                format!(
+                    "outputs shorter than BlazePose's ({} landmark values)",
+                    landmarks.len()
+                ),
+            )
+        })?;
+        Ok(Decoding {
+            pose,
+            mask_logits: None,
+        })
+    }
+
+    /// The pose of `run` with its mask (as [`crate::blazepose::decode`] gives it). A run
+    /// without the mask ([`Worker::first_run`]) is made again on the full model, on the
+    /// same ROI (unblanked, unmirrored, as first runs are); the pose is that run's but for
+    /// the flag, which stays `run`'s (a pose that left its region has flag 0).
+    ///
+    /// # Errors
+    /// [`ParsingError::Inference`] naming the model file.
+    fn finish(
+        &mut self,
+        image: &RgbImage,
+        run: Decoding,
+        model_path: &Path,
+    ) -> Result<DecodedPose, ParsingError> {
+        let Decoding { pose, mask_logits } = match run.mask_logits {
+            Some(_) => run,
+            None => {
+                let mut full = self.run(image, &run.roi, model_path)?;
+                full.pose.flag = run.flag;
+                full
+            }
+        };
+        Ok(DecodedPose {
+            mask: mask_from_logits(mask_logits.as_deref().unwrap_or(&[])),
+            ..pose
+        })
     }
 
     /// [`Worker::run`] on a crop blanked (black) outside `only` when given, and mirrored
@@ -489,7 +603,7 @@ impl Worker {
         only: Option<&PixelBox>,
         mirror: bool,
         model_path: &Path,
-    ) -> Result<DecodedPose, ParsingError> {
+    ) -> Result<Decoding, ParsingError> {
         crop_into(image, roi, INPUT, &mut self.input);
         if let Some(keep) = only {
             blank_outside(&mut self.input, roi, INPUT, keep, 0.0);
@@ -520,12 +634,18 @@ impl Worker {
         } else {
             (landmarks, mask, heatmap)
         };
-        decode(roi, landmarks, flag, mask, Some(heatmap)).ok_or_else(|| {
+        let pose = decode_landmarks(roi, landmarks, flag, Some(heatmap))
+            .filter(|_| mask.len() >= INPUT * INPUT);
+        let pose = pose.ok_or_else(|| {
             infer(format!(
                 "outputs shorter than BlazePose's ({} landmark values, {} mask values)",
                 landmarks.len(),
                 mask.len()
             ))
+        })?;
+        Ok(Decoding {
+            pose,
+            mask_logits: Some(mask[..INPUT * INPUT].to_vec()),
         })
     }
 
@@ -541,7 +661,8 @@ impl Worker {
     /// [`RETRY_ROI_SCALE`] × the region is tried, and kept when its centre is in the region
     /// (and its flag higher); the retry's crop is blanked outside the widened region
     /// ([`BlazePoseOptions::blank_retry`]). When neither pose is in the region the result
-    /// has flag 0 (no person).
+    /// has flag 0 (no person). `None` when the pose's flag is below
+    /// [`BlazePoseOptions::min_pose_flag`] (its mask is then never made).
     ///
     /// # Errors
     /// [`ParsingError::Inference`].
@@ -551,13 +672,18 @@ impl Worker {
         bounds: &PixelBox,
         model_path: &Path,
         options: &BlazePoseOptions,
-    ) -> Result<DecodedPose, ParsingError> {
+    ) -> Result<Option<DecodedPose>, ParsingError> {
         let (pose, only) = self.first_pose_in(image, bounds, model_path, options)?;
-        if !options.mirror_average || pose.flag < options.min_pose_flag {
-            return Ok(pose);
+        if pose.flag < options.min_pose_flag {
+            return Ok(None);
+        }
+        let pose = self.finish(image, pose, model_path)?;
+        if !options.mirror_average {
+            return Ok(Some(pose));
         }
         let mirrored = self.run_seeing(image, &pose.roi, only.as_ref(), true, model_path)?;
-        Ok(average_masks(&pose, &mirrored))
+        let mirrored = self.finish(image, mirrored, model_path)?;
+        Ok(Some(average_masks(&pose, &mirrored)))
     }
 
     /// [`Worker::pose_in`] before the mirrored run: the pose and the box its crop was
@@ -571,9 +697,10 @@ impl Worker {
         bounds: &PixelBox,
         model_path: &Path,
         options: &BlazePoseOptions,
-    ) -> Result<(DecodedPose, Option<PixelBox>), ParsingError> {
+    ) -> Result<(Decoding, Option<PixelBox>), ParsingError> {
         let (w, h) = (image.width as usize, image.height as usize);
-        let mut pose = self.run(image, &Roi::from_box(bounds, options.roi_scale), model_path)?;
+        let roi = Roi::from_box(bounds, options.roi_scale);
+        let mut pose = self.first_run(image, &roi, model_path)?;
         let inside = centre_inside(&pose, bounds, w, h);
         if !inside || pose.flag < options.min_pose_flag {
             let wide = widened(bounds);
@@ -712,5 +839,51 @@ mod tests {
             640,
             480
         ));
+    }
+
+    /// The landmark model cut at its mask output gives the full model's landmarks, flag and
+    /// heatmap bit for bit (the first run's decisions are the full model's) and no mask, on
+    /// crops of a patterned image. Needs ONNX Runtime (ORT_DYLIB_PATH or the project's
+    /// copy), as the crate's other model tests.
+    #[test]
+    fn the_maskless_model_gives_the_full_models_landmarks() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let model = root.join("models/blazepose_full.onnx");
+        let bytes = std::fs::read(&model).expect("committed BlazePose model");
+        let cut = without_outputs(&bytes, &[MASK.0]).expect("the mask output can be cut");
+        assert!(cut.len() < bytes.len());
+        let library = std::env::var_os("ORT_DYLIB_PATH")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| root.join(".deps/onnxruntime/libonnxruntime.so"));
+        let mut full = load_session(&library, &bytes, &model, 1, false).expect("full model");
+        let mut maskless = load_session(&library, &cut, &model, 1, false).expect("cut model");
+        assert!(maskless.outputs().iter().all(|o| o.name() != MASK.0));
+        let (w, h) = (320u32, 240u32);
+        let rgb = (0..w * h * 3).map(|i| (i * 37 % 251) as u8).collect();
+        let image = RgbImage::new(w, h, rgb).expect("w*h*3 bytes");
+        let mut input = Vec::new();
+        for (centre_px, angle_rad) in [([160.0, 120.0], 0.0), ([100.0, 150.0], 0.4)] {
+            let roi = Roi {
+                centre_px,
+                side_px: 200.0,
+                angle_rad,
+            };
+            crop_into(&image, &roi, INPUT, &mut input);
+            let outputs_of = |session: &mut Session| -> Vec<Vec<u32>> {
+                let outputs =
+                    run_one_input(session, INPUT_NAME, [1, INPUT, INPUT, 3], &input, &model)
+                        .expect("a run");
+                [LANDMARKS.0, FLAG.0, HEATMAP.0]
+                    .iter()
+                    .map(|name| {
+                        let (_, data) = named_output::<f32>(&outputs, name, &model).expect(name);
+                        data.iter().map(|v| v.to_bits()).collect()
+                    })
+                    .collect()
+            };
+            let want = outputs_of(&mut full);
+            assert_eq!(outputs_of(&mut maskless), want);
+            assert_eq!(want[0].len(), 195);
+        }
     }
 }

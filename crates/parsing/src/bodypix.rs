@@ -485,35 +485,61 @@ pub fn part_labels(map: &PartMap, threshold: f64) -> Vec<u8> {
 /// decides, BlazePose's where it decides; background pixels 1 − the larger person
 /// probability. A `map` of another size leaves `labels` as they are.
 pub fn fuse(labels: &mut LabelImage, map: &PartMap, threshold: f64) {
+    let width = labels.width as usize;
     let n = labels.labels.len();
-    if map.person.len() != n || map.u0 != 0 || map.v0 != 0 {
+    if width == 0 || map.person.len() != n || (map.u0, map.u1, map.v0) != (0, width, 0) {
         return;
     }
     let probs = labels.probs.get_or_insert_with(|| vec![1.0; n]);
     let threshold = threshold as f32;
-    for (i, (label, prob)) in labels.labels.iter_mut().zip(probs.iter_mut()).enumerate() {
-        let id = label.id();
-        let blazepose_person = (1..7).contains(&id);
-        if id == 5 || id == 6 {
-            continue;
-        }
-        let person = map.person[i];
-        if person < 0.0 || (blazepose_person && map.class[i] == 0) {
-            continue; // no BodyPix crop here, or no part sampled (below PART_FLOOR)
-        }
-        if !(blazepose_person || person >= threshold) {
-            *label = Label::BACKGROUND;
-            *prob = prob.min(1.0 - person);
-            continue;
-        }
-        let sure = if blazepose_person {
-            person.max(*prob)
-        } else {
-            person
-        };
-        *label = Label::from_id_or_unknown(map.class[i]);
-        *prob = (map.class_prob[i] * sure).clamp(0.0, 1.0);
+    // Rows in parallel: each pixel's result depends on that pixel alone.
+    labels
+        .labels
+        .par_chunks_mut(width)
+        .zip(probs.par_chunks_mut(width))
+        .enumerate()
+        .for_each(|(v, (labels, probs))| {
+            let row = v * width..(v + 1) * width;
+            let parts = map.person[row.clone()]
+                .iter()
+                .zip(&map.class[row.clone()])
+                .zip(&map.class_prob[row]);
+            for ((label, prob), ((&person, &class), &class_prob)) in
+                labels.iter_mut().zip(probs.iter_mut()).zip(parts)
+            {
+                fuse_pixel(label, prob, (person, class, class_prob), threshold);
+            }
+        });
+}
+
+/// One pixel of [`fuse`]: BlazePose's `label` and `prob` with BodyPix's merged (person
+/// probability, class, class probability) there.
+fn fuse_pixel(
+    label: &mut Label,
+    prob: &mut f32,
+    (person, class, class_prob): (f32, u8, f32),
+    threshold: f32,
+) {
+    let id = label.id();
+    let blazepose_person = (1..7).contains(&id);
+    if id == 5 || id == 6 {
+        return;
     }
+    if person < 0.0 || (blazepose_person && class == 0) {
+        return; // no BodyPix crop here, or no part sampled (below PART_FLOOR)
+    }
+    if !(blazepose_person || person >= threshold) {
+        *label = Label::BACKGROUND;
+        *prob = prob.min(1.0 - person);
+        return;
+    }
+    let sure = if blazepose_person {
+        person.max(*prob)
+    } else {
+        person
+    };
+    *label = Label::from_id_or_unknown(class);
+    *prob = (class_prob * sure).clamp(0.0, 1.0);
 }
 
 #[cfg(test)]
@@ -617,5 +643,61 @@ mod tests {
         assert_eq!(m.class, [1, 4, 6, 0]);
         assert_eq!(m.person, [0.9, 0.8, 0.3, -1.0]);
         assert_eq!(part_labels(&m, 0.7), [1, 4, 0, 0]);
+    }
+
+    /// [`fuse`] (rows in parallel) equals fusing the merged map pixel by pixel: random windows
+    /// (overlapping, reaching past the image's right and bottom edges), random labels.
+    #[test]
+    fn fusing_rows_in_parallel_equals_fusing_pixel_by_pixel() {
+        let (w, h) = (37usize, 23usize);
+        // A fixed linear congruential sequence: the same case every run.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |n: usize| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((state >> 33) % n as u64) as usize
+        };
+        for case in 0..20 {
+            let maps: Vec<PartMap> = (0..3)
+                .map(|_| {
+                    let (u0, v0) = (next(w), next(h));
+                    let (u1, v1) = (u0 + 1 + next(w), v0 + 1 + next(h));
+                    let n = (u1 - u0) * (v1 - v0);
+                    let mut m = PartMap::empty(u0, u1, v0, v1);
+                    for k in 0..n {
+                        // Coarse values: ties between regions are common (the earlier wins).
+                        m.person[k] = next(20) as f32 / 19.0;
+                        m.class[k] = if m.person[k] < PART_FLOOR {
+                            0
+                        } else {
+                            next(7) as u8
+                        };
+                        m.class_prob[k] = next(1000) as f32 / 999.0;
+                    }
+                    m
+                })
+                .collect();
+            let labels = LabelImage {
+                width: w as u32,
+                height: h as u32,
+                labels: (0..w * h)
+                    .map(|_| Label::from_id_or_unknown(next(8) as u8))
+                    .collect(),
+                probs: Some((0..w * h).map(|_| next(1000) as f32 / 999.0).collect()),
+            };
+            let merged = merge_part_maps(w, h, &maps);
+            // The serial reference: every pixel of the merged map in turn.
+            let mut want = labels.clone();
+            let probs = want.probs.as_mut().expect("probabilities");
+            for (i, (label, prob)) in want.labels.iter_mut().zip(probs.iter_mut()).enumerate() {
+                let part = (merged.person[i], merged.class[i], merged.class_prob[i]);
+                fuse_pixel(label, prob, part, 0.7);
+            }
+            let mut got = labels.clone();
+            fuse(&mut got, &merged, 0.7);
+            assert_eq!(got, want, "case {case}");
+            assert_ne!(got, labels, "case {case}: the maps change something");
+        }
     }
 }

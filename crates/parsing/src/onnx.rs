@@ -16,6 +16,9 @@ use std::fmt::Debug;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+mod prune;
+pub(crate) use prune::without_outputs;
+
 /// How an [`OnnxSegmenter`] runs.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct OnnxOptions {

@@ -407,3 +407,164 @@ impl Bone {
         d / self.scale_px + 1.0 + self.bias
     }
 }
+
+/// A segment a–b of a bone with what [`segment_distance`] derives from its ends alone.
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    a: P2,
+    b: P2,
+    /// b − a.
+    ab: P2,
+    /// |ab|², px².
+    l2: f64,
+}
+
+impl Segment {
+    fn new(a: P2, b: P2) -> Segment {
+        let ab = sub(b, a);
+        Segment {
+            a,
+            b,
+            ab,
+            l2: dot(ab, ab),
+        }
+    }
+
+    /// `q` minus its nearest point on a–b: [`segment_distance`] is its length (the same
+    /// operations on the same values).
+    fn offset(&self, q: P2) -> P2 {
+        if self.l2 < 1e-18 {
+            return sub(q, self.a);
+        }
+        let t = (dot(sub(q, self.a), self.ab) / self.l2).clamp(0.0, 1.0);
+        sub(q, add(self.a, scale(self.ab, t)))
+    }
+}
+
+/// The most segments [`min_distance`] compares by their squares (the torso quad's four).
+const MAX_SQUARED: usize = 4;
+/// Two squared distances this far apart (relative) cannot swap order once `hypot` (within
+/// an ulp of the true length) takes their roots.
+const SQUARED_MARGIN: f64 = 1e-9;
+
+/// The smallest of `q`'s distances to `segments` (`+∞` for none), as
+/// `segments.map(segment_distance).fold(+∞, f64::min)` gives it, with `hypot` (a libm call,
+/// most of a bone score's time) taken only of the segments whose squared distance is
+/// within [`SQUARED_MARGIN`] of the smallest: the others' lengths are larger, so the
+/// minimum is the same value. Anything unusual (a non-finite or tiny square, more segments
+/// than [`MAX_SQUARED`]) takes every root.
+fn min_distance(segments: &[Segment], q: P2) -> f64 {
+    let all = || {
+        segments
+            .iter()
+            .map(|s| norm(s.offset(q)))
+            .fold(f64::INFINITY, f64::min)
+    };
+    if segments.len() < 2 || segments.len() > MAX_SQUARED {
+        return all();
+    }
+    let mut offsets = [[0.0; 2]; MAX_SQUARED];
+    let mut squares = [0.0; MAX_SQUARED];
+    for (k, s) in segments.iter().enumerate() {
+        offsets[k] = s.offset(q);
+        squares[k] = dot(offsets[k], offsets[k]);
+    }
+    let squares = &squares[..segments.len()];
+    let smallest = squares.iter().copied().fold(f64::INFINITY, f64::min);
+    if !(smallest.is_finite() && smallest > 1e-200) || squares.iter().any(|s| s.is_nan()) {
+        return all();
+    }
+    let limit = smallest * (1.0 + SQUARED_MARGIN);
+    squares
+        .iter()
+        .zip(&offsets)
+        .filter(|&(&s, _)| s <= limit)
+        .map(|(_, &o)| norm(o))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// A [`Bone`] with the parts of its score that do not depend on the pixel computed once
+/// ([`label_person`](super::label_person) scores each bone at up to a few 10⁵ pixels):
+/// [`PreparedBone::score`] equals [`Bone::score`] bit for bit.
+#[derive(Clone, Debug)]
+pub(crate) struct PreparedBone {
+    pub(crate) class: u8,
+    pub(crate) scale_px: f64,
+    radius_px: f64,
+    bias: f64,
+    segments: Vec<Segment>,
+    /// The torso quad's edges (even-odd test on them), else a polyline's segments.
+    quad: bool,
+    /// A flat medial start: the first point, the first segment's axis, its length and the
+    /// outward unit vector.
+    flat: Option<(P2, P2, f64, P2)>,
+}
+
+impl PreparedBone {
+    pub(crate) fn new(bone: &Bone) -> PreparedBone {
+        let (segments, quad, flat) = match &bone.shape {
+            BoneShape::Polyline(pts) => {
+                let flat = match (pts.as_slice(), bone.start) {
+                    ([a, b, ..], BoneStart::FlatMedial { outward }) if norm(sub(*b, *a)) > 1e-9 => {
+                        let axis = sub(*b, *a);
+                        Some((*a, axis, norm(axis), outward))
+                    }
+                    _ => None,
+                };
+                let segments = pts.windows(2).map(|w| Segment::new(w[0], w[1])).collect();
+                (segments, false, flat)
+            }
+            BoneShape::Quad(quad) => {
+                let n = quad.len();
+                let segments = (0..n)
+                    .map(|i| Segment::new(quad[i], quad[(i + 1) % n]))
+                    .collect();
+                (segments, true, None)
+            }
+        };
+        PreparedBone {
+            class: bone.class,
+            scale_px: bone.scale_px,
+            radius_px: bone.radius_px,
+            bias: bone.bias,
+            segments,
+            quad,
+            flat,
+        }
+    }
+
+    /// [`Bone::score`] at `q`.
+    pub(crate) fn score(&self, q: P2) -> f64 {
+        let d = if self.quad {
+            // polygon_distance with the edges' differences taken once, and the distance
+            // to the edges only outside (inside it is 0 whatever they are).
+            let mut inside = false;
+            for s in &self.segments {
+                let (a, b) = (s.a, s.b);
+                if (a[1] > q[1]) != (b[1] > q[1]) {
+                    let x = a[0] + (q[1] - a[1]) * s.ab[0] / s.ab[1];
+                    if q[0] < x {
+                        inside = !inside;
+                    }
+                }
+            }
+            let d = if inside {
+                0.0
+            } else {
+                min_distance(&self.segments, q)
+            };
+            d - self.radius_px
+        } else {
+            let d = min_distance(&self.segments, q) - self.radius_px;
+            let behind = match self.flat {
+                Some((a, axis, length, outward)) => {
+                    let behind = -dot(sub(q, a), axis) / length;
+                    behind.min(-dot(sub(q, a), outward))
+                }
+                None => f64::NEG_INFINITY,
+            };
+            d.max(behind)
+        };
+        d / self.scale_px + 1.0 + self.bias
+    }
+}

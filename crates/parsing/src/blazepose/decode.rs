@@ -81,6 +81,23 @@ pub fn decode(
     if landmarks.len() < NUM_LANDMARKS * 5 || mask_logits.len() < INPUT * INPUT {
         return None;
     }
+    let mut pose = decode_landmarks(roi, landmarks, flag, heatmap)?;
+    pose.mask = mask_from_logits(mask_logits);
+    Some(pose)
+}
+
+/// [`decode`] without the mask (`mask` left empty; [`mask_from_logits`] makes it): the
+/// segmenter decodes the mask only for the pose a region keeps. `None` when `landmarks`
+/// is shorter than the model's.
+pub(crate) fn decode_landmarks(
+    roi: &Roi,
+    landmarks: &[f32],
+    flag: f32,
+    heatmap: Option<&[f32]>,
+) -> Option<DecodedPose> {
+    if landmarks.len() < NUM_LANDMARKS * 5 {
+        return None;
+    }
     let mut lm: Vec<[f64; 5]> = landmarks
         .chunks_exact(5)
         .take(NUM_LANDMARKS)
@@ -110,11 +127,18 @@ pub fn decode(
             .collect(),
         visibility: lm.iter().map(|l| sigmoid(l[3])).collect(),
         presence: lm.iter().map(|l| sigmoid(l[4])).collect(),
-        mask: mask_logits[..INPUT * INPUT]
-            .iter()
-            .map(|&v| sigmoid(f64::from(v)) as f32)
-            .collect(),
+        mask: Vec::new(),
     })
+}
+
+/// The person probabilities of the mask output's first 256×256 logits (fewer: empty).
+pub(crate) fn mask_from_logits(mask_logits: &[f32]) -> Vec<f32> {
+    mask_logits
+        .get(..INPUT * INPUT)
+        .unwrap_or(&[])
+        .iter()
+        .map(|&v| sigmoid(f64::from(v)) as f32)
+        .collect()
 }
 
 /// The landmark that each landmark becomes in the mirror image (left ↔ right of

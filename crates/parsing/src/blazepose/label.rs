@@ -1,6 +1,6 @@
 //! Labelling the pixels of one person from its bones and mask, and merging people.
 
-use super::bone::{Bone, RuleConfig, bones};
+use super::bone::{PreparedBone, RuleConfig, bones};
 use super::decode::DecodedPose;
 use super::model::INPUT;
 use super::roi::{P2, Roi, dot, sub};
@@ -43,8 +43,9 @@ pub(crate) fn mask_at(pose: &DecodedPose, axes: (P2, P2), q: P2) -> f64 {
         return 0.0;
     }
     let (tx, ty) = (tx.clamp(0.0, last), ty.clamp(0.0, last));
-    let ix = (tx.floor() as usize).min(INPUT - 2);
-    let iy = (ty.floor() as usize).min(INPUT - 2);
+    // In [0, 255] after the clamp: the casts are the floor (without a libm call).
+    let ix = (tx as usize).min(INPUT - 2);
+    let iy = (ty as usize).min(INPUT - 2);
     let (fx, fy) = (tx - ix as f64, ty - iy as f64);
     let m = |x: usize, y: usize| f64::from(pose.mask[y * INPUT + x]);
     (m(ix, iy) * (1.0 - fx) + m(ix + 1, iy) * fx) * (1.0 - fy)
@@ -117,7 +118,10 @@ pub fn label_person(
         return None;
     }
     let (u0, u1, v0, v1) = roi_window(&pose.roi, width, height)?;
-    let bl = bones(pose, cfg, width, height);
+    let bl: Vec<PreparedBone> = bones(pose, cfg, width, height)
+        .iter()
+        .map(PreparedBone::new)
+        .collect();
     if bl.is_empty() {
         return None;
     }
@@ -174,7 +178,7 @@ struct Band<'a> {
 fn label_band(
     pose: &DecodedPose,
     cfg: &RuleConfig,
-    bl: &[Bone],
+    bl: &[PreparedBone],
     axes: (P2, P2),
     (u0, u1): (usize, usize),
     (bv, bv1): (usize, usize),
@@ -264,42 +268,54 @@ pub const SIDE_BY_SIDE_M: f64 = 0.3;
 pub fn merge_people(width: usize, height: usize, people: &[PersonLabels]) -> LabelImage {
     let mut labels = vec![Label::BACKGROUND; width * height];
     let mut probs = vec![1.0f32; width * height];
-    let mut best = vec![f32::INFINITY; width * height];
-    // Who won each pixel (index into `people`), for the depth test.
-    let mut owner = vec![usize::MAX; width * height];
     // Front to back (unknown depths last), stable: ties keep the given order.
     let mut order: Vec<usize> = (0..people.len()).collect();
     order.sort_by(|&a, &b| {
         let key = |p: &PersonLabels| p.depth_m.unwrap_or(f64::INFINITY);
         key(&people[a]).total_cmp(&key(&people[b]))
     });
-    for &index in &order {
-        let p = &people[index];
-        let pw = p.u1 - p.u0;
-        for v in p.v0..p.v1.min(height) {
-            for u in p.u0..p.u1.min(width) {
-                let k = (v - p.v0) * pw + (u - p.u0);
-                let i = v * width + u;
-                if !p.score[k].is_finite() {
-                    if owner[i] == usize::MAX {
-                        probs[i] = probs[i].min(p.prob[k]);
+    // Rows are merged in parallel: a pixel's result depends on that pixel of each person
+    // alone, taken in `order`, so it is the same on any number of threads.
+    labels
+        .par_chunks_mut(width.max(1))
+        .zip(probs.par_chunks_mut(width.max(1)))
+        .enumerate()
+        .for_each_init(
+            // The row's best score and who won each pixel (index into `people`, for the
+            // depth test).
+            || (vec![f32::INFINITY; width], vec![usize::MAX; width]),
+            |(best, owner), (v, (labels, probs))| {
+                best.fill(f32::INFINITY);
+                owner.fill(usize::MAX);
+                for &index in &order {
+                    let p = &people[index];
+                    if !(p.v0..p.v1).contains(&v) {
+                        continue;
                     }
-                    continue;
+                    let start = (v - p.v0) * (p.u1 - p.u0);
+                    for u in p.u0..p.u1.min(width) {
+                        let k = start + (u - p.u0);
+                        if !p.score[k].is_finite() {
+                            if owner[u] == usize::MAX {
+                                probs[u] = probs[u].min(p.prob[k]);
+                            }
+                            continue;
+                        }
+                        let behind = owner[u] != usize::MAX
+                            && match (people[owner[u]].depth_m, p.depth_m) {
+                                (Some(front), Some(me)) => me - front > SIDE_BY_SIDE_M,
+                                _ => false,
+                            };
+                        if !behind && p.score[k] < best[u] {
+                            best[u] = p.score[k];
+                            labels[u] = Label::from_id_or_unknown(p.class[k]);
+                            probs[u] = p.prob[k];
+                            owner[u] = index;
+                        }
+                    }
                 }
-                let behind = owner[i] != usize::MAX
-                    && match (people[owner[i]].depth_m, p.depth_m) {
-                        (Some(front), Some(me)) => me - front > SIDE_BY_SIDE_M,
-                        _ => false,
-                    };
-                if !behind && p.score[k] < best[i] {
-                    best[i] = p.score[k];
-                    labels[i] = Label::from_id_or_unknown(p.class[k]);
-                    probs[i] = p.prob[k];
-                    owner[i] = index;
-                }
-            }
-        }
-    }
+            },
+        );
     LabelImage {
         width: width as u32,
         height: height as u32,

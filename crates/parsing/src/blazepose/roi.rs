@@ -119,33 +119,40 @@ pub fn crop_into(image: &RgbImage, roi: &Roi, size: usize, out: &mut Vec<f32>) {
         ),
     );
     let (wmax, hmax) = ((w - 1) as f64, (h - 1) as f64);
-    for j in 0..size {
+    // Each column's offset along `ex`, computed once instead of once per row.
+    let along: Vec<P2> = (0..size)
+        .map(|i| scale(ex, (i as f64 + 0.5) * step))
+        .collect();
+    let rgb = &image.rgb[..w * h * 3];
+    for (j, out_row) in out.chunks_exact_mut(size * 3).enumerate() {
         let ty = (j as f64 + 0.5) * step;
         let row = add(origin, scale(ey, ty));
-        for i in 0..size {
-            let tx = (i as f64 + 0.5) * step;
-            let p = add(row, scale(ex, tx));
+        for (px, &off) in out_row.chunks_exact_mut(3).zip(&along) {
+            let p = add(row, off);
             let x = p[0].clamp(0.0, wmax);
             let y = p[1].clamp(0.0, hmax);
-            // clamped to [0, w-1]: the casts cannot leave the image
-            let x0 = x.floor() as usize;
-            let y0 = y.floor() as usize;
+            // Clamped to [0, w-1] (or NaN, which casts to 0 as floor's NaN does): the cast
+            // is the floor without a libm call, and cannot leave the image.
+            let x0 = x as usize;
+            let y0 = y as usize;
             let x1 = (x0 + 1).min(w - 1);
             let y1 = (y0 + 1).min(h - 1);
             let fx = x - x0 as f64;
             let fy = y - y0 as f64;
+            let at = |k: usize| -> [f64; 3] {
+                let p = &rgb[k * 3..k * 3 + 3];
+                [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
+            };
             let (a, b, c, d) = (
-                (y0 * w + x0) * 3,
-                (y0 * w + x1) * 3,
-                (y1 * w + x0) * 3,
-                (y1 * w + x1) * 3,
+                at(y0 * w + x0),
+                at(y0 * w + x1),
+                at(y1 * w + x0),
+                at(y1 * w + x1),
             );
-            let o = (j * size + i) * 3;
             for ch in 0..3 {
-                let at = |k: usize| f64::from(image.rgb[k + ch]);
-                let top = at(a) * (1.0 - fx) + at(b) * fx;
-                let bot = at(c) * (1.0 - fx) + at(d) * fx;
-                out[o + ch] = ((top * (1.0 - fy) + bot * fy) / 255.0) as f32;
+                let top = a[ch] * (1.0 - fx) + b[ch] * fx;
+                let bot = c[ch] * (1.0 - fx) + d[ch] * fx;
+                px[ch] = ((top * (1.0 - fy) + bot * fy) / 255.0) as f32;
             }
         }
     }

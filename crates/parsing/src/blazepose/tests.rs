@@ -509,3 +509,50 @@ fn block_culling_equals_scoring_every_bone() {
         assert!(labelled > 1000, "the figure is labelled: {labelled} px");
     }
 }
+
+/// The bones with their pixel-independent parts computed once score every point exactly as
+/// the bones do: the figure's bones (torso quad, round head, flat-shouldered upper arms,
+/// three-point forearms), also rotated and with a degenerate (zero-length) limb, at points
+/// inside, on and around them.
+#[test]
+fn prepared_bones_score_bit_for_bit_as_the_bones() {
+    let cfg = RuleConfig::default();
+    let mut poses = vec![figure()];
+    let mut turned = figure();
+    for p in &mut turned.xy {
+        *p = [
+            50.0 + 0.8 * (p[0] - 50.0) - 0.6 * (p[1] - 80.0),
+            80.0 + 0.6 * (p[0] - 50.0) + 0.8 * (p[1] - 80.0),
+        ];
+    }
+    poses.push(turned);
+    let mut degenerate = figure();
+    degenerate.xy[landmark::LEFT_ELBOW] = degenerate.xy[landmark::LEFT_SHOULDER];
+    poses.push(degenerate);
+    let mut checked = 0;
+    for pose in &poses {
+        let bl = bones(pose, &cfg, 100, 160);
+        assert!(bl.len() >= 8, "the figure's bones: {}", bl.len());
+        assert!(
+            bl.iter()
+                .any(|b| matches!(b.start, BoneStart::FlatMedial { .. }))
+        );
+        for b in &bl {
+            let prepared = PreparedBone::new(b);
+            // Quarter-pixel steps (not only pixel centres) over and beyond the image.
+            for j in -40..=200 {
+                for i in -40..=160 {
+                    let q = [f64::from(i) * 0.75 - 0.125, f64::from(j) * 0.875 + 0.25];
+                    assert_eq!(
+                        prepared.score(q).to_bits(),
+                        b.score(q).to_bits(),
+                        "bone of class {} at {q:?}",
+                        b.class
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 500_000);
+}

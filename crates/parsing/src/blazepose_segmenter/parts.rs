@@ -43,7 +43,8 @@ impl BlazePoseSegmenter {
     }
 
     /// [`BlazePoseSegmenter::segment_image`] with BodyPix's parts: BlazePose's people
-    /// merged, BodyPix's regions merged, the two fused.
+    /// (their rims vetoed where BodyPix sees background) merged, BodyPix's regions merged,
+    /// the two fused, pieces held by nothing dropped.
     ///
     /// # Errors
     /// [`ParsingError::Inference`].
