@@ -162,7 +162,42 @@ pub struct FrameRecord {
     pub inputs: Vec<InputFile>,
     /// The frame's evaluation (a bodyseg-eval report in its JSON form) when the input has
     /// ground truth.
-    pub scores: Option<serde_json::Value>,
+    pub scores: Option<FrameScores>,
+}
+
+/// A frame's evaluation report held as compact JSON text; in the record file it is the
+/// same nested JSON object as ever. Why not a `serde_json::Value`: a run keeps every
+/// frame's record until its end (the report merges them), and a `Value` tree (an enum per
+/// number, a `String` per key, map nodes) took ~60 KB a frame of live memory against the
+/// text's few KB (a counting allocator over 1000 frames, docs/notes/2026-12-02-rerun.md).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FrameScores(String);
+
+impl FrameScores {
+    /// The scores of `value` (kept as its compact JSON text).
+    pub fn from_value(value: &serde_json::Value) -> FrameScores {
+        FrameScores(value.to_string())
+    }
+
+    /// The report's JSON text.
+    pub fn json(&self) -> &str {
+        &self.0
+    }
+}
+
+impl Serialize for FrameScores {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        // Written as a nested object (not a string), as the records always were.
+        let value: serde_json::Value =
+            serde_json::from_str(&self.0).map_err(serde::ser::Error::custom)?;
+        value.serialize(serializer)
+    }
+}
+
+impl<'de> Deserialize<'de> for FrameScores {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        serde_json::Value::deserialize(deserializer).map(|value| FrameScores::from_value(&value))
+    }
 }
 
 /// A frame that failed: its id and the error, one line.
@@ -608,6 +643,27 @@ mod tests {
         process: &FrameFn<'_, J>,
     ) -> BatchOutcome {
         run_batch(jobs, out, Shard::ALL, hash, false, &|_| {}, process).expect("batch")
+    }
+
+    /// A record's scores are written as the nested JSON object a `serde_json::Value` gives
+    /// (the record files stay as they were) and read back equal.
+    #[test]
+    fn frame_scores_are_written_as_a_nested_object() {
+        let value: serde_json::Value = serde_json::json!({
+            "version": 1,
+            "configurations": [{ "name": "M-R-N", "metrics": { "miou": 0.75, "biou": 0.5 } }],
+        });
+        let mut record = record_of("000001").expect("record");
+        record.scores = Some(FrameScores::from_value(&value));
+        let text = serde_json::to_string_pretty(&record).expect("serialise");
+        let mut as_value =
+            serde_json::to_value(record_of("000001").expect("record")).expect("value");
+        as_value["scores"] = value;
+        let written: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+        assert_eq!(written, as_value, "scores nested, not a string");
+        let back: FrameRecord = serde_json::from_str(&text).expect("read back");
+        assert_eq!(back, record);
+        assert!(serde_json::from_str::<FrameRecord>(&text.replace("0.75", "\"x")).is_err());
     }
 
     fn record_of(id: &str) -> Result<FrameRecord> {

@@ -82,8 +82,8 @@ mod viewer;
 
 pub use allocator::keep_freed_memory;
 pub use batch::{
-    BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameWriter, InputFile, OutputFile,
-    Shard,
+    BatchOutcome, BatchProgress, FrameFailure, FrameRecord, FrameScores, FrameWriter, InputFile,
+    OutputFile, Shard,
 };
 pub use bodyseg_calib::{AzureColorResolution, AzureDepthMode, AzureKinectMode, Board};
 pub use bodyseg_parsing::SegmenterKind;

@@ -452,6 +452,7 @@ impl FrameProcessor {
                 report.push(s.to_string(), bodyseg_eval::score_aligned(labels, &gt)?)?;
             }
             let scores: serde_json::Value = serde_json::from_str(&report.to_json()?)?;
+            let scores = crate::batch::FrameScores::from_value(&scores);
             let series = match self.sink {
                 Some(_) => crate::viewer::score_series(&report),
                 None => Vec::new(),

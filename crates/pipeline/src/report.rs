@@ -83,19 +83,20 @@ pub(crate) fn write_reports(
     resolved: &str,
     fps: f64,
 ) -> Result<(Option<Report>, Vec<PathBuf>)> {
-    let mut reports = Vec::new();
+    // Folded frame by frame (sums of counts: the same as merging all at once), so that the
+    // frames' reports are never all in memory together.
+    let mut report: Option<Report> = None;
     for r in &outcome.records {
         if let Some(s) = &r.scores {
-            let report = Report::from_json(&s.to_string())
+            let frame = Report::from_json(s.json())
                 .with_context(|| format!("frame {}: scores in its record", r.frame))?;
-            reports.push(report);
+            report = Some(match report {
+                None => frame,
+                Some(sum) => Report::merge([&sum, &frame])
+                    .with_context(|| format!("merging the frames' scores: frame {}", r.frame))?,
+            });
         }
     }
-    let report = if reports.is_empty() {
-        None
-    } else {
-        Some(Report::merge(&reports).context("merging the frames' scores")?)
-    };
     let suffix = opts.shard.suffix();
     let mut written = Vec::new();
     if let Some(report) = &report {
