@@ -517,7 +517,7 @@ impl Worker {
         roi: &Roi,
         model_path: &Path,
     ) -> Result<Decoding, ParsingError> {
-        self.run_seeing(image, roi, None, false, model_path)
+        self.run_seeing(image, roi, None, false, true, model_path)
     }
 
     /// A region's first run: [`Worker::run`] without the mask when there is a
@@ -532,36 +532,7 @@ impl Worker {
         roi: &Roi,
         model_path: &Path,
     ) -> Result<Decoding, ParsingError> {
-        let Some(session) = self.landmarks_only.as_mut() else {
-            return self.run(image, roi, model_path);
-        };
-        crop_into(image, roi, INPUT, &mut self.input);
-        let outputs = run_one_input(
-            session,
-            INPUT_NAME,
-            [1, INPUT, INPUT, 3],
-            &self.input,
-            model_path,
-        )?;
-        let get =
-            |name: &str| named_output::<f32>(&outputs, name, model_path).map(|(_, data)| data);
-        let landmarks = get(LANDMARKS.0)?;
-        let flag = get(FLAG.0)?.first().copied().unwrap_or(0.0);
-        let heatmap = get(HEATMAP.0)?;
-        self.runs += 1;
-        let pose = decode_landmarks(roi, landmarks, flag, Some(heatmap)).ok_or_else(|| {
-            inference_error(
-                model_path,
-                format!(
-                    "outputs shorter than BlazePose's ({} landmark values)",
-                    landmarks.len()
-                ),
-            )
-        })?;
-        Ok(Decoding {
-            pose,
-            mask_logits: None,
-        })
+        self.run_seeing(image, roi, None, false, false, model_path)
     }
 
     /// The pose of `run` with its mask (as [`crate::blazepose::decode`] gives it). A run
@@ -592,7 +563,8 @@ impl Worker {
     }
 
     /// [`Worker::run`] on a crop blanked (black) outside `only` when given, and mirrored
-    /// (left ↔ right, the outputs brought back to the unmirrored crop) when `mirror`.
+    /// (left ↔ right, the outputs brought back to the unmirrored crop) when `mirror`; on
+    /// [`Worker::landmarks_only`] (no mask logits) when `mask` is false and there is one.
     ///
     /// # Errors
     /// [`ParsingError::Inference`] naming the model file.
@@ -602,6 +574,7 @@ impl Worker {
         roi: &Roi,
         only: Option<&PixelBox>,
         mirror: bool,
+        mask: bool,
         model_path: &Path,
     ) -> Result<Decoding, ParsingError> {
         crop_into(image, roi, INPUT, &mut self.input);
@@ -613,17 +586,15 @@ impl Worker {
         }
         let path = model_path;
         let infer = |cause: String| inference_error(path, cause);
-        let outputs = run_one_input(
-            &mut self.session,
-            INPUT_NAME,
-            [1, INPUT, INPUT, 3],
-            &self.input,
-            path,
-        )?;
+        let (session, with_mask) = match self.landmarks_only.as_mut() {
+            Some(session) if !mask => (session, false),
+            _ => (&mut self.session, true),
+        };
+        let outputs = run_one_input(session, INPUT_NAME, [1, INPUT, INPUT, 3], &self.input, path)?;
         let get = |name: &str| named_output::<f32>(&outputs, name, path).map(|(_, data)| data);
         let landmarks = get(LANDMARKS.0)?;
         let flag = get(FLAG.0)?.first().copied().unwrap_or(0.0);
-        let mask = get(MASK.0)?;
+        let mask = if with_mask { get(MASK.0)? } else { &[] };
         let heatmap = get(HEATMAP.0)?;
         self.runs += 1;
         let unmirrored;
@@ -635,7 +606,7 @@ impl Worker {
             (landmarks, mask, heatmap)
         };
         let pose = decode_landmarks(roi, landmarks, flag, Some(heatmap))
-            .filter(|_| mask.len() >= INPUT * INPUT);
+            .filter(|_| !with_mask || mask.len() >= INPUT * INPUT);
         let pose = pose.ok_or_else(|| {
             infer(format!(
                 "outputs shorter than BlazePose's ({} landmark values, {} mask values)",
@@ -645,7 +616,7 @@ impl Worker {
         })?;
         Ok(Decoding {
             pose,
-            mask_logits: Some(mask[..INPUT * INPUT].to_vec()),
+            mask_logits: with_mask.then(|| mask[..INPUT * INPUT].to_vec()),
         })
     }
 
@@ -681,7 +652,7 @@ impl Worker {
         if !options.mirror_average {
             return Ok(Some(pose));
         }
-        let mirrored = self.run_seeing(image, &pose.roi, only.as_ref(), true, model_path)?;
+        let mirrored = self.run_seeing(image, &pose.roi, only.as_ref(), true, true, model_path)?;
         let mirrored = self.finish(image, mirrored, model_path)?;
         Ok(Some(average_masks(&pose, &mirrored)))
     }
@@ -710,6 +681,7 @@ impl Worker {
                 &Roi::from_box(bounds, RETRY_ROI_SCALE),
                 only,
                 false,
+                true,
                 model_path,
             )?;
             if centre_inside(&retry, bounds, w, h) && (!inside || retry.flag > pose.flag) {
