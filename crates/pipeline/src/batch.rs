@@ -26,8 +26,10 @@
 use crate::recording::check_relative_path;
 use crate::stage::Stage;
 use anyhow::{Context, Result, bail};
+use bodyseg_eval::Report;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -222,11 +224,52 @@ pub struct BatchProgress {
     pub skipped: usize,
 }
 
+/// The frames' scores summed as the frames finish (see [`BatchOutcome::scores`]); the first
+/// record whose scores cannot be read or added, as an error.
+#[derive(Default)]
+struct ScoreFold {
+    reports: BTreeMap<String, Report>,
+    error: Option<String>,
+}
+
+impl ScoreFold {
+    /// Takes `record`'s scores out of it and adds them to its group's sum. Sums of counts:
+    /// the order frames finish in does not change them.
+    fn take(&mut self, record: &mut FrameRecord) {
+        let Some(scores) = record.scores.take() else {
+            return;
+        };
+        if self.error.is_some() {
+            return;
+        }
+        let group = record.frame.rsplit_once('/').map_or("", |(group, _)| group);
+        let added = Report::from_json(scores.json())
+            .with_context(|| format!("frame {}: scores in its record", record.frame))
+            .and_then(|frame| match self.reports.get(group) {
+                None => Ok(frame),
+                Some(sum) => Report::merge([sum, &frame])
+                    .with_context(|| format!("merging the frames' scores: frame {}", record.frame)),
+            });
+        match added {
+            Ok(sum) => {
+                self.reports.insert(group.to_string(), sum);
+            }
+            Err(e) => self.error = Some(format!("{e:#}")),
+        }
+    }
+}
+
 /// What a batch did.
 #[derive(Debug)]
 pub struct BatchOutcome {
-    /// Records of this shard's complete frames (processed now or skipped), in list order.
+    /// Records of this shard's complete frames (processed now or skipped), in list order,
+    /// without their scores: those are folded into [`BatchOutcome::scores`] as the frames
+    /// finish, so that a long batch does not hold every frame's evaluation until its end.
     pub records: Vec<FrameRecord>,
+    /// The frames' scores summed per group of frames: the part of a frame id before its
+    /// last `/` (a recording of `convert`), `""` for a plain frame id. Groups without
+    /// scores are absent.
+    pub scores: BTreeMap<String, Report>,
     /// Frames processed now.
     pub processed: usize,
     /// Frames skipped as complete.
@@ -487,6 +530,12 @@ pub(crate) fn run_batch<J: Sync>(
     let failed_count = AtomicUsize::new(0);
     let skipped_count = AtomicUsize::new(0);
     let totals: Mutex<Vec<(&'static str, Duration)>> = Mutex::new(Vec::new());
+    let scores: Mutex<ScoreFold> = Mutex::new(ScoreFold::default());
+    let fold = |record: &mut FrameRecord| {
+        if let Ok(mut s) = scores.lock() {
+            s.take(record);
+        }
+    };
     let start = Instant::now();
 
     enum Done {
@@ -498,11 +547,12 @@ pub(crate) fn run_batch<J: Sync>(
         .par_iter()
         .with_max_len(1)
         .map(|(id, job)| {
-            let done = if let Some(r) = (!redo)
+            let done = if let Some(mut r) = (!redo)
                 .then(|| complete_record(out, id, config_hash))
                 .flatten()
             {
                 skipped_count.fetch_add(1, Ordering::Relaxed);
+                fold(&mut r);
                 Done::Skipped(r)
             } else {
                 let mut writer = FrameWriter::new(out);
@@ -527,7 +577,8 @@ pub(crate) fn run_batch<J: Sync>(
                             Ok(record)
                         });
                 match result {
-                    Ok(record) => {
+                    Ok(mut record) => {
+                        fold(&mut record);
                         if let Ok(mut t) = totals.lock() {
                             for s in &stages {
                                 match t.iter_mut().find(|(n, _)| *n == s.name) {
@@ -560,8 +611,15 @@ pub(crate) fn run_batch<J: Sync>(
         })
         .collect();
 
+    let scores = scores
+        .into_inner()
+        .map_err(|_| anyhow::anyhow!("a frame worker panicked while adding its scores"))?;
+    if let Some(e) = scores.error {
+        bail!("{e}");
+    }
     let mut outcome = BatchOutcome {
         records: Vec::new(),
+        scores: scores.reports,
         processed: 0,
         skipped: 0,
         failed: Vec::new(),
@@ -664,6 +722,66 @@ mod tests {
         let back: FrameRecord = serde_json::from_str(&text).expect("read back");
         assert_eq!(back, record);
         assert!(serde_json::from_str::<FrameRecord>(&text.replace("0.75", "\"x")).is_err());
+    }
+
+    /// A frame's report: `n` points, labels 1 of which `hits` predicted right (else 2).
+    fn frame_report(n: usize, hits: usize) -> Report {
+        let gt = vec![bodyseg_core::Label::from_id_or_unknown(1); n];
+        let pred: Vec<_> = (0..n)
+            .map(|i| bodyseg_core::Label::from_id_or_unknown(if i < hits { 1 } else { 2 }))
+            .collect();
+        let mut r = Report::new();
+        r.push(
+            "M",
+            bodyseg_eval::score_aligned(&pred, &gt).expect("scores"),
+        )
+        .expect("push");
+        r
+    }
+
+    /// The batch sums the frames' scores per group (the id's part before its last `/`) as
+    /// they finish and keeps the records without them; a resumed batch (frames skipped as
+    /// complete, their scores read from their records) sums the same.
+    #[test]
+    fn scores_are_summed_per_group_as_frames_finish() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let jobs: Vec<(String, usize)> = ["a/000", "a/001", "b/000", "b/001", "b/002"]
+            .iter()
+            .enumerate()
+            .map(|(i, id)| (id.to_string(), i))
+            .collect();
+        let per_frame = |i: usize| frame_report(10 + i, 3 + i);
+        let process = |f: BatchFrame<'_, usize>, _: &mut FrameWriter, _: &mut Vec<Stage>| {
+            let mut record = record_of(f.id)?;
+            let value: serde_json::Value = serde_json::from_str(&per_frame(*f.job).to_json()?)?;
+            record.scores = Some(FrameScores::from_value(&value));
+            Ok(record)
+        };
+        let first = whole(&jobs, dir.path(), "h", &process);
+        assert!(first.records.iter().all(|r| r.scores.is_none()));
+        let want = |ids: &[usize]| {
+            let reports: Vec<Report> = ids.iter().map(|&i| per_frame(i)).collect();
+            Report::merge(&reports).expect("merge")
+        };
+        assert_eq!(first.scores.keys().collect::<Vec<_>>(), ["a", "b"]);
+        assert_eq!(first.scores["a"], want(&[0, 1]));
+        assert_eq!(first.scores["b"], want(&[2, 3, 4]));
+        let resumed = whole(&jobs, dir.path(), "h", &process);
+        assert_eq!(resumed.skipped, 5);
+        assert_eq!(resumed.scores, first.scores);
+        // A plain frame id is the group "".
+        let plain = numbered_jobs(2);
+        let process = |f: BatchFrame<'_, u32>, _: &mut FrameWriter, _: &mut Vec<Stage>| {
+            let mut record = record_of(f.id)?;
+            let value: serde_json::Value =
+                serde_json::from_str(&per_frame(*f.job as usize).to_json()?)?;
+            record.scores = Some(FrameScores::from_value(&value));
+            Ok(record)
+        };
+        let dir = tempfile::tempdir().expect("temp dir");
+        let outcome = whole(&plain, dir.path(), "h", &process);
+        assert_eq!(outcome.scores.keys().collect::<Vec<_>>(), [""]);
+        assert_eq!(outcome.scores[""], want(&[0, 1]));
     }
 
     fn record_of(id: &str) -> Result<FrameRecord> {

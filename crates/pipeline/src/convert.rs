@@ -251,6 +251,12 @@ fn convert_recordings(
                     .filter(|r| r.frame.starts_with(&prefix))
                     .cloned()
                     .collect(),
+                scores: outcome
+                    .scores
+                    .get(name.as_str())
+                    .map(|r| (name.clone(), r.clone()))
+                    .into_iter()
+                    .collect(),
                 processed: 0,
                 skipped: 0,
                 failed: outcome

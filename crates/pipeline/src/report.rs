@@ -83,20 +83,15 @@ pub(crate) fn write_reports(
     resolved: &str,
     fps: f64,
 ) -> Result<(Option<Report>, Vec<PathBuf>)> {
-    // Folded frame by frame (sums of counts: the same as merging all at once), so that the
-    // frames' reports are never all in memory together.
-    let mut report: Option<Report> = None;
-    for r in &outcome.records {
-        if let Some(s) = &r.scores {
-            let frame = Report::from_json(s.json())
-                .with_context(|| format!("frame {}: scores in its record", r.frame))?;
-            report = Some(match report {
-                None => frame,
-                Some(sum) => Report::merge([&sum, &frame])
-                    .with_context(|| format!("merging the frames' scores: frame {}", r.frame))?,
-            });
+    // The groups' sums (one group but for `convert`'s overall report): sums of counts, the
+    // same as merging every frame's report at once.
+    let report = match outcome.scores.len() {
+        0 => None,
+        1 => outcome.scores.values().next().cloned(),
+        _ => {
+            Some(Report::merge(outcome.scores.values()).context("merging the recordings' scores")?)
         }
-    }
+    };
     let suffix = opts.shard.suffix();
     let mut written = Vec::new();
     if let Some(report) = &report {

@@ -14,10 +14,12 @@
 //! which `re_log_encoding`'s decoder reads per message; the stream header's LZ4 is the
 //! default its encoder writes, and its decoder does not decompress by it). The bytes are those
 //! of the SDK's encoder (the same framing types, the manifest built by its
-//! `RrdManifestBuilder`) but for that per-chunk choice, and `scripts/check_rrd.py` reads the
-//! files back with the Python SDK.
+//! `RrdManifestBuilder`, fed at the end from a compact record of the chunks: [`Manifest`]) but
+//! for that per-chunk choice, and `scripts/check_rrd.py` reads the files back with the Python
+//! SDK.
 
 use crate::ipc::IpcStream;
+use crate::manifest::Manifest;
 use re_protos::common::v1alpha1::Compression as ProtoCompression;
 use re_protos::log_msg::v1alpha1::{ArrowMsg as ProtoArrowMsg, Encoding as ProtoEncoding};
 use re_sdk::external::arrow::array::RecordBatch;
@@ -25,7 +27,7 @@ use re_sdk::external::arrow::ipc::writer::StreamWriter;
 use re_sdk::external::re_log_encoding::external::lz4_flex;
 use re_sdk::external::re_log_encoding::{
     CrateVersion, Encodable, EncodingOptions, MessageHeader, MessageKind, RRD_FOURCC, RrdFooter,
-    RrdManifestBuilder, StreamFooter, StreamHeader, ToTransport,
+    StreamFooter, StreamHeader, ToTransport,
 };
 use re_sdk::external::re_log_types::{LogMsg, StoreId};
 use std::collections::HashMap;
@@ -66,8 +68,8 @@ pub(crate) struct RrdEncoder<W: Write> {
     lz4: Vec<u8>,
     /// Message header and the protobuf fields before the payload.
     head: Vec<u8>,
-    /// The footer's manifest, per recording.
-    manifests: HashMap<StoreId, RrdManifestBuilder>,
+    /// The footer's manifest, per recording, kept compact until the end ([`Manifest`]).
+    manifests: HashMap<StoreId, Manifest>,
 }
 
 impl<W: Write> RrdEncoder<W> {
@@ -155,11 +157,11 @@ impl<W: Write> RrdEncoder<W> {
         }
         .map_err(|e| e.to_string())?;
         self.written += payload_len as u64;
-        self.manifests
-            .entry(store_id.clone())
-            .or_default()
-            .append(&chunk_batch, span, uncompressed_size)
-            .map_err(|e| e.to_string())
+        self.manifests.entry(store_id.clone()).or_default().append(
+            &chunk_batch,
+            span,
+            uncompressed_size,
+        )
     }
 
     /// The batch as an Arrow IPC stream into `ipc` (from `stream` where it has one).
@@ -210,8 +212,7 @@ impl<W: Write> RrdEncoder<W> {
         let manifests = std::mem::take(&mut self.manifests)
             .into_iter()
             .map(|(id, m)| m.build(id.clone()).map(|m| (id, m)))
-            .collect::<Result<HashMap<_, _>, _>>()
-            .map_err(|e| e.to_string())?;
+            .collect::<Result<HashMap<_, _>, _>>()?;
         let footer = RrdFooter { manifests }
             .to_transport(())
             .map_err(|e| e.to_string())?;
@@ -285,20 +286,41 @@ fn push_varint(out: &mut Vec<u8>, mut v: u64) {
 mod tests {
     use super::*;
     use re_protos::log_msg::v1alpha1::log_msg::Msg;
+    use re_sdk::ComponentBatch;
     use re_sdk::RecordingStreamBuilder;
     use re_sdk::external::re_log_encoding::{Decodable, Encoder, ToApplication};
+    use re_sdk::log::{Chunk, RowId};
+    use re_sdk::time::Timeline;
     use re_sdk_types::archetypes::{Points3D, Scalars};
+    use re_sdk_types::components::{ClassId, Position3D};
 
-    /// A few messages as a run logs them: store info, clouds (one of them unlabelled),
-    /// scalars on two frames, static data.
+    /// A few messages as a run logs them: store info, clouds (one of them unlabelled, one
+    /// with its positions and class ids in rows of their own), scalars on three frames (rows
+    /// the batcher joins into chunks), a timeline on some frames only, static data.
     fn messages() -> Vec<LogMsg> {
         let (rec, storage) = RecordingStreamBuilder::new("encoder_test")
             .memory()
             .expect("memory recording");
         rec.log_static("world", &Scalars::single(1.0))
             .expect("log static");
-        for frame in 0..2_i64 {
+        for frame in 0..3_i64 {
             rec.set_time_sequence("frame", frame);
+            if frame == 1 {
+                rec.set_timestamp_nanos_since_epoch("time", 1_700_000_000_000_000_000_i64);
+            } else {
+                rec.disable_timeline("time");
+            }
+            // Two rows of one entity, each with one component: two chunks.
+            rec.log(
+                "world/split",
+                &Points3D::update_fields().with_positions([[frame as f32, 0.0, 1.0]]),
+            )
+            .expect("log positions");
+            rec.log(
+                "world/split",
+                &Points3D::update_fields().with_class_ids([frame as u16]),
+            )
+            .expect("log class ids");
             let n = 1000 + frame as usize * 77;
             let xyz = (0..n).map(|i| [i as f32, 0.5, -(i as f32)]);
             rec.log(
@@ -309,6 +331,30 @@ mod tests {
             rec.log("scores/biou", &Scalars::single(0.25 * frame as f64))
                 .expect("log scalar");
         }
+        // A chunk of three rows in which each component misses a row (nulls), as a chunk
+        // sent whole; the times out of order.
+        let positions: Vec<Position3D> = vec![[1.0, 2.0, 3.0].into(); 4];
+        let ids: Vec<ClassId> = vec![2.into(); 4];
+        let mut sparse = Chunk::builder("world/sparse");
+        for (frame, with_positions, with_ids) in
+            [(5_i64, true, true), (2, true, false), (9, false, true)]
+        {
+            sparse = sparse.with_sparse_component_batches(
+                RowId::new(),
+                [(Timeline::new_sequence("frame"), frame)],
+                [
+                    (
+                        Points3D::descriptor_positions(),
+                        with_positions.then_some(&positions as &dyn ComponentBatch),
+                    ),
+                    (
+                        Points3D::descriptor_class_ids(),
+                        with_ids.then_some(&ids as &dyn ComponentBatch),
+                    ),
+                ],
+            );
+        }
+        rec.send_chunk(sparse.build().expect("sparse chunk"));
         rec.flush_blocking().expect("flush");
         storage.take()
     }

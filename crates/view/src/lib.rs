@@ -39,6 +39,8 @@ mod encoder;
 #[cfg(feature = "rerun")]
 mod ipc;
 #[cfg(feature = "rerun")]
+mod manifest;
+#[cfg(feature = "rerun")]
 mod order;
 #[cfg(feature = "rerun")]
 mod sink;

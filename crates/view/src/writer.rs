@@ -108,6 +108,11 @@ impl ViewWriter {
             .map_err(|e| err(&e))?;
         let (sink, closed) = crate::sink::RrdFileSink::create(&partial).map_err(|e| err(&e))?;
         rec.set_sink(Box::new(sink));
+        // No `log_time` timeline: the wall-clock time at which a worker logged a frame says
+        // nothing about the recording (frames come from parallel workers, out of order),
+        // and it doubled the footer manifest's columns, which grow with every chunk
+        // (docs/notes/2026-12-02-rerun.md, 2026-12-04, session 43).
+        rec.set_log_time_enabled(false);
         let stamps: BTreeMap<&str, i64> = stamps.iter().map(|(s, t)| (s.as_str(), *t)).collect();
         let frames = frames
             .iter()
@@ -300,7 +305,9 @@ impl ViewWriter {
             _ => None,
         };
         for batch in frame_cloud_batches(frame.projected, frame.refined, clusters) {
-            self.log(batch.entity, &points(batch.positions, batch.paint))?;
+            for row in points_rows(batch.positions, batch.paint) {
+                self.log(batch.entity, &row)?;
+            }
         }
         if let Some(boxes) = frame.boxes {
             self.log(paths::BOXES, &boxes_3d(boxes))?;
@@ -520,28 +527,34 @@ fn frame_cloud_batches(
 }
 
 /// A `Points3D` of these positions (a `Position3D` batch) painted so, handed to the SDK as
-/// ready-made Arrow arrays. Through `Position3D` / `ClassId` values the SDK rebuilds each
-/// array by growing a `Vec` point by point: ~16 ms of user CPU per 3-camera frame of
-/// ~350k points, and the fresh pages of its reallocations showed as system time
-/// (docs/notes/2026-12-02-rerun.md, 2026-12-03).
-fn points(positions: ArrayRef, paint: Paint) -> Points3D {
+/// ready-made Arrow arrays, as one or two rows of the same entity and time: the positions
+/// (with the radius), then the class ids or colours of each point, so that each becomes a
+/// chunk of its own in the file. Float positions are written as they are (LZ4 leaves them
+/// as they are) and only the class ids go through LZ4; in one chunk LZ4 ran over both
+/// (docs/notes/2026-12-02-rerun.md, 2026-12-04, session 43). A cloud under the batcher's
+/// chunk size (`sink::BATCH_FLUSH_BYTES`) is still one chunk: the batcher joins its rows.
+/// Through `Position3D` / `ClassId` values the SDK rebuilds each array by growing a `Vec`
+/// point by point: ~16 ms of user CPU per 3-camera frame of ~350k points, and the fresh
+/// pages of its reallocations showed as system time (same notes, 2026-12-03).
+fn points_rows(positions: ArrayRef, paint: Paint) -> Vec<Points3D> {
     let mut p = Points3D::update_fields();
     p.positions = Some(SerializedComponentBatch::new(
         positions,
         Points3D::descriptor_positions(),
     ));
-    let p = match paint {
+    let p = p.with_radii([POINT_RADIUS_M]);
+    match paint {
         Paint::Classes(ids) => {
-            p.class_ids = Some(SerializedComponentBatch::new(
+            let mut c = Points3D::update_fields();
+            c.class_ids = Some(SerializedComponentBatch::new(
                 ids,
                 Points3D::descriptor_class_ids(),
             ));
-            p
+            vec![p, c]
         }
-        Paint::Unknown => p.with_class_ids([u16::from(Label::UNKNOWN_ID)]),
-        Paint::Colors(colors) => p.with_colors(colors),
-    };
-    p.with_radii([POINT_RADIUS_M])
+        Paint::Unknown => vec![p.with_class_ids([u16::from(Label::UNKNOWN_ID)])],
+        Paint::Colors(colors) => vec![p, Points3D::update_fields().with_colors(colors)],
+    }
 }
 
 fn segmentation(l: &LabelImage) -> SegmentationImage {
