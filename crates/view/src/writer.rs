@@ -360,9 +360,11 @@ impl ViewWriter {
             if d.raw.len() != d.width as usize * d.height as usize {
                 return Err(size_err("depth", d.raw.len(), d.width, d.height, 1));
             }
-            let mut bytes = Vec::with_capacity(d.raw.len() * 2);
-            for v in d.raw {
-                bytes.extend_from_slice(&v.to_le_bytes());
+            // Little-endian bytes, written in place (a copy the compiler vectorises; pushing
+            // value by value was most of this function's time).
+            let mut bytes = vec![0_u8; d.raw.len() * 2];
+            for (b, v) in bytes.chunks_exact_mut(2).zip(d.raw) {
+                b.copy_from_slice(&v.to_le_bytes());
             }
             // Rerun's `meter`: raw units per metre, the rig's depth_scale.
             self.log(
