@@ -10,8 +10,9 @@
 # Needs a release binary built with the feature: cargo build --release --features rerun.
 # Time, for two runs of the handover scene (3 cameras), each the ratio of `run`'s wall-clock
 # times and of its CPU times (user + sys, from /usr/bin/time; the figure to compare on a
-# loaded machine), medians of 3 rounds (one run without and one with `--rerun` per round)
-# after a warm-up, no figure:
+# loaded machine; user time alone too: on a VM the system time also holds the host's cost of
+# fresh pages, which varies several-fold between identical runs), medians of 3 rounds (one
+# run without and one with `--rerun` per round) after a warm-up, no figure:
 #   - the default parser (BlazePose + BodyPix, `--parser model`: what `--parser auto` picks
 #     on a recording without recorded labels) on MODEL_FRAMES frames: a user's run. Needs
 #     the ONNX Runtime (ORT_DYLIB_PATH, else .deps/onnxruntime/); skipped, saying so,
@@ -37,32 +38,34 @@ synth() { # synth NAME ARGS...: the recording $recs/NAME, made once
     [ -f "$recs/$name/rig.toml" ] || "$bin" synth --no-preview "$@" --out "$recs/$name" >/dev/null 2>&1
 }
 
-run() { # run REC OUT [extra args]: "wall cpu" seconds of one full run (cpu = user + sys)
+run() { # run REC OUT [extra args]: "wall cpu user" seconds of one full run (cpu = user + sys)
     local rec="$1" out="$2"; shift 2
     /usr/bin/time -f "%e %U %S" -o "$tmp/time" \
         "$bin" --quiet run --recording "$recs/$rec" --out "$out" --figure none --force "$@" >/dev/null
-    awk '{printf "%s %.2f\n", $1, $2 + $3}' "$tmp/time"
+    awk '{printf "%s %.2f %s\n", $1, $2 + $3, $2}' "$tmp/time"
 }
 median() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
 
 ratio() { # ratio LABEL REC FRAMES PARSER: prints the wall and CPU ratios of --rerun
     local label="$1" rec="$2" n="$3" parser="$4"
     run "$rec" "$tmp/warm" --parser "$parser" >/dev/null
-    local plain=() with=() plain_cpu=() with_cpu=() wall cpu
+    local plain=() with=() plain_cpu=() with_cpu=() plain_user=() with_user=() wall cpu user
     for _ in 1 2 3; do
-        read -r wall cpu < <(run "$rec" "$tmp/plain" --parser "$parser"); plain+=("$wall"); plain_cpu+=("$cpu")
-        read -r wall cpu < <(run "$rec" "$tmp/with" --parser "$parser" --rerun "$tmp/with/run.rrd")
-        with+=("$wall"); with_cpu+=("$cpu")
+        read -r wall cpu user < <(run "$rec" "$tmp/plain" --parser "$parser")
+        plain+=("$wall"); plain_cpu+=("$cpu"); plain_user+=("$user")
+        read -r wall cpu user < <(run "$rec" "$tmp/with" --parser "$parser" --rerun "$tmp/with/run.rrd")
+        with+=("$wall"); with_cpu+=("$cpu"); with_user+=("$user")
     done
-    local p w pc wc size
+    local p w pc wc pu wu size
     p=$(median "${plain[@]}"); w=$(median "${with[@]}")
     pc=$(median "${plain_cpu[@]}"); wc=$(median "${with_cpu[@]}")
+    pu=$(median "${plain_user[@]}"); wu=$(median "${with_user[@]}")
     size=$(stat -c %s "$tmp/with/run.rrd")
     printf '%s, %d frames, 3 cameras: wall %.3f s/frame without --rerun, %.3f s/frame with (ratio %.3f), .rrd %.1f MB (%.1f MB/frame)\n' \
         "$label" "$n" "$(echo "$p / $n" | bc -l)" "$(echo "$w / $n" | bc -l)" "$(echo "$w / $p" | bc -l)" \
         "$(echo "$size / 1000000" | bc -l)" "$(echo "$size / 1000000 / $n" | bc -l)"
-    printf '%s, %d frames, 3 cameras: CPU (user + sys) %.2f s without --rerun, %.2f s with (ratio %.3f)\n' \
-        "$label" "$n" "$pc" "$wc" "$(echo "$wc / $pc" | bc -l)"
+    printf '%s, %d frames, 3 cameras: CPU (user + sys) %.2f s without --rerun, %.2f s with (ratio %.3f); user alone %.2f s, %.2f s (ratio %.3f)\n' \
+        "$label" "$n" "$pc" "$wc" "$(echo "$wc / $pc" | bc -l)" "$pu" "$wu" "$(echo "$wu / $pu" | bc -l)"
 }
 
 # A user's run: the default parser (BlazePose + BodyPix).

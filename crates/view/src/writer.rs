@@ -5,8 +5,9 @@
 //! writer thread in a channel bounded by count (1024 chunks, not bytes): a
 //! run that logs faster than the writer encodes would queue nearly the whole file in
 //! memory, so [`ViewWriter`] waits for the writer after every [`FLUSH_EVERY_BYTES`]
-//! logged (back-pressure), which bounds what is queued (memory still grows slowly over a
-//! long recording: docs/notes/2026-12-02-rerun.md).
+//! logged (back-pressure), which bounds what is queued. What still grows with the recording
+//! is the footer's index of chunks, kept compact until the file ends (`crate::manifest`;
+//! docs/notes/2026-12-02-rerun.md).
 
 use crate::order::{self, CloudBatch, Layers, Paint};
 use crate::paths;
