@@ -534,8 +534,8 @@ fn frame_cloud_batches(
 /// (with the radius), then the class ids or colours of each point, so that each becomes a
 /// chunk of its own in the file. Float positions are written as they are (LZ4 leaves them
 /// as they are) and only the class ids go through LZ4; in one chunk LZ4 ran over both
-/// (docs/notes/2026-12-02-rerun.md, 2026-12-04, session 43). A cloud under the batcher's
-/// chunk size (`sink::BATCH_FLUSH_BYTES`) is still one chunk: the batcher joins its rows.
+/// (docs/notes/2026-12-02-rerun.md, 2026-12-04, session 43). The SDK's batcher never joins
+/// rows of different components into one chunk, so this holds for small clouds too.
 /// Through `Position3D` / `ClassId` values the SDK rebuilds each array by growing a `Vec`
 /// point by point: ~16 ms of user CPU per 3-camera frame of ~350k points, and the fresh
 /// pages of its reallocations showed as system time (same notes, 2026-12-03).
