@@ -2,13 +2,14 @@
 //! written and built by the SDK's `RrdManifestBuilder` when the file ends.
 //!
 //! Why: `re_log_encoding` 0.36.3's builder keeps its index dense from the start: every chunk
-//! appends an entry to *every* (timeline, component) column seen so far (~25 bytes each, ~75
-//! columns in a run's file), ~2 KB a chunk, ~25-30 KB a frame of live memory that grows with
-//! the recording (a counting allocator over 1000 frames, docs/notes/2026-12-02-rerun.md,
-//! 2026-12-04, session 43). Here a chunk keeps only what the builder reads from it: its id,
-//! entity, row count, byte span, the time of each row per timeline, and per component its
-//! column (descriptor and Arrow type, shared by all chunks) and which rows hold it, ~300 bytes
-//! a chunk. At the end each chunk is rebuilt as a skeleton (the same rows, times and
+//! appends an entry to *every* (timeline, component) column seen so far (~25 bytes each, from
+//! its source), so its memory grows with chunks × columns: `run --rerun` kept ~25-30 KB a
+//! frame more live memory than the plain run, most of it this index (a counting allocator over
+//! 1000 frames of one camera, docs/notes/2026-12-02-rerun.md, 2026-12-04, sessions 42 and 43).
+//! Here a chunk keeps only what the builder reads from it: its id, entity, row count, byte
+//! span, the time of each row per timeline, and per component its column (descriptor and Arrow
+//! type, shared by all chunks) and which rows hold it: ~130-260 bytes a chunk (estimated from
+//! the struct sizes). At the end each chunk is rebuilt as a skeleton (the same rows, times and
 //! validity, every list empty) and appended to the SDK's builder, which makes the same
 //! manifest as if it had seen the chunks themselves (unit test in `encoder.rs`).
 
