@@ -770,14 +770,7 @@ mod tests {
         assert_eq!(resumed.skipped, 5);
         assert_eq!(resumed.scores, first.scores);
         // A plain frame id is the group "".
-        let plain = numbered_jobs(2);
-        let process = |f: BatchFrame<'_, u32>, _: &mut FrameWriter, _: &mut Vec<Stage>| {
-            let mut record = record_of(f.id)?;
-            let value: serde_json::Value =
-                serde_json::from_str(&per_frame(*f.job as usize).to_json()?)?;
-            record.scores = Some(FrameScores::from_value(&value));
-            Ok(record)
-        };
+        let plain: Vec<(String, usize)> = (0..2).map(|i| (format!("{i:03}"), i)).collect();
         let dir = tempfile::tempdir().expect("temp dir");
         let outcome = whole(&plain, dir.path(), "h", &process);
         assert_eq!(outcome.scores.keys().collect::<Vec<_>>(), [""]);
