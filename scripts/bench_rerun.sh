@@ -40,6 +40,10 @@ synth() { # synth NAME ARGS...: the recording $recs/NAME, made once
 
 run() { # run REC OUT [extra args]: "wall cpu user" seconds of one full run (cpu = user + sys)
     local rec="$1" out="$2"; shift 2
+    # Into a new folder, as a first run: over a previous run's files each replacing rename
+    # waits for the file system to write the new file out (ext4), which the .rrd's own
+    # writes make slower (docs/notes/2026-12-02-rerun.md, 2026-12-04b).
+    rm -rf "$out"
     /usr/bin/time -f "%e %U %S" -o "$tmp/time" \
         "$bin" --quiet run --recording "$recs/$rec" --out "$out" --figure none --force "$@" >/dev/null
     awk '{printf "%s %.2f %s\n", $1, $2 + $3, $2}' "$tmp/time"

@@ -18,7 +18,9 @@ the run's files in OUT (a run of the whole recording):
 - per frame, the boxes of world/boxes equal those of OUT/boxes/<stem>.json;
 - every camera's colour image (an EncodedImage with its media type: the recording's file),
   depth image, 2D labels and refined labels are there for every frame (with --recording
-  REC, each colour image's bytes equal to REC/<camera>/color/<stem>.png|.jpg), and its Pinhole and Transform3D (static) at world/cameras/<name>/color and /depth;
+  REC, each colour image's bytes equal to REC/<camera>/color/<stem>.png|.jpg and each depth
+  image's values to REC/<camera>/depth/<stem>.png), and its Pinhole and Transform3D (static)
+  at world/cameras/<name>/color and /depth;
 - the AnnotationContext at world; with --expect-scores, scores/<configuration>/biou;
 - with --clusters yes, per frame world/clusters has as many points as the PLY (`run
   --rerun-clusters`); with --clusters no, world/clusters is not in the file (the default).
@@ -107,7 +109,8 @@ def main() -> int:
     ap.add_argument("--expect-scores", action="store_true")
     ap.add_argument("--clusters", choices=("yes", "no"), help="whether world/clusters is there")
     ap.add_argument("--recording", type=Path,
-                    help="the recording: each colour image's bytes must equal its file's")
+                    help="the recording: each colour image's bytes, and each depth image's "
+                    "values, must equal its file's")
     args = ap.parse_args()
 
     try:
@@ -115,6 +118,7 @@ def main() -> int:
         import rerun.experimental as rrx
         import datafusion  # noqa: F401  (the dataframe API's engine)
         import numpy as np
+        from PIL import Image  # rerun-sdk's own dependency
     except ImportError as e:
         print(
             f"check_rrd: the Rerun SDK is not installed ({e}); "
@@ -229,6 +233,19 @@ def main() -> int:
                         f"frame {stem}: {base}/color/image is not the bytes of "
                         f"{args.recording / c / 'color'}/{stem}.png|.jpg"
                     )
+                depth_png = args.recording / c / "depth" / f"{stem}.png"
+                if depth_png.is_file():
+                    name = column(df, f"{base}/depth/image", "DepthImage", "buffer")
+                    buffers = [v for v in rows[name] if v is not None] if name else []
+                    got = (np.frombuffer(buffers[0][0].tobytes(), dtype="<u2")
+                           if buffers and len(buffers[0]) else None)
+                    with Image.open(depth_png) as png:
+                        want = np.asarray(png, dtype=np.uint16).ravel()
+                    if got is None or not np.array_equal(got, want):
+                        failures.append(
+                            f"frame {stem}: {base}/depth/image's values are not those of "
+                            f"{depth_png}"
+                        )
         if args.expect_scores:
             if not any(":Scalars:scalars" in n and "/scores/" in n and "biou" in n
                        for n in df.columns if rows[n].notna().any()):

@@ -4,15 +4,22 @@
 //! 2-core VM this project is measured on that costs ~2 s of system time per GB (`dd
 //! bs=8M count=64` of zeros: 1.05 s system time buffered, 0.07 s with `oflag=direct`).
 //! A `.rrd` of `run --rerun` is ~11 MB a frame, written once and not read back by the
-//! run: [`DirectFile`] writes it with `O_DIRECT` from an aligned buffer of its own
-//! (docs/notes/2026-12-02-rerun.md, 2026-12-04). Where the file system refuses `O_DIRECT`
-//! (tmpfs, some network file systems), and on other systems, it writes through the page
-//! cache as any file.
+//! run: [`DirectFile`] writes it with `O_DIRECT` from aligned buffers of its own
+//! (docs/notes/2026-12-02-rerun.md, 2026-12-04). An `O_DIRECT` write returns when the
+//! device has the data, so a full buffer is written by a thread of its own while the
+//! caller fills the other one (double buffering): the caller waits for the device only
+//! when it fills a buffer faster than the device takes one. The `.rrd` is written by the
+//! frame workers under a lock: waiting there for each 8 MB write made `run --rerun` ~7 %
+//! slower (docs/notes/2026-12-02-rerun.md, 2026-12-04b).
+//! Where the file system refuses `O_DIRECT` (tmpfs, some network file systems), and on
+//! other systems, it writes through the page cache as any file.
 
 use crate::IoError;
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::thread::JoinHandle;
 
 /// Alignment of `O_DIRECT` buffers, file offsets and lengths: 4096, the page size and the
 /// largest logical block size of common devices.
@@ -20,6 +27,90 @@ const ALIGN: usize = 4096;
 
 /// Bytes gathered before each write: large writes keep the device busy with few calls.
 const BUFFER_BYTES: usize = 8 << 20;
+
+/// A buffer of [`BUFFER_BYTES`] aligned to [`ALIGN`].
+#[derive(Debug)]
+struct Block {
+    /// `ALIGN` bytes more than [`BUFFER_BYTES`]: the aligned window starts at `start`.
+    buf: Vec<u8>,
+    start: usize,
+}
+
+impl Block {
+    fn new() -> Block {
+        let buf = vec![0; BUFFER_BYTES + ALIGN];
+        let start = buf.as_ptr().align_offset(ALIGN).min(ALIGN);
+        Block { buf, start }
+    }
+
+    fn bytes(&self) -> &[u8] {
+        &self.buf[self.start..self.start + BUFFER_BYTES]
+    }
+
+    fn bytes_mut(&mut self) -> &mut [u8] {
+        &mut self.buf[self.start..self.start + BUFFER_BYTES]
+    }
+}
+
+/// The thread that writes full buffers (their first `n` bytes, in the order sent) and
+/// hands each back with the outcome; after a failed write it writes nothing more.
+#[derive(Debug)]
+struct BlockWriter {
+    to: Option<SyncSender<(Block, usize)>>,
+    back: Receiver<(Block, std::io::Result<()>)>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl BlockWriter {
+    /// Starts the thread on `file` (a handle sharing the caller's file offset).
+    fn start(mut file: File) -> std::io::Result<BlockWriter> {
+        let (to, blocks) = sync_channel::<(Block, usize)>(1);
+        let (done, back) = sync_channel(2);
+        let thread = std::thread::Builder::new()
+            .name("direct_write".into())
+            .spawn(move || {
+                let mut failed = false;
+                for (block, n) in blocks {
+                    let result = if failed {
+                        Err(std::io::Error::other("an earlier write to the file failed"))
+                    } else {
+                        file.write_all(&block.bytes()[..n])
+                    };
+                    failed |= result.is_err();
+                    if done.send((block, result)).is_err() {
+                        break;
+                    }
+                }
+            })?;
+        Ok(BlockWriter {
+            to: Some(to),
+            back,
+            thread: Some(thread),
+        })
+    }
+
+    /// Waits for every buffer sent to be written and ends the thread; the first error.
+    fn finish(mut self) -> std::io::Result<()> {
+        self.to.take();
+        let mut first_error = None;
+        for (_, result) in self.back.iter() {
+            if let Err(e) = result {
+                first_error.get_or_insert(e);
+            }
+        }
+        if let Some(thread) = self.thread.take() {
+            thread
+                .join()
+                .map_err(|_| std::io::Error::other("the file's writer thread panicked"))?;
+        }
+        first_error.map_or(Ok(()), Err)
+    }
+}
+
+/// The writer thread is gone (it ends only when told to, or by a panic).
+fn writer_gone() -> std::io::Error {
+    std::io::Error::other("the file's writer thread has stopped")
+}
 
 /// A file written from the start, once, past the page cache where the system allows it
 /// (see the module documentation). [`DirectFile::finish`] writes the last partial block
@@ -31,13 +122,18 @@ pub struct DirectFile {
     path: PathBuf,
     /// Whether `file` was opened with `O_DIRECT`.
     direct: bool,
-    /// `ALIGN` bytes more than [`BUFFER_BYTES`]: the aligned window starts at `start`.
-    buf: Vec<u8>,
-    start: usize,
-    /// Bytes waiting in `buf[start..start + pending]`.
+    /// The buffer being filled (`None` once writing through the page cache).
+    block: Option<Block>,
+    /// The other buffer, when the writer thread does not hold it.
+    spare: Option<Block>,
+    /// Bytes waiting in `block`'s first bytes.
     pending: usize,
-    /// Bytes written to the file so far (a multiple of `ALIGN` while direct).
+    /// Bytes written or handed to the writer thread so far (a multiple of `ALIGN` while
+    /// direct).
     written: u64,
+    /// Writes full buffers after the first (which is written here: a file system may
+    /// refuse `O_DIRECT` only at the first write).
+    writer: Option<BlockWriter>,
     finished: bool,
 }
 
@@ -55,20 +151,15 @@ impl DirectFile {
             Some(file) => (file, true),
             None => (File::create(path).map_err(wrap)?, false),
         };
-        let buf = if direct {
-            vec![0; BUFFER_BYTES + ALIGN]
-        } else {
-            Vec::new()
-        };
-        let start = buf.as_ptr().align_offset(ALIGN).min(buf.len());
         Ok(DirectFile {
             file,
             path: path.to_path_buf(),
             direct,
-            buf,
-            start,
+            block: direct.then(Block::new),
+            spare: None,
             pending: 0,
             written: 0,
+            writer: None,
             finished: false,
         })
     }
@@ -95,10 +186,17 @@ impl DirectFile {
             return Ok(());
         }
         self.finished = true;
-        if self.direct && self.pending > 0 {
+        // Every full buffer first: the writer thread shares the file's offset.
+        if let Some(writer) = self.writer.take() {
+            writer.finish()?;
+        }
+        if self.direct
+            && self.pending > 0
+            && let Some(block) = &mut self.block
+        {
             let length = self.written + self.pending as u64;
             let padded = self.pending.div_ceil(ALIGN) * ALIGN;
-            self.buf[self.start + self.pending..self.start + padded].fill(0);
+            block.bytes_mut()[self.pending..padded].fill(0);
             self.pending = padded;
             self.write_blocks()?;
             self.file.set_len(length)?;
@@ -106,14 +204,17 @@ impl DirectFile {
         self.file.flush()
     }
 
-    /// Writes the whole blocks of the pending bytes; the rest (under `ALIGN`) stays.
+    /// Writes the whole blocks of the pending bytes here and now; the rest (under `ALIGN`)
+    /// stays. The first write, and the last.
     fn write_blocks(&mut self) -> std::io::Result<()> {
         let whole = self.pending / ALIGN * ALIGN;
+        let Some(block) = &mut self.block else {
+            return Ok(());
+        };
         if whole == 0 {
             return Ok(());
         }
-        let window = self.start..self.start + whole;
-        match self.file.write_all(&self.buf[window.clone()]) {
+        match self.file.write_all(&block.bytes()[..whole]) {
             Ok(()) => {}
             // Refused at the first write (the open succeeded, the file system does not
             // do direct I/O after all): go on through the page cache.
@@ -123,53 +224,87 @@ impl DirectFile {
                     .truncate(true)
                     .open(&self.path)?;
                 self.direct = false;
-                let all = self.start..self.start + self.pending;
-                self.file.write_all(&self.buf[all])?;
+                self.file.write_all(&block.bytes()[..self.pending])?;
                 self.written = self.pending as u64;
                 self.pending = 0;
-                self.buf = Vec::new();
-                self.start = 0;
+                self.block = None;
                 return Ok(());
             }
             Err(e) => return Err(e),
         }
         self.written += whole as u64;
-        self.buf
-            .copy_within(window.end..self.start + self.pending, self.start);
+        block.bytes_mut().copy_within(whole..self.pending, 0);
         self.pending -= whole;
+        Ok(())
+    }
+
+    /// Hands the whole blocks of the pending bytes to the writer thread (the first write
+    /// is made here, see [`DirectFile::writer`]) and goes on in the other buffer, waiting
+    /// for it only while the thread still writes it.
+    fn hand_off(&mut self) -> std::io::Result<()> {
+        let whole = self.pending / ALIGN * ALIGN;
+        if whole == 0 || self.block.is_none() {
+            return Ok(());
+        }
+        if self.written == 0 {
+            return self.write_blocks();
+        }
+        if self.writer.is_none() {
+            self.writer = Some(BlockWriter::start(self.file.try_clone()?)?);
+            self.spare = Some(Block::new());
+        }
+        let (Some(writer), Some(block)) = (&mut self.writer, &mut self.block) else {
+            return Ok(());
+        };
+        let mut next = match self.spare.take() {
+            Some(spare) => spare,
+            None => {
+                let (returned, result) = writer.back.recv().map_err(|_| writer_gone())?;
+                result?;
+                returned
+            }
+        };
+        let rest = self.pending - whole;
+        next.bytes_mut()[..rest].copy_from_slice(&block.bytes()[whole..self.pending]);
+        let full = std::mem::replace(block, next);
+        writer
+            .to
+            .as_ref()
+            .ok_or_else(writer_gone)?
+            .send((full, whole))
+            .map_err(|_| writer_gone())?;
+        self.written += whole as u64;
+        self.pending = rest;
         Ok(())
     }
 }
 
 impl Write for DirectFile {
     fn write(&mut self, data: &[u8]) -> std::io::Result<usize> {
-        if !self.direct {
-            return self.file.write(data);
-        }
         let mut rest = data;
         while !rest.is_empty() {
+            let Some(block) = &mut self.block else {
+                // Through the page cache (never direct, or fell back to it).
+                self.file.write_all(rest)?;
+                break;
+            };
             let n = (BUFFER_BYTES - self.pending).min(rest.len());
-            let at = self.start + self.pending;
-            self.buf[at..at + n].copy_from_slice(&rest[..n]);
+            block.bytes_mut()[self.pending..self.pending + n].copy_from_slice(&rest[..n]);
             self.pending += n;
             rest = &rest[n..];
             if self.pending == BUFFER_BYTES {
-                self.write_blocks()?;
-                if !self.direct {
-                    // Fell back to the page cache: the rest goes there.
-                    self.file.write_all(rest)?;
-                    break;
-                }
+                self.hand_off()?;
             }
         }
         Ok(data.len())
     }
 
-    /// Writes the whole blocks gathered so far; up to `ALIGN - 1` bytes stay in memory
-    /// until [`DirectFile::finish`] (an `O_DIRECT` write cannot end mid-block).
+    /// Hands the whole blocks gathered so far to be written (they are on disk once
+    /// [`DirectFile::finish`] returns); up to `ALIGN - 1` bytes stay in memory until then
+    /// (an `O_DIRECT` write cannot end mid-block).
     fn flush(&mut self) -> std::io::Result<()> {
-        if self.direct {
-            self.write_blocks()
+        if self.block.is_some() {
+            self.hand_off()
         } else {
             self.file.flush()
         }
@@ -217,6 +352,7 @@ mod tests {
             4097,
             BUFFER_BYTES + 12_345,
             2 * BUFFER_BYTES,
+            5 * BUFFER_BYTES + 4097,
         ] {
             let path = dir.path().join(format!("f{total}.bin"));
             let data = pattern(total);

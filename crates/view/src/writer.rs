@@ -1,14 +1,13 @@
 //! [`ViewWriter`]: a [`FrameSink`] that streams frames into a `.rrd` file with the Rerun
 //! SDK (`re_sdk`). The rig, the class palette and the blueprint are logged once (static);
-//! each frame on the `frame` timeline (and `time`), then dropped. The file sink
-//! (`crate::sink`, the SDK's encoder writing past the page cache) queues chunks for its
-//! writer thread in a channel bounded by count (1024 chunks, not bytes): a
-//! run that logs faster than the writer encodes would queue nearly the whole file in
-//! memory, so [`ViewWriter`] waits for the writer after every [`FLUSH_EVERY_BYTES`]
-//! logged (back-pressure), which bounds what is queued. What still grows with the recording
-//! is the footer's index of chunks, kept compact until the file ends (`crate::manifest`;
+//! each frame on the `frame` timeline (and `time`), then dropped. A frame's images and
+//! clouds are made into chunks and encoded by the worker that gives the frame, and written
+//! at once (`crate::sink`); its boxes and scores go through the SDK's batcher, which joins
+//! small rows of several frames into one chunk. What grows with the recording is the
+//! footer's index of chunks, kept compact until the file ends (`crate::manifest`;
 //! docs/notes/2026-12-02-rerun.md).
 
+use crate::encoder::Lz4;
 use crate::order::{self, CloudBatch, Layers, Paint};
 use crate::paths;
 use crate::{CameraView, CloudView, FrameSink, ImageFileFormat, ViewError, ViewFrame};
@@ -19,6 +18,8 @@ use re_sdk::blueprint::{
     TimeSeriesView, Vertical,
 };
 use re_sdk::external::arrow::array::ArrayRef;
+use re_sdk::external::re_log_types::StoreId;
+use re_sdk::log::{Chunk, RowId};
 use re_sdk::{RecordingStream, RecordingStreamBuilder, SerializedComponentBatch};
 use re_sdk_types::archetypes::{
     AnnotationContext, Boxes3D, DepthImage, EncodedImage, Image, Pinhole, Points3D, Scalars,
@@ -30,7 +31,7 @@ use re_sdk_types::datatypes::{
 };
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 /// The application id the files carry (the viewer groups recordings by it).
 const APPLICATION_ID: &str = "bodyseg";
@@ -42,20 +43,19 @@ const UNKNOWN_RGB: [u8; 3] = [200, 200, 200];
 /// with stride 2, so a cloud reads as a surface.
 const POINT_RADIUS_M: f32 = 0.004;
 
-/// Bytes of logged data (as sent: pixels, positions, class ids) after which the writer
-/// waits for the file to catch up. 64 MiB: several frames of the 3-camera scene (~12 MB
-/// each) in flight, so the frame workers rarely wait, and a bound on what is queued.
-const FLUSH_EVERY_BYTES: u64 = 64 << 20;
-
 /// Streams a run's frames into a `.rrd` file (see the crate documentation for what is
 /// logged where). Thread-safe: frames may come from any worker in any order; the
 /// timeline, not the order of calls, orders them.
 ///
 /// The file is written to `<path>.partial` and renamed to `path` by
 /// [`ViewWriter::finish`]; a writer dropped without `finish` leaves only the partial file.
-/// Frames given after `finish` are dropped (the stream is disconnected).
+/// Frames given after `finish` are dropped (the file is closed).
 pub struct ViewWriter {
     rec: RecordingStream,
+    /// The file, also the SDK's sink: the images and clouds are written here directly.
+    file: Arc<crate::sink::RrdFile>,
+    /// The recording's id (its chunks' store).
+    store_id: StoreId,
     path: PathBuf,
     partial: PathBuf,
     /// Camera names, rig order.
@@ -66,10 +66,6 @@ pub struct ViewWriter {
     frames: BTreeMap<String, (i64, Option<i64>)>,
     /// Whether the clusters layer is written (off by default: a third copy of the cloud).
     clusters: bool,
-    /// Bytes logged since the last wait for the file writer (see [`FLUSH_EVERY_BYTES`]).
-    unflushed_bytes: AtomicU64,
-    /// How closing the file went, once the sink is dropped ([`ViewWriter::finish`]).
-    closed: crate::sink::Closed,
 }
 
 impl std::fmt::Debug for ViewWriter {
@@ -107,8 +103,12 @@ impl ViewWriter {
             .recording_name(name)
             .buffered()
             .map_err(|e| err(&e))?;
-        let (sink, closed) = crate::sink::RrdFileSink::create(&partial).map_err(|e| err(&e))?;
-        rec.set_sink(Box::new(sink));
+        let file = crate::sink::RrdFile::create(&partial).map_err(|e| err(&e))?;
+        rec.set_sink(Box::new(crate::sink::RrdFileSink::new(file.clone())));
+        let store_id = rec
+            .store_info()
+            .ok_or_else(|| err(&"the recording stream is disabled"))?
+            .store_id;
         // No `log_time` timeline: the wall-clock time at which a worker logged a frame says
         // nothing about the recording (frames come from parallel workers, out of order),
         // and it doubled the footer manifest's columns, which grow with every chunk
@@ -122,16 +122,18 @@ impl ViewWriter {
             .collect();
         let writer = ViewWriter {
             rec,
+            file,
+            store_id,
             path: path.to_path_buf(),
             partial,
             cameras: rig.cameras.iter().map(|c| c.name.clone()).collect(),
             depth_scales: rig.cameras.iter().map(|c| c.depth_scale as f32).collect(),
             frames,
             clusters: false,
-            unflushed_bytes: AtomicU64::new(0),
-            closed,
         };
         writer.log_static(rig).map_err(|e| err(&e))?;
+        // The store info and the static data in the file before any frame's chunk.
+        writer.rec.flush_blocking().map_err(|e| err(&e))?;
         Ok(writer)
     }
 
@@ -160,14 +162,9 @@ impl ViewWriter {
             path: self.path.clone(),
         };
         self.rec.flush_blocking().map_err(|e| err(&e))?;
-        // Disconnecting drops the file sink, which joins its writer thread: the file is
-        // complete and closed after this, or its error is in `closed`.
+        // Nothing more from the SDK; then the end of the stream and the footer.
         self.rec.disconnect();
-        match self.closed.lock().ok().and_then(|mut c| c.take()) {
-            Some(Ok(())) => {}
-            Some(Err(e)) => return Err(err(&e)),
-            None => return Err(err(&"the file writer did not close the file")),
-        }
+        self.file.close().map_err(|e| err(&e))?;
         std::fs::rename(&self.partial, &self.path).map_err(|e| err(&e))?;
         Ok(self.path.clone())
     }
@@ -246,23 +243,7 @@ impl ViewWriter {
         }
         let result = self.write_at_time(frame);
         rec.reset_time();
-        result?;
-        self.back_pressure(frame_bytes(frame, self.clusters))
-    }
-
-    /// Counts `bytes` as logged; past [`FLUSH_EVERY_BYTES`], waits until the file writer
-    /// has written everything logged so far (this worker waits, the others go on logging).
-    fn back_pressure(&self, bytes: u64) -> Result<(), ViewError> {
-        let before = self.unflushed_bytes.fetch_add(bytes, Ordering::Relaxed);
-        if before + bytes < FLUSH_EVERY_BYTES {
-            return Ok(());
-        }
-        // Only the worker that crossed the bound waits; the count starts again.
-        self.unflushed_bytes.store(0, Ordering::Relaxed);
-        self.rec.flush_blocking().map_err(|e| ViewError::Rerun {
-            message: format!("waiting for the file writer: {e}"),
-            path: self.path.clone(),
-        })
+        result
     }
 
     fn write_at_time(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
@@ -307,7 +288,7 @@ impl ViewWriter {
         };
         for batch in frame_cloud_batches(frame.projected, frame.refined, clusters) {
             for row in points_rows(batch.positions, batch.paint) {
-                self.log(batch.entity, &row)?;
+                self.log_chunk(batch.entity, &row, Lz4::WhereWorth)?;
             }
         }
         if let Some(boxes) = frame.boxes {
@@ -344,17 +325,19 @@ impl ViewWriter {
                 ImageFileFormat::Png => MediaType::png(),
                 ImageFileFormat::Jpeg => MediaType::jpeg(),
             };
-            self.log(
+            self.log_chunk(
                 paths::color_image(name).as_str(),
                 &EncodedImage::new(f.bytes.to_vec()).with_media_type(media_type),
+                Lz4::WhereWorth,
             )?;
         } else if let Some(c) = camera.color {
             if c.rgb.len() != c.width as usize * c.height as usize * 3 {
                 return Err(size_err("colour", c.rgb.len(), c.width, c.height, 3));
             }
-            self.log(
+            self.log_chunk(
                 paths::color_image(name).as_str(),
                 &Image::from_rgb24(c.rgb.clone(), [c.width, c.height]),
+                Lz4::WhereWorth,
             )?;
         }
         if let Some(d) = camera.depth {
@@ -367,14 +350,16 @@ impl ViewWriter {
             for (b, v) in bytes.chunks_exact_mut(2).zip(d.raw) {
                 b.copy_from_slice(&v.to_le_bytes());
             }
-            // Rerun's `meter`: raw units per metre, the rig's depth_scale.
-            self.log(
+            // Rerun's `meter`: raw units per metre, the rig's depth_scale. Not compressed
+            // (`Lz4::Never`: LZ4 halves it, but slowly).
+            self.log_chunk(
                 paths::depth_image(name).as_str(),
                 &DepthImage::new(
                     bytes,
                     ImageFormat::depth([d.width, d.height], ChannelDatatype::U16),
                 )
                 .with_meter(depth_scale),
+                Lz4::Never,
             )?;
         }
         for (what, entity, labels) in [
@@ -389,12 +374,37 @@ impl ViewWriter {
                 if l.labels.len() != l.width as usize * l.height as usize {
                     return Err(size_err(what, l.labels.len(), l.width, l.height, 1));
                 }
-                self.log(entity.as_str(), &segmentation(l))?;
+                self.log_chunk(entity.as_str(), &segmentation(l), Lz4::WhereWorth)?;
             }
         }
         Ok(())
     }
 
+    /// Logs `what` at `entity`, at this thread's time, as a chunk of its own, encoded and
+    /// written by this thread (`crate::sink`; LZ4 as `lz4` allows): a frame's images and
+    /// clouds, each large enough to be a chunk.
+    fn log_chunk(
+        &self,
+        entity: &str,
+        what: &dyn re_sdk::AsComponents,
+        lz4: Lz4,
+    ) -> Result<(), ViewError> {
+        let err = |e: &dyn std::fmt::Display| ViewError::Rerun {
+            message: format!("{entity}: {e}"),
+            path: self.path.clone(),
+        };
+        let chunk = Chunk::builder(entity)
+            .with_archetype(RowId::new(), self.rec.now(), what)
+            .build()
+            .map_err(|e| err(&e))?;
+        let msg = chunk.to_arrow_msg().map_err(|e| err(&e))?;
+        self.file
+            .append_chunk(&self.store_id, &msg, lz4)
+            .map_err(|e| err(&e))
+    }
+
+    /// Logs `what` at `entity` through the SDK (its batcher joins the rows of several
+    /// frames into one chunk): the small rows, boxes and scores.
     fn log(&self, entity: &str, what: &dyn re_sdk::AsComponents) -> Result<(), ViewError> {
         self.rec.log(entity, what).map_err(|e| ViewError::Rerun {
             message: format!("{entity}: {e}"),
@@ -411,33 +421,6 @@ impl FrameSink for ViewWriter {
     fn wants_clusters(&self) -> bool {
         self.clusters
     }
-}
-
-/// About how many bytes of data a frame logs (pixels, positions and class ids; the few
-/// boxes and scores left out): what [`ViewWriter::back_pressure`] counts.
-fn frame_bytes(frame: &ViewFrame<'_>, clusters: bool) -> u64 {
-    let mut bytes = 0;
-    for c in &frame.cameras {
-        bytes += match (c.color_file, c.color) {
-            (Some(f), _) => f.bytes.len(),
-            (None, Some(i)) => i.rgb.len(),
-            (None, None) => 0,
-        };
-        bytes += c.depth.map_or(0, |d| d.raw.len() * 2);
-        bytes += [c.parsed, c.refined]
-            .iter()
-            .flatten()
-            .map(|l| l.labels.len())
-            .sum::<usize>();
-    }
-    // Positions (3 x f32) and a u16 class id per point; clusters: positions and a colour.
-    for cloud in [frame.projected, frame.refined].iter().flatten() {
-        bytes += cloud.positions_m.len() * 14;
-    }
-    if clusters && let Some(c) = frame.clusters {
-        bytes += c.len() * 16;
-    }
-    bytes as u64
 }
 
 /// `OUT.rrd` → `OUT.rrd.partial`.
