@@ -20,6 +20,9 @@
 #   - the recorded parser (`--parser recorded`: no 2D parsing, the cheapest run there is) on
 #     FRAMES frames: the worst case for the ratio.
 # Memory: 1 camera, colour 480 px wide, recorded parser.
+# With INSTRUCTIONS=1 (needs valgrind): the recorded parser's instructions per frame too,
+# without and with --rerun (callgrind, 3 and FRAMES frames: the difference per frame), a
+# figure this VM's timing noise (host page faults: +-15 % between identical runs) leaves alone.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 frames="${1:-24}"
@@ -87,6 +90,24 @@ fi
 # The worst case: no 2D parsing at all.
 synth "handover$frames" --preset handover --frames "$frames" --seed 1
 ratio "recorded parser (no 2D parsing, worst case)" "handover$frames" "$frames" recorded
+
+if [ "${INSTRUCTIONS:-0}" = 1 ]; then
+    synth handover3 --preset handover --frames 3 --seed 1
+    instructions() { # instructions REC [extra args]: instructions of one run (callgrind)
+        local rec="$1"; shift
+        rm -rf "$tmp/vg"
+        valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" "$bin" --quiet run \
+            --recording "$recs/$rec" --out "$tmp/vg" --parser recorded --figure none "$@" \
+            >/dev/null 2>"$tmp/vg.log"
+        awk '/Collected :/ {gsub(",", "", $4); print $4}' "$tmp/vg.log"
+    }
+    p3=$(instructions handover3); w3=$(instructions handover3 --rerun "$tmp/vg/run.rrd")
+    pn=$(instructions "handover$frames"); wn=$(instructions "handover$frames" --rerun "$tmp/vg/run.rrd")
+    printf 'recorded parser, instructions per frame (%d - 3 frames): %.1f M without --rerun, %.1f M with (ratio %.3f); whole %d-frame run %.3f\n' \
+        "$frames" "$(echo "($pn - $p3) / ($frames - 3) / 1000000" | bc -l)" \
+        "$(echo "($wn - $w3) / ($frames - 3) / 1000000" | bc -l)" \
+        "$(echo "($wn - $w3) / ($pn - $p3)" | bc -l)" "$frames" "$(echo "$wn / $pn" | bc -l)"
+fi
 
 # Memory over a long recording: small images, one camera.
 small=(--set rig.cameras=1 --set rig.color_width=480 --set people.count=1)

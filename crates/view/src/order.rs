@@ -87,14 +87,6 @@ fn for_each_run(codes: &[u8], mut f: impl FnMut(usize, Range<usize>)) {
     }
 }
 
-/// `dst[k..]` = `src` through `f`: a loop that vectorises on long runs.
-#[inline]
-fn put<S, T>(dst: &mut [T], k: usize, src: &[S], f: impl Fn(&S) -> T) {
-    for (d, s) in dst[k..k + src.len()].iter_mut().zip(src) {
-        *d = f(s);
-    }
-}
-
 /// The batches of `layers` (lengths checked by the caller: labels and clusters as long as
 /// the positions): known and unknown per present layer, then the clusters when given.
 /// `cluster_color` colours a cluster.
@@ -112,50 +104,46 @@ pub(crate) fn cloud_batches(
     debug_assert!(projected.is_none_or(|l| l.len() == n));
     debug_assert!(refined.is_none_or(|l| l.len() == n));
     debug_assert!(clusters.is_none_or(|c| c.len() == n));
-    // Counting pass: each point's group, the sizes of the groups.
+    // Each point's group, then the runs of each group (labels come in runs: a camera's
+    // pixels row by row).
     let mut codes = vec![0u8; n];
     for (bit, labels) in [(1, projected), (2, refined)] {
         for (g, l) in codes.iter_mut().zip(labels.unwrap_or_default()) {
             *g |= if l.is_unknown() { 0 } else { bit };
         }
     }
-    // Sums that vectorise (not a histogram: its counter chains the points of a run).
-    let sum = |bits: fn(u8) -> usize| codes.iter().map(|&g| bits(g)).sum::<usize>();
-    let a = sum(|g| usize::from(g == 3));
-    let b = sum(|g| usize::from(g & 1)) - a;
-    let c = sum(|g| usize::from(g >> 1)) - a;
-    let d = n - a - b - c;
-    let mut start = [0usize; 4];
-    start[C] = 0;
-    start[A] = c;
-    start[B] = c + a;
-    start[D] = c + a + b;
-    // Gather pass, run by run (labels come in runs: a camera's pixels row by row), each
-    // run copied as a block to its group's next slots: the positions; each layer's class
-    // ids, all its points in that order (its known points are a slice: IPC writes only
-    // the slice); the clusters' colours.
-    let mut out = vec![[0f32; 3]; n];
-    let mut projected_ids = projected.map(|_| vec![0u16; n]);
-    let mut refined_ids = refined.map(|_| vec![0u16; n]);
-    let mut colors = clusters.map(|_| vec![Rgba32(0); n]);
+    let mut runs: [Vec<Range<usize>>; 4] = Default::default();
+    for_each_run(&codes, |g, run| runs[g].push(run));
+    drop(codes);
+    let size = |g: usize| runs[g].iter().map(ExactSizeIterator::len).sum::<usize>();
+    let (a, b, c, d) = (size(A), size(B), size(C), size(D));
+    // Gather, group by group in the order C, A, B, D, each run appended as a block: the
+    // positions; each layer's class ids, all its points in that order (its known points are
+    // a slice: IPC writes only the slice); the clusters' colours. Appending, nothing is
+    // written twice (a buffer filled in place is zeroed first: 5.3 M of the gather's 14.6 M
+    // instructions a frame, docs/notes/2026-12-02-rerun.md, 2026-12-04b).
+    let mut out: Vec<f32> = Vec::with_capacity(n * 3);
+    let mut projected_ids = projected.map(|_| Vec::<u16>::with_capacity(n));
+    let mut refined_ids = refined.map(|_| Vec::<u16>::with_capacity(n));
+    let mut colors = clusters.map(|_| Vec::<Rgba32>::with_capacity(n));
     let id = |l: &Label| u16::from(l.id());
-    for_each_run(&codes, |g, run| {
-        let k = start[g];
-        start[g] += run.len();
-        out[k..k + run.len()].copy_from_slice(&xyz[run.clone()]);
-        if let (Some(ids), Some(l)) = (&mut projected_ids, projected) {
-            put(ids, k, &l[run.clone()], id);
+    for g in [C, A, B, D] {
+        for run in &runs[g] {
+            out.extend_from_slice(xyz[run.clone()].as_flattened());
+            if let (Some(ids), Some(l)) = (&mut projected_ids, projected) {
+                ids.extend(l[run.clone()].iter().map(id));
+            }
+            if let (Some(ids), Some(l)) = (&mut refined_ids, refined) {
+                ids.extend(l[run.clone()].iter().map(id));
+            }
+            if let (Some(colors), Some(c)) = (&mut colors, clusters) {
+                colors.extend(c[run.clone()].iter().map(|c| cluster_color(*c)));
+            }
         }
-        if let (Some(ids), Some(l)) = (&mut refined_ids, refined) {
-            put(ids, k, &l[run.clone()], id);
-        }
-        if let (Some(colors), Some(c)) = (&mut colors, clusters) {
-            put(colors, k, &c[run], |c| cluster_color(*c));
-        }
-    });
+    }
     let projected_ids = projected_ids.map(UInt16Array::from);
     let refined_ids = refined_ids.map(UInt16Array::from);
-    let all = positions(out.into_flattened());
+    let all = positions(out);
     let mut batches = Vec::with_capacity(5);
     if let Some(ids) = projected_ids {
         batches.push(CloudBatch {
@@ -581,7 +569,7 @@ mod timing {
         });
         println!(
             "{n} points: positions copied {copy:.0} us; 1a703d7 (copy + class ids) \
-             {before:.0} us; gathered (count, scatter, class ids) {gather:.0} us"
+             {before:.0} us; gathered (runs per group, appended, class ids) {gather:.0} us"
         );
     }
 }
