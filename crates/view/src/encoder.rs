@@ -7,10 +7,13 @@
 //! writing it: on this project's 2-core VM the fresh pages of those buffers and the copies
 //! were most of the writer thread's time (docs/notes/2026-12-02-rerun.md, 2026-12-04,
 //! sessions 41 and 42). Here a chunk's Arrow IPC stream is gathered from the batch's own
-//! buffers ([`IpcStream`]) and copied once: into the IPC buffer kept as long as the file, then
-//! LZ4-compressed into the LZ4 buffer (also kept) and written from there; or, for a chunk that
-//! LZ4 would barely shrink (float positions, the colour images' PNG/JPEG files), straight
-//! into the file, uncompressed. Each message says its compression (`ArrowMsg.compression`,
+//! buffers ([`IpcStream`]) and copied once: into an IPC buffer kept by the encoding thread
+//! ([`Scratch`]), then LZ4-compressed into its LZ4 buffer (also kept) and written from there;
+//! or, for a chunk that LZ4 would barely shrink (float positions, the colour images' PNG/JPEG
+//! files) or that is not to be compressed ([`Lz4::Never`]: depth), straight into the file,
+//! uncompressed. The encoding ([`encode_chunk`]) and the writing ([`RrdEncoder::write_chunk`])
+//! are apart, so that frame workers encode without holding the file (`crate::sink`). Each
+//! message says its compression (`ArrowMsg.compression`,
 //! which `re_log_encoding`'s decoder reads per message; the stream header's LZ4 is the
 //! default its encoder writes, and its decoder does not decompress by it). The bytes are those
 //! of the SDK's encoder (the same framing types, the manifest built by its

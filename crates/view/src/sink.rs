@@ -10,7 +10,7 @@
 //! IPC and LZ4 into buffers of that thread, outside any lock) and written under the file's
 //! lock; the small rows (boxes, scores) and the static data still go through the SDK, whose
 //! sink [`RrdFileSink`] writes them into the same file. Nothing is queued: memory does not
-//! grow with a run's speed, and a write error reaches the frame that met it.
+//! grow with a run's speed. A write error is kept and reported when the file is closed.
 //!
 //! The file is a [`bodyseg_io::DirectFile`]: on Linux `O_DIRECT` writes from an aligned
 //! buffer instead of copying ~11 MB a frame into the page cache, and the stream is encoded by
@@ -40,8 +40,8 @@ const BATCH_FLUSH_BYTES: u64 = 256 << 10;
 const BATCH_FLUSH_TICK: Duration = Duration::from_secs(10);
 
 thread_local! {
-    /// Each logging thread's buffers for encoding chunks (a frame worker's: ~1 MB, the
-    /// largest compressed chunk it has written).
+    /// Each logging thread's buffers for encoding chunks (a frame worker's: about twice
+    /// the largest chunk it has compressed, ~1-2 MB).
     static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
 
@@ -129,7 +129,7 @@ impl RrdFile {
     }
 
     /// Ends the file (end-of-stream marker, footer, last block) and closes it; later calls
-    /// answer how the first went. Writes after it fail.
+    /// answer how the first went. Chunks given after it are dropped.
     pub(crate) fn close(&self) -> Result<(), String> {
         let mut state = self
             .state
