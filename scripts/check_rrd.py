@@ -234,7 +234,9 @@ def main() -> int:
                         f"{args.recording / c / 'color'}/{stem}.png|.jpg"
                     )
                 depth_png = args.recording / c / "depth" / f"{stem}.png"
-                if depth_png.is_file():
+                if not depth_png.is_file():
+                    failures.append(f"frame {stem}: no {depth_png} to compare the depth with")
+                else:
                     name = column(df, f"{base}/depth/image", "DepthImage", "buffer")
                     buffers = [v for v in rows[name] if v is not None] if name else []
                     got = (np.frombuffer(buffers[0][0].tobytes(), dtype="<u2")
