@@ -15,13 +15,15 @@ the run's files in OUT (a run of the whole recording):
   none 255) + world/<layer>_unknown (class id 255) equal the vertex count of
   OUT/clouds/<stem>.ply; world/refined's class ids, counted per class, and its unknown points
   equal the PLY's `label`s (the refined labels: the points are in another order);
-- per frame, the boxes of world/boxes equal those of OUT/boxes/<stem>.json;
+- per frame, the boxes of world/boxes (their count and centres) equal those of
+  OUT/boxes/<stem>.json;
 - every camera's colour image (an EncodedImage with its media type: the recording's file),
   depth image, 2D labels and refined labels are there for every frame (with --recording
   REC, each colour image's bytes equal to REC/<camera>/color/<stem>.png|.jpg and each depth
   image's values to REC/<camera>/depth/<stem>.png), and its Pinhole and Transform3D (static)
   at world/cameras/<name>/color and /depth;
-- the AnnotationContext at world; with --expect-scores, scores/<configuration>/biou;
+- the AnnotationContext at world; with --expect-scores, scores/<configuration>/biou, and
+  each configuration's biou and miou equal to the frame's OUT/frames/<stem>.json;
 - with --clusters yes, per frame world/clusters has as many points as the PLY (`run
   --rerun-clusters`); with --clusters no, world/clusters is not in the file (the default).
 
@@ -207,10 +209,17 @@ def main() -> int:
             failures.append(f"frame {stem}: world/clusters is there ({clusters} points)")
         boxes_file = args.run / "boxes" / f"{stem}.json"
         if boxes_file.is_file():
-            want_boxes = len(json.loads(boxes_file.read_text())["boxes"])
+            boxes = json.loads(boxes_file.read_text())["boxes"]
             got_boxes = count(rows, "world/boxes", "Boxes3D", "half_sizes") or 0
-            if got_boxes != want_boxes:
-                failures.append(f"frame {stem}: {got_boxes} boxes, the JSON {want_boxes}")
+            if got_boxes != len(boxes):
+                failures.append(f"frame {stem}: {got_boxes} boxes, the JSON {len(boxes)}")
+            name = column(df, "world/boxes", "Boxes3D", "centers")
+            cells = [v for v in rows[name] if v is not None and len(v)] if name else []
+            got = np.array([list(c) for c in cells[0]], dtype=np.float64) if cells else None
+            want = np.array([b["center_m"] for b in boxes], dtype=np.float64).reshape(-1, 3)
+            if boxes and (got is None or got.shape != want.shape
+                          or not np.allclose(got, want, atol=1e-5)):
+                failures.append(f"frame {stem}: world/boxes' centres are not the JSON's")
         for c in cameras:
             base = f"world/cameras/{c}"
             for entity, archetype, component in (
@@ -252,6 +261,18 @@ def main() -> int:
             if not any(":Scalars:scalars" in n and "/scores/" in n and "biou" in n
                        for n in df.columns if rows[n].notna().any()):
                 failures.append(f"frame {stem}: no scores/<configuration>/biou")
+            # Each configuration's BIoU and mIoU equal the frame's record, where it has one.
+            record = args.run / "frames" / f"{stem}.json"
+            scores = json.loads(record.read_text()).get("scores") if record.is_file() else None
+            for config in (scores or {}).get("configurations", []):
+                for metric in ("biou", "miou"):
+                    entity = f"scores/{config['name']}/{metric}"
+                    name = column(df, entity, "Scalars", "scalars")
+                    values = [float(v[0]) for v in rows[name] if v is not None and len(v)] \
+                        if name else []
+                    want = config["metrics"][metric]
+                    if len(values) != 1 or abs(values[0] - want) > 1e-9:
+                        failures.append(f"frame {stem}: {entity} is {values}, {record} {want}")
 
     static = store.reader(index=None).to_pandas()
     for c in cameras:

@@ -43,6 +43,8 @@ mod manifest;
 #[cfg(feature = "rerun")]
 mod order;
 #[cfg(feature = "rerun")]
+mod rows;
+#[cfg(feature = "rerun")]
 mod sink;
 #[cfg(feature = "rerun")]
 mod writer;

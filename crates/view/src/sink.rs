@@ -8,8 +8,9 @@
 //! (docs/notes/2026-12-02-rerun.md, 2026-12-04 and 2026-12-04b). Here a frame's images and
 //! clouds are encoded by the frame worker that made them ([`RrdFile::append_chunk`]: Arrow
 //! IPC and LZ4 into buffers of that thread, outside any lock) and written under the file's
-//! lock; the small rows (boxes, scores) and the static data still go through the SDK, whose
-//! sink [`RrdFileSink`] writes them into the same file. Nothing is queued: memory does not
+//! lock, and so are the small rows (boxes, scores), gathered over many frames
+//! (`crate::rows`); the static data (cameras, palette, blueprint) still go through the SDK,
+//! whose sink [`RrdFileSink`] writes them into the same file. Nothing is queued: memory does not
 //! grow with a run's speed. A write error is kept and reported when the file is closed.
 //!
 //! The file is a [`bodyseg_io::DirectFile`]: on Linux `O_DIRECT` writes from an aligned
@@ -19,25 +20,12 @@
 use crate::encoder::{Lz4, RrdEncoder, Scratch, encode_chunk};
 use bodyseg_io::DirectFile;
 use re_sdk::external::re_log_types::{ArrowMsg, StoreId};
-use re_sdk::log::ChunkBatcherConfig;
 use re_sdk::log::LogMsg;
 use re_sdk::sink::{LogSink, SinkFlushError};
 use std::cell::RefCell;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-
-/// Bytes of pending rows of one entity after which the SDK's batcher makes them a chunk
-/// (its default: 2 MiB). Only the small rows go through the SDK (the images and clouds do
-/// not: [`RrdFile::append_chunk`]); `RERUN_FLUSH_NUM_BYTES` still overrides it.
-const BATCH_FLUSH_BYTES: u64 = 256 << 10;
-
-/// How long the SDK's batcher gathers an entity's rows before it makes them a chunk (its
-/// default: 200 ms). The rows it gets are a frame's boxes and scores (45 scalar entities
-/// with 5 configurations): at 200 ms they made ~40 % of the file's chunks, each encoded
-/// on its own and indexed in the footer (docs/notes/2026-12-02-rerun.md, 2026-12-04b).
-/// `RERUN_FLUSH_TICK_SECS` still overrides it.
-const BATCH_FLUSH_TICK: Duration = Duration::from_secs(10);
 
 thread_local! {
     /// Each logging thread's buffers for encoding chunks (a frame worker's: about twice
@@ -176,14 +164,6 @@ impl LogSink for RrdFileSink {
 
     fn defers_finalization_to_shutdown(&self) -> bool {
         true
-    }
-
-    fn default_batcher_config(&self) -> ChunkBatcherConfig {
-        ChunkBatcherConfig {
-            flush_num_bytes: BATCH_FLUSH_BYTES,
-            flush_tick: BATCH_FLUSH_TICK,
-            ..ChunkBatcherConfig::DEFAULT
-        }
     }
 }
 

@@ -2,14 +2,15 @@
 //! SDK (`re_sdk`). The rig, the class palette and the blueprint are logged once (static);
 //! each frame on the `frame` timeline (and `time`), then dropped. A frame's images and
 //! clouds are made into chunks and encoded by the worker that gives the frame, and written
-//! at once (`crate::sink`); its boxes and scores go through the SDK's batcher, which joins
-//! small rows of several frames into one chunk. What grows with the recording is the
-//! footer's index of chunks, kept compact until the file ends (`crate::manifest`;
+//! at once (`crate::sink`); its boxes and scores are gathered with other frames' into one
+//! chunk per entity (`crate::rows`). What grows with the recording is the footer's index of
+//! chunks, kept compact until the file ends (`crate::manifest`;
 //! docs/notes/2026-12-02-rerun.md).
 
 use crate::encoder::Lz4;
 use crate::order::{self, CloudBatch, Layers, Paint};
 use crate::paths;
+use crate::rows::{self, ROWS_PER_CHUNK, Row, SmallRows};
 use crate::{CameraView, CloudView, FrameSink, ImageFileFormat, ViewError, ViewFrame};
 use bodyseg_calib::{Intrinsics, Pose, Rig};
 use bodyseg_core::{Class, Label, LabelImage, PersonBox};
@@ -20,7 +21,7 @@ use re_sdk::blueprint::{
 use re_sdk::external::arrow::array::ArrayRef;
 use re_sdk::external::re_log_types::StoreId;
 use re_sdk::log::{Chunk, RowId};
-use re_sdk::{RecordingStream, RecordingStreamBuilder, SerializedComponentBatch};
+use re_sdk::{AsComponents, RecordingStream, RecordingStreamBuilder, SerializedComponentBatch};
 use re_sdk_types::archetypes::{
     AnnotationContext, Boxes3D, DepthImage, EncodedImage, Image, Pinhole, Points3D, Scalars,
     SegmentationImage, Transform3D, ViewCoordinates,
@@ -66,6 +67,8 @@ pub struct ViewWriter {
     frames: BTreeMap<String, (i64, Option<i64>)>,
     /// Whether the clusters layer is written (off by default: a third copy of the cloud).
     clusters: bool,
+    /// The boxes and scores of frames, gathered into chunks of many frames (`crate::rows`).
+    small_rows: SmallRows,
 }
 
 impl std::fmt::Debug for ViewWriter {
@@ -130,6 +133,7 @@ impl ViewWriter {
             depth_scales: rig.cameras.iter().map(|c| c.depth_scale as f32).collect(),
             frames,
             clusters: false,
+            small_rows: SmallRows::new(ROWS_PER_CHUNK),
         };
         writer.log_static(rig).map_err(|e| err(&e))?;
         // The store info and the static data in the file before any frame's chunk.
@@ -161,6 +165,7 @@ impl ViewWriter {
             message: e.to_string(),
             path: self.path.clone(),
         };
+        self.write_rows(self.small_rows.take_all())?;
         self.rec.flush_blocking().map_err(|e| err(&e))?;
         // Nothing more from the SDK; then the end of the stream and the footer.
         self.rec.disconnect();
@@ -241,12 +246,12 @@ impl ViewWriter {
             Some(ns) => rec.set_timestamp_nanos_since_epoch(paths::TIME_TIMELINE, ns),
             None => rec.disable_timeline(paths::TIME_TIMELINE),
         }
-        let result = self.write_at_time(frame);
+        let result = self.write_at_time(frame, index);
         rec.reset_time();
         result
     }
 
-    fn write_at_time(&self, frame: &ViewFrame<'_>) -> Result<(), ViewError> {
+    fn write_at_time(&self, frame: &ViewFrame<'_>, index: i64) -> Result<(), ViewError> {
         let stem = frame.stem;
         for ((name, scale), camera) in self
             .cameras
@@ -291,11 +296,34 @@ impl ViewWriter {
                 self.log_chunk(batch.entity, &row, Lz4::WhereWorth)?;
             }
         }
-        if let Some(boxes) = frame.boxes {
-            self.log(paths::BOXES, &boxes_3d(boxes))?;
-        }
-        for (name, value) in &frame.scores {
-            self.log(paths::score(name).as_str(), &Scalars::single(*value))?;
+        // The small rows: gathered with other frames' (`crate::rows`).
+        let time = self.rec.now();
+        let row = |what: &dyn AsComponents| Row {
+            frame: index,
+            time: time.clone(),
+            components: what.as_serialized_batches(),
+        };
+        let boxes = frame
+            .boxes
+            .map(|boxes| (paths::BOXES.to_string(), row(&boxes_3d(boxes))));
+        let scores = frame
+            .scores
+            .iter()
+            .map(|(name, value)| (paths::score(name), row(&Scalars::single(*value))));
+        let full = self.small_rows.add(boxes.into_iter().chain(scores));
+        self.write_rows(full)
+    }
+
+    /// Writes each entity's rows as one chunk.
+    fn write_rows(&self, batches: Vec<rows::Batch>) -> Result<(), ViewError> {
+        for (entity, rows) in batches {
+            let err = |e: &dyn std::fmt::Display| ViewError::Rerun {
+                message: format!("{entity}: {e}"),
+                path: self.path.clone(),
+            };
+            let chunk = rows::chunk(&entity, rows).map_err(|e| err(&e))?;
+            self.write_chunk(&chunk, Lz4::WhereWorth)
+                .map_err(|e| err(&e))?;
         }
         Ok(())
     }
@@ -397,19 +425,15 @@ impl ViewWriter {
             .with_archetype(RowId::new(), self.rec.now(), what)
             .build()
             .map_err(|e| err(&e))?;
-        let msg = chunk.to_arrow_msg().map_err(|e| err(&e))?;
-        self.file
-            .append_chunk(&self.store_id, &msg, lz4)
-            .map_err(|e| err(&e))
+        self.write_chunk(&chunk, lz4).map_err(|e| err(&e))
     }
 
-    /// Logs `what` at `entity` through the SDK (its batcher joins the rows of several
-    /// frames into one chunk): the small rows, boxes and scores.
-    fn log(&self, entity: &str, what: &dyn re_sdk::AsComponents) -> Result<(), ViewError> {
-        self.rec.log(entity, what).map_err(|e| ViewError::Rerun {
-            message: format!("{entity}: {e}"),
-            path: self.path.clone(),
-        })
+    /// Encodes `chunk` in this thread and writes it into the file (`crate::sink`).
+    fn write_chunk(&self, chunk: &Chunk, lz4: Lz4) -> Result<(), String> {
+        let msg = chunk.to_arrow_msg().map_err(|e| e.to_string())?;
+        self.file
+            .append_chunk(&self.store_id, &msg, lz4)
+            .map_err(|e| e.to_string())
     }
 }
 
@@ -512,14 +536,12 @@ fn frame_cloud_batches(
     batches
 }
 
-/// A `Points3D` of these positions (a `Position3D` batch) painted so, handed to the SDK as
-/// ready-made Arrow arrays, as one or two rows of the same entity and time: the positions
-/// (with the radius), then the class ids or colours of each point, so that each becomes a
-/// chunk of its own in the file. Float positions are written as they are (LZ4 leaves them
-/// as they are) and only the class ids go through LZ4; in one chunk LZ4 ran over both
-/// (docs/notes/2026-12-02-rerun.md, 2026-12-04, session 43). The SDK's batcher never joins
-/// rows of different components into one chunk, so this holds for small clouds too.
-/// Through `Position3D` / `ClassId` values the SDK rebuilds each array by growing a `Vec`
+/// A `Points3D` of these positions (a `Position3D` batch) painted so, as ready-made Arrow
+/// arrays, in one or two rows of the same entity and time: the positions (with the radius),
+/// then the class ids or colours of each point, each written as a chunk of its own
+/// (`ViewWriter::log_chunk`). Float positions are written as they are (LZ4 leaves them as
+/// they are) and only the class ids go through LZ4; in one chunk LZ4 ran over both
+/// (docs/notes/2026-12-02-rerun.md, 2026-12-04, session 43). Through `Position3D` / `ClassId` values the SDK rebuilds each array by growing a `Vec`
 /// point by point: ~16 ms of user CPU per 3-camera frame of ~350k points, and the fresh
 /// pages of its reallocations showed as system time (same notes, 2026-12-03).
 fn points_rows(positions: ArrayRef, paint: Paint) -> Vec<Points3D> {
