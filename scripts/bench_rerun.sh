@@ -11,8 +11,10 @@
 # Time, for two runs of the handover scene (3 cameras), each the ratio of `run`'s wall-clock
 # times and of its CPU times (user + sys, from /usr/bin/time; the figure to compare on a
 # loaded machine; user time alone too: on a VM the system time also holds the host's cost of
-# fresh pages, which varies several-fold between identical runs), medians of 3 rounds (one
-# run without and one with `--rerun` per round) after a warm-up, no figure:
+# fresh pages, which varies several-fold between identical runs), and the `rerun` stage's
+# time over the other stages' within the `--rerun` run (run.json; the direct cost, which
+# the machine's noise weighs alike), medians of 3 rounds (one run without and one with
+# `--rerun` per round) after a warm-up, no figure:
 #   - the default parser (BlazePose + BodyPix, `--parser model`: what `--parser auto` picks
 #     on a recording without recorded labels) on MODEL_FRAMES frames: a user's run. Needs
 #     the ONNX Runtime (ORT_DYLIB_PATH, else .deps/onnxruntime/); skipped, saying so,
@@ -56,12 +58,13 @@ median() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
 ratio() { # ratio LABEL REC FRAMES PARSER: prints the wall and CPU ratios of --rerun
     local label="$1" rec="$2" n="$3" parser="$4"
     run "$rec" "$tmp/warm" --parser "$parser" >/dev/null
-    local plain=() with=() plain_cpu=() with_cpu=() plain_user=() with_user=() wall cpu user
+    local plain=() with=() plain_cpu=() with_cpu=() plain_user=() with_user=() share=() wall cpu user
     for _ in 1 2 3; do
         read -r wall cpu user < <(run "$rec" "$tmp/plain" --parser "$parser")
         plain+=("$wall"); plain_cpu+=("$cpu"); plain_user+=("$user")
         read -r wall cpu user < <(run "$rec" "$tmp/with" --parser "$parser" --rerun "$tmp/with/run.rrd")
         with+=("$wall"); with_cpu+=("$cpu"); with_user+=("$user")
+        share+=("$(stage_share "$tmp/with/run.json")")
     done
     local p w pc wc pu wu size
     p=$(median "${plain[@]}"); w=$(median "${with[@]}")
@@ -73,6 +76,19 @@ ratio() { # ratio LABEL REC FRAMES PARSER: prints the wall and CPU ratios of --r
         "$(echo "$size / 1000000" | bc -l)" "$(echo "$size / 1000000 / $n" | bc -l)"
     printf '%s, %d frames, 3 cameras: CPU (user + sys) %.2f s without --rerun, %.2f s with (ratio %.3f); user alone %.2f s, %.2f s (ratio %.3f)\n' \
         "$label" "$n" "$pc" "$wc" "$(echo "$wc / $pc" | bc -l)" "$pu" "$wu" "$(echo "$wu / $pu" | bc -l)"
+    printf '%s, %d frames, 3 cameras: the rerun stage took %.3f of the other stages'"'"' time in the same run (1 + it: %.3f)\n' \
+        "$label" "$n" "$(median "${share[@]}")" "$(echo "1 + $(median "${share[@]}")" | bc -l)"
+}
+
+# The rerun stage's time over the other stages' (run.json's stage_seconds, summed over the
+# workers): the direct cost of writing the .rrd, measured within one run, so that the
+# machine's speed at that moment weighs both alike. The ratios above also hold what the
+# writing costs the other stages (caches, memory, threads), and this VM's noise.
+stage_share() {
+    python3 -c 'import json, sys
+s = dict(json.load(open(sys.argv[1]))["stage_seconds"])
+r = s.pop("rerun")
+print("%.4f" % (r / sum(s.values())))' "$1"
 }
 
 # A user's run: the default parser (BlazePose + BodyPix).
