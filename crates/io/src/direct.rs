@@ -6,9 +6,9 @@
 //! A `.rrd` of `run --rerun` is ~11 MB a frame, written once and not read back by the
 //! run: [`DirectFile`] writes it with `O_DIRECT` from aligned buffers of its own
 //! (docs/notes/2026-12-02-rerun.md, 2026-12-04). An `O_DIRECT` write returns when the
-//! device has the data, so a full buffer is written by a thread of its own while the
-//! caller fills the other one (double buffering): the caller waits for the device only
-//! when it fills a buffer faster than the device takes one. The `.rrd` is written by the
+//! device has the data, so full buffers are written by a thread of its own while the
+//! caller fills another (up to [`MAX_BLOCKS`] buffers): the caller waits for the device
+//! only when it is that many buffers ahead of it. The `.rrd` is written by the
 //! frame workers under a lock: waiting there for each 8 MB write made `run --rerun` ~7 %
 //! slower (docs/notes/2026-12-02-rerun.md, 2026-12-04b).
 //! Where the file system refuses `O_DIRECT` (tmpfs, some network file systems), and on
@@ -27,6 +27,13 @@ const ALIGN: usize = 4096;
 
 /// Bytes gathered before each write: large writes keep the device busy with few calls.
 const BUFFER_BYTES: usize = 8 << 20;
+
+/// Buffers at most: the one being filled and up to three with the writer thread. A buffer
+/// is made only when every other is still being written: a writer that keeps up uses two.
+/// With two at most, the frame workers of `run --rerun` waited for the device in bursts
+/// (~12 MB a frame from two workers at once): 76-125 ms per 96 frames, under the file's
+/// lock (docs/notes/2026-12-02-rerun.md, 2026-12-04c).
+const MAX_BLOCKS: usize = 4;
 
 /// A buffer of [`BUFFER_BYTES`] aligned to [`ALIGN`].
 #[derive(Debug)]
@@ -64,8 +71,8 @@ struct BlockWriter {
 impl BlockWriter {
     /// Starts the thread on `file` (a handle sharing the caller's file offset).
     fn start(mut file: File) -> std::io::Result<BlockWriter> {
-        let (to, blocks) = sync_channel::<(Block, usize)>(1);
-        let (done, back) = sync_channel(2);
+        let (to, blocks) = sync_channel::<(Block, usize)>(MAX_BLOCKS);
+        let (done, back) = sync_channel(MAX_BLOCKS);
         let thread = std::thread::Builder::new()
             .name("direct_write".into())
             .spawn(move || {
@@ -124,8 +131,10 @@ pub struct DirectFile {
     direct: bool,
     /// The buffer being filled (`None` once writing through the page cache).
     block: Option<Block>,
-    /// The other buffer, when the writer thread does not hold it.
-    spare: Option<Block>,
+    /// Buffers written and handed back by the writer thread, ready to be filled.
+    spare: Vec<Block>,
+    /// Buffers made so far (at most [`MAX_BLOCKS`]).
+    made: usize,
     /// Bytes waiting in `block`'s first bytes.
     pending: usize,
     /// Bytes written or handed to the writer thread so far (a multiple of `ALIGN` while
@@ -156,7 +165,8 @@ impl DirectFile {
             path: path.to_path_buf(),
             direct,
             block: direct.then(Block::new),
-            spare: None,
+            spare: Vec::new(),
+            made: 1,
             pending: 0,
             written: 0,
             writer: None,
@@ -239,8 +249,9 @@ impl DirectFile {
     }
 
     /// Hands the whole blocks of the pending bytes to the writer thread (the first write
-    /// is made here, see [`DirectFile::writer`]) and goes on in the other buffer, waiting
-    /// for it only while the thread still writes it.
+    /// is made here, see [`DirectFile::writer`]) and goes on in another buffer: one the
+    /// thread has written, else a new one (up to [`MAX_BLOCKS`]), else the next the thread
+    /// hands back (the only wait).
     fn hand_off(&mut self) -> std::io::Result<()> {
         let whole = self.pending / ALIGN * ALIGN;
         if whole == 0 || self.block.is_none() {
@@ -251,13 +262,21 @@ impl DirectFile {
         }
         if self.writer.is_none() {
             self.writer = Some(BlockWriter::start(self.file.try_clone()?)?);
-            self.spare = Some(Block::new());
         }
         let (Some(writer), Some(block)) = (&mut self.writer, &mut self.block) else {
             return Ok(());
         };
-        let mut next = match self.spare.take() {
+        // The buffers written meanwhile, and their errors.
+        while let Ok((returned, result)) = writer.back.try_recv() {
+            result?;
+            self.spare.push(returned);
+        }
+        let mut next = match self.spare.pop() {
             Some(spare) => spare,
+            None if self.made < MAX_BLOCKS => {
+                self.made += 1;
+                Block::new()
+            }
             None => {
                 let (returned, result) = writer.back.recv().map_err(|_| writer_gone())?;
                 result?;
