@@ -5,7 +5,7 @@
 # recording lengths (flat memory: the file streams frame by frame).
 #
 #   scripts/bench_rerun.sh [FRAMES] [LONG_FRAMES] [SHORT_FRAMES] [MODEL_FRAMES]
-#                                                          (default 24, 500, 100, 8)
+#                                                          (default 96, 500, 100, 8)
 #
 # Needs a release binary built with the feature: cargo build --release --features rerun.
 # Time, for two runs of the handover scene (3 cameras), each the ratio of `run`'s wall-clock
@@ -13,21 +13,23 @@
 # loaded machine; user time alone too: on a VM the system time also holds the host's cost of
 # fresh pages, which varies several-fold between identical runs), and the `rerun` stage's
 # time over the other stages' within the `--rerun` run (run.json; the direct cost, which
-# the machine's noise weighs alike), medians of 3 rounds (one run without and one with
-# `--rerun` per round) after a warm-up, no figure:
+# the machine's noise weighs alike), medians of ROUNDS rounds (default 5; one run without
+# and one with `--rerun` per round) after a warm-up, no figure:
 #   - the default parser (BlazePose + BodyPix, `--parser model`: what `--parser auto` picks
 #     on a recording without recorded labels) on MODEL_FRAMES frames: a user's run. Needs
 #     the ONNX Runtime (ORT_DYLIB_PATH, else .deps/onnxruntime/); skipped, saying so,
 #     without it. The 2D parsing dominates its time, so few frames are enough;
 #   - the recorded parser (`--parser recorded`: no 2D parsing, the cheapest run there is) on
-#     FRAMES frames: the worst case for the ratio.
+#     FRAMES frames: the worst case for the ratio. Enough frames that what a run pays once
+#     (the SDK's start, the file's footer, the first touch of the writer's memory: ~0.25 s
+#     on this project's VM, where a fresh 2 MB page costs ~10 ms) weighs little per frame.
 # Memory: 1 camera, colour 480 px wide, recorded parser.
 # With INSTRUCTIONS=1 (needs valgrind): the recorded parser's instructions per frame too,
-# without and with --rerun (callgrind, 3 and FRAMES frames: the difference per frame), a
+# without and with --rerun (callgrind, 3 and 24 frames: the difference per frame), a
 # figure this VM's timing noise (host page faults: +-15 % between identical runs) leaves alone.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-frames="${1:-24}"
+frames="${1:-96}"
 long="${2:-500}"
 short="${3:-100}"
 model_frames="${4:-8}"
@@ -53,13 +55,14 @@ run() { # run REC OUT [extra args]: "wall cpu user" seconds of one full run (cpu
         "$bin" --quiet run --recording "$recs/$rec" --out "$out" --figure none --force "$@" >/dev/null
     awk '{printf "%s %.2f %s\n", $1, $2 + $3, $2}' "$tmp/time"
 }
-median() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
+rounds="${ROUNDS:-5}"
+median() { printf '%s\n' "$@" | sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
 
 ratio() { # ratio LABEL REC FRAMES PARSER: prints the wall and CPU ratios of --rerun
     local label="$1" rec="$2" n="$3" parser="$4"
     run "$rec" "$tmp/warm" --parser "$parser" >/dev/null
     local plain=() with=() plain_cpu=() with_cpu=() plain_user=() with_user=() share=() wall cpu user
-    for _ in 1 2 3; do
+    for _ in $(seq "$rounds"); do
         read -r wall cpu user < <(run "$rec" "$tmp/plain" --parser "$parser")
         plain+=("$wall"); plain_cpu+=("$cpu"); plain_user+=("$user")
         read -r wall cpu user < <(run "$rec" "$tmp/with" --parser "$parser" --rerun "$tmp/with/run.rrd")
@@ -109,6 +112,7 @@ ratio "recorded parser (no 2D parsing, worst case)" "handover$frames" "$frames" 
 
 if [ "${INSTRUCTIONS:-0}" = 1 ]; then
     synth handover3 --preset handover --frames 3 --seed 1
+    synth handover24 --preset handover --frames 24 --seed 1
     instructions() { # instructions REC [extra args]: instructions of one run (callgrind)
         local rec="$1"; shift
         rm -rf "$tmp/vg"
@@ -118,11 +122,11 @@ if [ "${INSTRUCTIONS:-0}" = 1 ]; then
         awk '/Collected :/ {gsub(",", "", $4); print $4}' "$tmp/vg.log"
     }
     p3=$(instructions handover3); w3=$(instructions handover3 --rerun "$tmp/vg/run.rrd")
-    pn=$(instructions "handover$frames"); wn=$(instructions "handover$frames" --rerun "$tmp/vg/run.rrd")
-    printf 'recorded parser, instructions per frame (%d - 3 frames): %.1f M without --rerun, %.1f M with (ratio %.3f); whole %d-frame run %.3f\n' \
-        "$frames" "$(echo "($pn - $p3) / ($frames - 3) / 1000000" | bc -l)" \
-        "$(echo "($wn - $w3) / ($frames - 3) / 1000000" | bc -l)" \
-        "$(echo "($wn - $w3) / ($pn - $p3)" | bc -l)" "$frames" "$(echo "$wn / $pn" | bc -l)"
+    pn=$(instructions handover24); wn=$(instructions handover24 --rerun "$tmp/vg/run.rrd")
+    printf 'recorded parser, instructions per frame (24 - 3 frames): %.1f M without --rerun, %.1f M with (ratio %.3f); whole 24-frame run %.3f\n' \
+        "$(echo "($pn - $p3) / 21 / 1000000" | bc -l)" \
+        "$(echo "($wn - $w3) / 21 / 1000000" | bc -l)" \
+        "$(echo "($wn - $w3) / ($pn - $p3)" | bc -l)" "$(echo "$wn / $pn" | bc -l)"
 fi
 
 # Memory over a long recording: small images, one camera.
