@@ -31,7 +31,7 @@ const BUFFER_BYTES: usize = 8 << 20;
 /// Buffers at most: the one being filled and up to three with the writer thread. A buffer
 /// is made only when every other is still being written: a writer that keeps up uses two.
 /// With two at most, the frame workers of `run --rerun` waited for the device in bursts
-/// (~12 MB a frame from two workers at once): 76-125 ms per 96 frames, under the file's
+/// (~12 MB a frame from two workers at once): 76-150 ms per 96 frames, under the file's
 /// lock (docs/notes/2026-12-02-rerun.md, 2026-12-04c).
 const MAX_BLOCKS: usize = 4;
 
