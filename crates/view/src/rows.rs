@@ -2,9 +2,9 @@
 //! into one chunk per entity before they are written.
 //!
 //! A frame has ~46 such rows (45 scores with 5 configurations, the boxes), a few bytes
-//! each. Logged through the SDK, each row woke the SDK's batcher thread: ~100 context
-//! switches a frame (half of them the frame workers preempted on a 2-core machine) and the
-//! SDK's per-row work, for rows the batcher then joined anyway
+//! each. Logged through the SDK, each row woke the SDK's batcher thread: ~90 context
+//! switches a frame (about half of them involuntary: threads preempted on a 2-core
+//! machine) and the SDK's per-row work, for rows the batcher then joined anyway
 //! (docs/notes/2026-12-02-rerun.md, 2026-12-04c). Here the frame worker adds its rows under
 //! one short lock; an entity's rows become a chunk once [`ROWS_PER_CHUNK`] of them are
 //! pending (or when the file ends), made and written by the worker that added the last

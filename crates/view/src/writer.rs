@@ -317,13 +317,9 @@ impl ViewWriter {
     /// Writes each entity's rows as one chunk.
     fn write_rows(&self, batches: Vec<rows::Batch>) -> Result<(), ViewError> {
         for (entity, rows) in batches {
-            let err = |e: &dyn std::fmt::Display| ViewError::Rerun {
-                message: format!("{entity}: {e}"),
-                path: self.path.clone(),
-            };
-            let chunk = rows::chunk(&entity, rows).map_err(|e| err(&e))?;
+            let chunk = rows::chunk(&entity, rows).map_err(|e| self.entity_error(&entity, e))?;
             self.write_chunk(&chunk, Lz4::WhereWorth)
-                .map_err(|e| err(&e))?;
+                .map_err(|e| self.entity_error(&entity, e))?;
         }
         Ok(())
     }
@@ -411,21 +407,21 @@ impl ViewWriter {
     /// Logs `what` at `entity`, at this thread's time, as a chunk of its own, encoded and
     /// written by this thread (`crate::sink`; LZ4 as `lz4` allows): a frame's images and
     /// clouds, each large enough to be a chunk.
-    fn log_chunk(
-        &self,
-        entity: &str,
-        what: &dyn re_sdk::AsComponents,
-        lz4: Lz4,
-    ) -> Result<(), ViewError> {
-        let err = |e: &dyn std::fmt::Display| ViewError::Rerun {
-            message: format!("{entity}: {e}"),
-            path: self.path.clone(),
-        };
+    fn log_chunk(&self, entity: &str, what: &dyn AsComponents, lz4: Lz4) -> Result<(), ViewError> {
         let chunk = Chunk::builder(entity)
             .with_archetype(RowId::new(), self.rec.now(), what)
             .build()
-            .map_err(|e| err(&e))?;
-        self.write_chunk(&chunk, lz4).map_err(|e| err(&e))
+            .map_err(|e| self.entity_error(entity, e))?;
+        self.write_chunk(&chunk, lz4)
+            .map_err(|e| self.entity_error(entity, e))
+    }
+
+    /// An error of the SDK or the file about `entity`.
+    fn entity_error(&self, entity: &str, e: impl std::fmt::Display) -> ViewError {
+        ViewError::Rerun {
+            message: format!("{entity}: {e}"),
+            path: self.path.clone(),
+        }
     }
 
     /// Encodes `chunk` in this thread and writes it into the file (`crate::sink`).
